@@ -1,0 +1,25 @@
+# lapjoint: impact-hammer ring-downs of bolted lap joints -> damping and frequency
+# curves, the paper's friction models, and a diagnosis of what they get wrong.
+#
+#   snakemake -c2 all                                  # built-in demo campaign
+#   snakemake -c2 all --config campaign=PATH           # your own campaign
+#   snakemake -c2 all -s /path/to/lapjoint/Snakefile -d WORKDIR
+
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+configfile: workflow.source_path("config.yaml")
+
+
+include: "rules/common.smk"
+include: "rules/demo.smk"
+include: "rules/measured.smk"
+include: "rules/figures.smk"
+
+
+rule all:
+    input:
+        all_outputs(),
+    default_target: True

@@ -1,0 +1,95 @@
+# Helpers shared by the rules: validated config, the campaign's runs, target lists.
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, workflow.basedir)
+
+from workflow.config import ConfigError, validate_config
+
+try:
+    SETTINGS = validate_config(config)
+except ConfigError as error:
+    raise WorkflowError(f"invalid configuration:\n{error}") from None
+
+CAMPAIGN = Path(SETTINGS.campaign)
+USES_DEMO = SETTINGS.uses_demo_campaign()
+
+
+def campaign_inventory():
+    """Configurations and run files of the campaign, in campaign.yaml order.
+
+    The demo campaign is planned from its settings (it may not exist yet: a rule
+    generates it); any other campaign is listed from its campaign.yaml.
+    """
+    from workflow.campaign import CampaignFormatError, list_runs, load_campaign
+
+    if USES_DEMO:
+        from workflow.virtual_lab import planned_run_files
+
+        return planned_run_files(SETTINGS.demo.runs_per_configuration)
+    try:
+        campaign = load_campaign(CAMPAIGN)
+        return list_runs(CAMPAIGN, campaign)
+    except (CampaignFormatError, FileNotFoundError) as error:
+        raise WorkflowError(f"cannot read campaign {CAMPAIGN}: {error}") from None
+
+
+RUN_FILES = campaign_inventory()
+CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
+RUNS = {
+    name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS
+}
+if not RUN_FILES:
+    raise WorkflowError(f"campaign {CAMPAIGN} has no run files")
+
+
+wildcard_constraints:
+    configuration="|".join(CONFIGURATIONS),
+
+
+def run_file(wildcards):
+    for run in RUNS[wildcards.configuration]:
+        if run.run == wildcards.run:
+            return CAMPAIGN / run.path
+    raise WorkflowError(f"no run {wildcards.run} in configuration {wildcards.configuration}")
+
+
+def configuration_run_files(wildcards):
+    return [CAMPAIGN / run.path for run in RUNS[wildcards.configuration]]
+
+
+def run_segment_tables(wildcards=None):
+    return [
+        f"results/interim/segments/{run.configuration}/{run.run}.parquet" for run in RUN_FILES
+    ]
+
+
+def run_status_files(wildcards=None):
+    return [f"results/interim/status/{run.configuration}/{run.run}.json" for run in RUN_FILES]
+
+
+def damping_figure_number(configuration):
+    """The paper's figures 10, 11, 12 are damping vs amplitude per configuration;
+    configurations past the third keep number 12."""
+    return min(10 + CONFIGURATIONS.index(configuration), 12)
+
+
+def damping_figures():
+    return [
+        f"results/figures/fig{damping_figure_number(name):02d}_damping_{name}.png"
+        for name in CONFIGURATIONS
+    ]
+
+
+def all_outputs():
+    return [
+        "results/tables/segments.parquet",
+        "results/tables/runs.parquet",
+        "results/tables/damping_fits.parquet",
+        "results/tables/hypotheses.parquet",
+        "results/figures/fig09_time_history.png",
+        *damping_figures(),
+        "results/figures/fig13_area_fits.png",
+        *[f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS],
+    ]

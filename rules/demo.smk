@@ -1,0 +1,23 @@
+# The built-in demo: a campaign measured in the virtual lab (workflow/virtual_lab.py).
+# It exists only when config.yaml's campaign points at demo.path.
+
+if USES_DEMO:
+
+    rule demo_campaign:
+        output:
+            campaign_yaml=CAMPAIGN / "campaign.yaml",
+            runs=[CAMPAIGN / run.path for run in RUN_FILES],
+            truth=f"{CAMPAIGN}.truth.json",
+        params:
+            seed=SETTINGS.demo.seed,
+            runs_per_configuration=SETTINGS.demo.runs_per_configuration,
+        log:
+            "results/logs/demo_campaign.log",
+        benchmark:
+            "results/benchmarks/demo_campaign.tsv"
+        threads: 1
+        resources:
+            mem_mb=1000,
+            runtime=10,
+        script:
+            "../scripts/make_demo_campaign.py"

@@ -1,0 +1,99 @@
+# Measured-data chain: raw ASCII -> first mode -> per-run band-pass, envelope,
+# segmented log decrement -> Parquet tables -> damping fits and hypotheses.
+
+
+rule identify_mode:
+    input:
+        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        runs=configuration_run_files,
+    output:
+        "results/interim/mode/{configuration}.json",
+    params:
+        campaign=str(CAMPAIGN),
+        band_half_width=SETTINGS.analysis.band_half_width,
+        mode_search_hz=SETTINGS.analysis.mode_search_hz,
+        mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
+    log:
+        "results/logs/identify_mode/{configuration}.log",
+    benchmark:
+        "results/benchmarks/identify_mode/{configuration}.tsv"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    script:
+        "../scripts/identify_mode.py"
+
+
+rule analyse_run:
+    input:
+        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        run=run_file,
+        mode="results/interim/mode/{configuration}.json",
+    output:
+        segments="results/interim/segments/{configuration}/{run}.parquet",
+        status="results/interim/status/{configuration}/{run}.json",
+    params:
+        campaign=str(CAMPAIGN),
+        strict=SETTINGS.strict,
+        analysis=SETTINGS.analysis.model_dump(exclude={"band_half_width", "mode_search_hz", "mode_search_fraction"}),
+        quality=SETTINGS.quality.model_dump(),
+    log:
+        "results/logs/analyse_run/{configuration}/{run}.log",
+    benchmark:
+        "results/benchmarks/analyse_run/{configuration}/{run}.tsv"
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
+    script:
+        "../scripts/analyse_run.py"
+
+
+rule collect_tables:
+    input:
+        segments=run_segment_tables(),
+        status=run_status_files(),
+        modes=expand("results/interim/mode/{configuration}.json", configuration=CONFIGURATIONS),
+        campaign_yaml=CAMPAIGN / "campaign.yaml",
+    output:
+        segments="results/tables/segments.parquet",
+        rejected="results/tables/segments_rejected.parquet",
+        runs="results/tables/runs.parquet",
+        modes="results/tables/modes.parquet",
+    params:
+        campaign=str(CAMPAIGN),
+    log:
+        "results/logs/collect_tables.log",
+    benchmark:
+        "results/benchmarks/collect_tables.tsv"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    script:
+        "../scripts/collect_tables.py"
+
+
+rule fit_curves:
+    input:
+        segments="results/tables/segments.parquet",
+        campaign_yaml=CAMPAIGN / "campaign.yaml",
+    output:
+        fits="results/tables/damping_fits.parquet",
+        curves="results/tables/damping_curves.parquet",
+        hypotheses="results/tables/hypotheses.parquet",
+        area="results/tables/area_fits.parquet",
+    params:
+        campaign=str(CAMPAIGN),
+        fits=SETTINGS.fits.model_dump(),
+    log:
+        "results/logs/fit_curves.log",
+    benchmark:
+        "results/benchmarks/fit_curves.tsv"
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=20,
+    script:
+        "../scripts/fit_curves.py"

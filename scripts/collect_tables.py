@@ -1,0 +1,32 @@
+"""Rule collect_tables: the campaign's segments, runs and modes as Parquet tables."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow.campaign import load_campaign
+from workflow.logs import setup_script_logging
+from workflow.pipeline import collect_tables
+from workflow.tables import write_table
+
+log = setup_script_logging(snakemake.log[0], "collect_tables")
+campaign = load_campaign(Path(snakemake.params.campaign))
+tables = collect_tables(
+    segment_paths=snakemake.input.segments,
+    status_paths=snakemake.input.status,
+    mode_paths=snakemake.input.modes,
+    campaign=campaign,
+)
+response_unit = {"response_amplitude": f"{campaign.response.unit} ({campaign.response.quantity})"}
+for name in ("segments", "rejected", "runs", "modes"):
+    write_table(tables[name], snakemake.output[name], units=response_unit)
+runs = tables["runs"]
+log.info(
+    "%d runs used, %d excluded; %d segments kept",
+    int((runs["status"] == "used").sum()),
+    int((runs["status"] == "excluded").sum()),
+    len(tables["segments"]),
+)
+for row in runs[runs["status"] == "excluded"].itertuples():
+    log.warning("excluded %s/%s: %s", row.configuration, row.run, row.reason)

@@ -1,0 +1,52 @@
+"""Rule figure_time_history: paper figure 9 for the first used run of the first configuration."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+import numpy as np
+
+from workflow import decay, figures
+from workflow.campaign import load_campaign, read_run
+from workflow.logs import setup_script_logging
+from workflow.pipeline import analysis_window
+from workflow.tables import read_table
+
+log = setup_script_logging(snakemake.log[0], "figure_time_history")
+campaign_dir = Path(snakemake.params.campaign)
+campaign = load_campaign(campaign_dir)
+configuration = snakemake.params.configuration
+runs = read_table(snakemake.input.runs_table)
+used = runs[(runs["configuration"] == configuration) & (runs["status"] == "used")]
+modes = read_table(snakemake.input.modes).set_index("configuration")
+figure_path = snakemake.output[0]
+if used.empty:
+    raise SystemExit(f"configuration {configuration} has no usable run to show (see runs.parquet)")
+row = used.iloc[0]
+record = read_run(campaign_dir, row["path"], campaign)
+band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))
+start, stop = analysis_window(record, campaign.configurations[configuration].window_s)
+analysis = snakemake.params.analysis
+result = decay.analyse_decay(
+    record.response,
+    record.sample_rate_hz,
+    band_hz,
+    mode_hz=float(modes.loc[configuration, "mode_hz"]),
+    start_index=start if (start, stop) != (0, record.n_samples) else None,
+    stop_index=stop,
+    **analysis,
+)
+time_s = np.arange(record.n_samples) / record.sample_rate_hz
+figure = figures.time_history(
+    time_s,
+    record.response,
+    result.filtered,
+    result.envelope,
+    response_label=f"{record.response_quantity} ({record.response_unit})",
+    title=f"{configuration} / {row['run']}: unfiltered and filtered response",
+    band_hz=band_hz,
+    decay_start_s=result.start_index / record.sample_rate_hz,
+)
+figures.save(figure, figure_path)
+log.info("figure 9 from %s", row["path"])

@@ -1,0 +1,49 @@
+"""Rule identify_mode: first-mode frequency and analysis band of one configuration."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow.campaign import list_runs, load_campaign
+from workflow.config import QualitySettings
+from workflow.logs import setup_script_logging
+from workflow.pipeline import analysis_window, identify_mode, read_and_check
+from workflow.tables import write_json
+
+log = setup_script_logging(snakemake.log[0], "identify_mode")
+configuration = snakemake.wildcards.configuration
+campaign_dir = Path(snakemake.params.campaign)
+campaign = load_campaign(campaign_dir)
+spec = campaign.configurations[configuration]
+
+records, windows, skipped = [], [], {}
+for run_file in list_runs(campaign_dir, campaign):
+    if run_file.configuration != configuration:
+        continue
+    record, problems = read_and_check(campaign_dir, run_file.path, campaign, QualitySettings())
+    if problems:
+        skipped[run_file.run] = problems
+        log.warning("mode search skips %s: %s", run_file.path, "; ".join(problems))
+        continue
+    records.append(record)
+    windows.append(analysis_window(record, spec.window_s))
+
+try:
+    mode = identify_mode(
+        records,
+        windows=windows,
+        campaign_mode_hz=campaign.mode_hz,
+        campaign_band_hz=campaign.band_hz,
+        band_half_width=snakemake.params.band_half_width,
+        mode_search_hz=snakemake.params.mode_search_hz,
+        mode_search_fraction=snakemake.params.mode_search_fraction,
+    )
+    document = {**mode.to_dict(), "skipped_runs": skipped}
+    log.info("configuration %s: mode %.3f Hz (%s), band %s", configuration, mode.mode_hz, mode.method, mode.band_hz)
+except ValueError as error:
+    # Every run of this configuration then gets excluded with this reason;
+    # the other configurations go on.
+    document = {"error": f"configuration {configuration}: first mode not found: {error}", "skipped_runs": skipped}
+    log.error(document["error"])
+write_json(snakemake.output[0], document)

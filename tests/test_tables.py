@@ -1,0 +1,31 @@
+"""Parquet tables: units in the schema, atomic writes."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from workflow.tables import column_units, read_table, write_json, write_table
+
+
+def test_units_round_trip_as_field_metadata(tmp_path):
+    frame = pd.DataFrame({"velocity_amplitude_in_s": [0.1, 1.0], "zeta": [0.01, 0.02], "run": ["a", "b"]})
+    path = tmp_path / "t.parquet"
+    write_table(frame, path, units={"run": "label"})
+    units = column_units(path)
+    assert units["velocity_amplitude_in_s"] == "in/s"
+    assert units["run"] == "label"
+    pd.testing.assert_frame_equal(read_table(path), frame)
+
+
+def test_failed_write_leaves_no_file(tmp_path):
+    path = tmp_path / "t.parquet"
+    with pytest.raises(Exception):
+        write_table(pd.DataFrame({"x": [object()]}), path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_json_rejects_nan(tmp_path):
+    with pytest.raises(ValueError):
+        write_json(tmp_path / "x.json", {"value": float("nan")})
+    write_json(tmp_path / "y.json", {"value": np.float64(1.5), "array": np.arange(2)})
+    assert (tmp_path / "y.json").read_text().count("1.5") == 1

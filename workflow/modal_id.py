@@ -1,0 +1,242 @@
+"""First-mode identification from impact-hammer runs.
+
+The paper estimates the frequency response function (FRF) of the jointed beam from
+several hammer hits, reads the first modal frequency off it, and chooses the band-pass
+around that mode. These functions do the same for any campaign: an H1 estimate (or a
+response-only spectrum when no force was recorded), a peak search inside a frequency
+range, and the band around the peak.
+
+Spectra are averaged over runs. Each run is transformed with a *rectangular* window
+by default: a hammer record starts with the impulse (a few pre-trigger samples in), and
+any tapering window (Hann, ...) would weight that impulse by almost zero and discard the
+excitation. Runs of different lengths are handled by giving every run the same segment
+length ``nperseg`` (the shortest run by default), so all spectra share one frequency grid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy import signal
+
+__all__ = ["h1_frf", "response_spectrum", "find_mode_hz", "band_around"]
+
+
+def _as_runs(runs: Sequence[np.ndarray], name: str) -> list[np.ndarray]:
+    arrays = [np.asarray(run, dtype=float) for run in runs]
+    if not arrays:
+        raise ValueError(f"{name}: at least one run is needed")
+    for index, run in enumerate(arrays):
+        if run.ndim != 1:
+            raise ValueError(f"{name}[{index}] must be 1-D, got shape {run.shape}")
+        if run.size < 2:
+            raise ValueError(f"{name}[{index}] has fewer than 2 samples")
+        if not np.all(np.isfinite(run)):
+            raise ValueError(f"{name}[{index}] contains NaN or inf")
+    return arrays
+
+
+def _segment_length(runs: list[np.ndarray], nperseg: int | None) -> int:
+    shortest = min(run.size for run in runs)
+    if nperseg is None:
+        return shortest
+    if not 2 <= nperseg <= shortest:
+        raise ValueError(f"nperseg must lie in [2, {shortest}] (the shortest run), got {nperseg}")
+    return int(nperseg)
+
+
+def h1_frf(
+    force_runs: Sequence[np.ndarray],
+    response_runs: Sequence[np.ndarray],
+    fs_hz: float,
+    nperseg: int | None = None,
+    window: str = "boxcar",
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """H1 frequency response estimate and coherence averaged over hammer runs.
+
+    Parameters
+    ----------
+    force_runs, response_runs : sequence of 1-D array_like
+        Force and response of each run (same number of runs; within a run, the two
+        channels have equal length; runs may differ in length). Any units.
+    fs_hz : float
+        Sample rate, Hz.
+    nperseg : int, optional
+        Samples per spectral segment, the same for every run so that all spectra share
+        one frequency grid. Default: the shortest run's length (one segment per run,
+        frequency resolution ``fs_hz / nperseg`` Hz). Runs longer than ``nperseg`` are
+        split into non-overlapping segments (Welch averaging within the run).
+    window : str, optional
+        Window name for :func:`scipy.signal.get_window`. Default ``"boxcar"``, because a
+        tapering window would suppress the impulse at the start of a hammer record.
+
+    Returns
+    -------
+    frequency_hz : ndarray
+        Frequencies, Hz, from 0 to ``fs_hz / 2``.
+    h1 : ndarray of complex
+        ``G_fx / G_ff`` (response unit per force unit), with cross- and auto-spectra
+        averaged over runs before dividing.
+    coherence : ndarray
+        Ordinary coherence ``|G_fx|**2 / (G_ff * G_xx)``, in [0, 1]. With a single
+        segment in total it is identically 1 and carries no information.
+
+    Notes
+    -----
+    H1 is unbiased by noise on the response channel (noise on the force channel biases
+    it low). Averaging spectra, not FRFs, is what makes H1 and the coherence meaningful.
+    """
+    forces = _as_runs(force_runs, "force_runs")
+    responses = _as_runs(response_runs, "response_runs")
+    if len(forces) != len(responses):
+        raise ValueError(
+            f"{len(forces)} force runs but {len(responses)} response runs; they must pair up"
+        )
+    for index, (force, response) in enumerate(zip(forces, responses)):
+        if force.size != response.size:
+            raise ValueError(
+                f"run {index}: force has {force.size} samples, response {response.size}"
+            )
+    segment = _segment_length(forces, nperseg)
+    options = dict(fs=fs_hz, window=window, nperseg=segment, noverlap=0, detrend="constant")
+    g_ff = g_xx = g_fx = 0.0
+    for force, response in zip(forces, responses):
+        # scipy's csd(x, y) averages conj(X) * Y, so csd(force, response) = conj(F) X.
+        frequency_hz, cross = signal.csd(force, response, **options)
+        _, auto_force = signal.welch(force, **options)
+        _, auto_response = signal.welch(response, **options)
+        g_fx = g_fx + cross
+        g_ff = g_ff + auto_force
+        g_xx = g_xx + auto_response
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h1 = g_fx / g_ff
+        coherence = np.abs(g_fx) ** 2 / (g_ff * g_xx)
+    # Bins with no force energy (e.g. exactly zero after detrending) have no estimate.
+    h1 = np.where(g_ff > 0, h1, np.nan)
+    coherence = np.clip(np.where((g_ff > 0) & (g_xx > 0), coherence, np.nan), 0.0, 1.0)
+    return frequency_hz, h1, coherence
+
+
+def response_spectrum(
+    response_runs: Sequence[np.ndarray],
+    fs_hz: float,
+    nperseg: int | None = None,
+    window: str = "boxcar",
+) -> tuple[np.ndarray, np.ndarray]:
+    """Power spectral density of the response averaged over runs (no force recorded).
+
+    Parameters
+    ----------
+    response_runs : sequence of 1-D array_like
+        Response of each run, any unit U; runs may differ in length.
+    fs_hz : float
+        Sample rate, Hz.
+    nperseg : int, optional
+        Samples per segment, common to all runs; default the shortest run's length.
+    window : str, optional
+        Window name; default ``"boxcar"`` (see :func:`h1_frf`).
+
+    Returns
+    -------
+    frequency_hz : ndarray
+        Frequencies, Hz.
+    psd : ndarray
+        One-sided power spectral density, U**2/Hz, averaged over runs.
+    """
+    responses = _as_runs(response_runs, "response_runs")
+    segment = _segment_length(responses, nperseg)
+    total = 0.0
+    for response in responses:
+        frequency_hz, psd = signal.welch(
+            response, fs=fs_hz, window=window, nperseg=segment, noverlap=0, detrend="constant"
+        )
+        total = total + psd
+    return frequency_hz, total / len(responses)
+
+
+def find_mode_hz(
+    frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tuple[float, float]
+) -> float:
+    """Frequency of the largest spectral peak inside a search range.
+
+    Parameters
+    ----------
+    frequency_hz : array_like
+        Uniformly spaced, increasing frequencies, Hz.
+    magnitude : array_like
+        Spectral magnitude at those frequencies (``|H1|``, a PSD, ...; complex values are
+        replaced by their modulus). Any unit; only its shape matters.
+    search_hz : (float, float)
+        Lowest and highest frequency, Hz, where the peak may lie.
+
+    Returns
+    -------
+    float
+        Peak frequency, Hz: the largest local maximum (a bin above both neighbours)
+        inside the range, refined by a parabola through the log magnitude of the peak
+        bin and its two neighbours. A resonance peak is close to a parabola in log
+        magnitude, so the refinement is accurate to a small fraction of a bin.
+
+    Raises
+    ------
+    ValueError
+        If the range holds no interior peak (e.g. the spectrum only rises or falls
+        across it, which means the mode lies outside the range).
+    """
+    frequency_hz = np.asarray(frequency_hz, dtype=float)
+    magnitude = np.abs(np.asarray(magnitude))
+    if frequency_hz.shape != magnitude.shape or frequency_hz.ndim != 1:
+        raise ValueError("frequency_hz and magnitude must be 1-D arrays of equal length")
+    low_hz, high_hz = (float(value) for value in search_hz)
+    if not low_hz < high_hz:
+        raise ValueError(f"search range must be increasing, got {search_hz}")
+    step_hz = np.diff(frequency_hz)
+    if step_hz.size == 0 or not np.allclose(step_hz, step_hz[0], rtol=1e-6):
+        raise ValueError("frequency_hz must be uniformly spaced")
+    # Log of a zero (or NaN) bin is replaced by the smallest finite value so that it can
+    # never be a peak but also never breaks the comparison.
+    finite = np.isfinite(magnitude) & (magnitude > 0)
+    if not finite.any():
+        raise ValueError("magnitude has no positive finite value")
+    log_mag = np.full(magnitude.shape, np.log(magnitude[finite].min()) - 1.0)
+    log_mag[finite] = np.log(magnitude[finite])
+
+    inner = np.arange(1, magnitude.size - 1)
+    is_peak = (log_mag[inner] > log_mag[inner - 1]) & (log_mag[inner] > log_mag[inner + 1])
+    in_range = (frequency_hz[inner] >= low_hz) & (frequency_hz[inner] <= high_hz)
+    candidates = inner[is_peak & in_range & finite[inner]]
+    if candidates.size == 0:
+        raise ValueError(
+            f"no spectral peak inside the search range {low_hz:g}-{high_hz:g} Hz: the "
+            "spectrum only rises or falls there, so the mode lies outside it (widen "
+            "the range or check mode_hz)"
+        )
+    peak = candidates[np.argmax(log_mag[candidates])]
+    left, centre, right = log_mag[peak - 1 : peak + 2]
+    curvature = left - 2.0 * centre + right  # negative at a strict maximum
+    offset_bins = 0.5 * (left - right) / curvature
+    return float(frequency_hz[peak] + offset_bins * step_hz[0])
+
+
+def band_around(mode_hz: float, half_width_fraction: float) -> tuple[float, float]:
+    """Band-pass edges centred (arithmetically) on a mode.
+
+    Parameters
+    ----------
+    mode_hz : float
+        Mode frequency, Hz (> 0).
+    half_width_fraction : float
+        Half width as a fraction of ``mode_hz``, in (0, 1).
+
+    Returns
+    -------
+    (low_hz, high_hz) : tuple of float
+        ``mode_hz * (1 - half_width_fraction)``, ``mode_hz * (1 + half_width_fraction)``;
+        0.2 around 125 Hz gives the paper's (100, 150) Hz.
+    """
+    if not mode_hz > 0:
+        raise ValueError(f"mode_hz must be positive, got {mode_hz}")
+    if not 0 < half_width_fraction < 1:
+        raise ValueError(f"half_width_fraction must lie in (0, 1), got {half_width_fraction}")
+    return (mode_hz * (1.0 - half_width_fraction), mode_hz * (1.0 + half_width_fraction))

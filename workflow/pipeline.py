@@ -1,0 +1,383 @@
+"""The measured-data chain, one stage per function, as the workflow's rules call it.
+
+Each function takes already-read records and plain settings and returns tables or
+small documents; the scripts in ``scripts/`` only read inputs and write outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from workflow import decay, modal_id, quality, units
+from workflow.campaign import RunRecord
+
+
+@dataclass(frozen=True)
+class ModeInfo:
+    """First mode of a configuration and the band used to isolate it."""
+
+    mode_hz: float
+    band_hz: tuple[float, float]
+    method: str  # "h1" (force recorded), "spectrum" (response only) or "campaign" (given)
+    coherence_at_mode: float | None
+    n_runs: int
+
+    def to_dict(self) -> dict:
+        return {
+            "mode_hz": self.mode_hz,
+            "band_hz": list(self.band_hz),
+            "method": self.method,
+            "coherence_at_mode": self.coherence_at_mode,
+            "n_runs": self.n_runs,
+        }
+
+    @classmethod
+    def from_dict(cls, document: dict) -> "ModeInfo":
+        return cls(
+            mode_hz=float(document["mode_hz"]),
+            band_hz=(float(document["band_hz"][0]), float(document["band_hz"][1])),
+            method=str(document["method"]),
+            coherence_at_mode=document.get("coherence_at_mode"),
+            n_runs=int(document["n_runs"]),
+        )
+
+
+def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> tuple[int, int]:
+    """Sample indices [start, stop) of the part of a run to analyse.
+
+    Without ``window_s`` the whole record is used (the decay start is then found
+    at the excitation peak by the decay analysis).
+    """
+    if window_s is None:
+        return 0, record.n_samples
+    start = int(round(window_s[0] * record.sample_rate_hz))
+    stop = int(round(window_s[1] * record.sample_rate_hz))
+    start = min(max(start, 0), record.n_samples)
+    stop = min(max(stop, start), record.n_samples)
+    return start, stop
+
+
+def mode_search_range(
+    sample_rate_hz: float,
+    campaign_mode_hz: float | None,
+    mode_search_hz: tuple[float, float] | None,
+    mode_search_fraction: float,
+) -> tuple[float, float]:
+    """Frequency range in which the first mode is searched, Hz."""
+    if campaign_mode_hz is not None:
+        return (
+            campaign_mode_hz * (1.0 - mode_search_fraction),
+            campaign_mode_hz * (1.0 + mode_search_fraction),
+        )
+    if mode_search_hz is not None:
+        return mode_search_hz
+    return 5.0, 0.4 * sample_rate_hz
+
+
+def identify_mode(
+    records: list[RunRecord],
+    *,
+    windows: list[tuple[int, int]],
+    campaign_mode_hz: float | None,
+    campaign_band_hz: tuple[float, float] | None,
+    band_half_width: float,
+    mode_search_hz: tuple[float, float] | None,
+    mode_search_fraction: float,
+) -> ModeInfo:
+    """First-mode frequency of a configuration from all its readable runs.
+
+    The H1 frequency-response estimate (with coherence) is used when every run
+    recorded the force, the averaged response spectrum otherwise. The band is
+    campaign.yaml's ``band_hz`` when given, else ``mode * (1 -/+ band_half_width)``.
+    """
+    if not records:
+        raise ValueError("no readable run to identify the mode from")
+    sample_rate_hz = records[0].sample_rate_hz
+    search_hz = mode_search_range(
+        sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction
+    )
+    responses = [record.response[start:stop] for record, (start, stop) in zip(records, windows)]
+    coherence_at_mode = None
+    if all(record.force_lbf is not None for record in records):
+        forces = [record.force_lbf[start:stop] for record, (start, stop) in zip(records, windows)]
+        frequency_hz, h1, coherence = modal_id.h1_frf(forces, responses, sample_rate_hz)
+        mode_hz = modal_id.find_mode_hz(frequency_hz, np.abs(h1), search_hz)
+        coherence_at_mode = float(np.interp(mode_hz, frequency_hz, coherence))
+        method = "h1"
+    else:
+        frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
+        mode_hz = modal_id.find_mode_hz(frequency_hz, psd, search_hz)
+        method = "spectrum"
+    if campaign_band_hz is not None:
+        band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
+    else:
+        band_hz = modal_id.band_around(mode_hz, band_half_width)
+    return ModeInfo(
+        mode_hz=float(mode_hz),
+        band_hz=band_hz,
+        method=method,
+        coherence_at_mode=coherence_at_mode,
+        n_runs=len(records),
+    )
+
+
+SEGMENT_COLUMNS = [
+    "configuration",
+    "run",
+    "t_s",
+    "response_amplitude",
+    "velocity_amplitude_in_s",
+    "frequency_hz",
+    "zeta",
+    "fit_rms",
+    "kept",
+    "reject_reason",
+]
+
+
+def empty_segments() -> pd.DataFrame:
+    """A segments table with no rows and the right columns."""
+    frame = pd.DataFrame({name: pd.Series(dtype=float) for name in SEGMENT_COLUMNS})
+    frame["configuration"] = frame["configuration"].astype(str)
+    frame["run"] = frame["run"].astype(str)
+    frame["kept"] = frame["kept"].astype(bool)
+    frame["reject_reason"] = frame["reject_reason"].astype(str)
+    return frame
+
+
+def analyse_run(
+    record: RunRecord,
+    *,
+    configuration: str,
+    run: str,
+    mode: ModeInfo,
+    window: tuple[int, int],
+    filter_order: int,
+    segment_cycles: float,
+    segment_overlap: float,
+    noise_floor_factor: float,
+    edge_time_constants: float,
+    min_snr_db: float,
+    min_segments: int,
+) -> tuple[pd.DataFrame, list[str]]:
+    """Band-pass, envelope and segmented log decrement of one run.
+
+    Returns
+    -------
+    segments : DataFrame
+        Every segment with ``kept`` and ``reject_reason``; times are seconds from
+        the start of the file; ``velocity_amplitude_in_s`` uses each segment's
+        local frequency.
+    problems : list of str
+        Quality problems found by the decay analysis (too noisy, too few
+        segments); empty when the run is usable.
+    """
+    start, stop = window
+    result = decay.analyse_decay(
+        record.response,
+        record.sample_rate_hz,
+        mode.band_hz,
+        mode_hz=mode.mode_hz,
+        filter_order=filter_order,
+        segment_cycles=segment_cycles,
+        segment_overlap=segment_overlap,
+        noise_floor_factor=noise_floor_factor,
+        edge_time_constants=edge_time_constants,
+        start_index=start if window != (0, record.n_samples) else None,
+        stop_index=stop,
+    )
+    segments = result.segments
+    frame = pd.DataFrame(
+        {
+            "configuration": configuration,
+            "run": run,
+            "t_s": np.asarray(segments["t_s"], dtype=float),
+            "response_amplitude": np.asarray(segments["amplitude"], dtype=float),
+            "velocity_amplitude_in_s": units.velocity_amplitude_in_s(
+                np.asarray(segments["amplitude"], dtype=float),
+                record.response_quantity,
+                record.response_unit,
+                np.asarray(segments["frequency_hz"], dtype=float),
+            ),
+            "frequency_hz": np.asarray(segments["frequency_hz"], dtype=float),
+            "zeta": np.asarray(segments["zeta"], dtype=float),
+            "fit_rms": np.asarray(segments["fit_rms"], dtype=float),
+            "kept": np.asarray(segments["kept"], dtype=bool),
+            "reject_reason": np.asarray(segments["reject_reason"], dtype=str),
+        },
+        columns=SEGMENT_COLUMNS,
+    )
+    problems = []
+    peak_envelope = float(np.max(result.envelope[result.start_index : stop]))
+    snr_problem = quality.check_snr(peak_envelope, result.noise_floor, min_snr_db)
+    if snr_problem:
+        problems.append(snr_problem)
+    n_kept = int(frame["kept"].sum())
+    if n_kept < min_segments:
+        problems.append(
+            f"only {n_kept} usable log-decrement segments (at least {min_segments} needed)"
+        )
+    return frame, problems
+
+
+def read_and_check(
+    campaign_dir, path: str, campaign, quality_settings
+) -> tuple[RunRecord | None, list[str]]:
+    """Read one run file and apply the record-level quality checks.
+
+    Returns the record (None when it cannot be read) and the list of problems,
+    each a message that names the file and what is wrong.
+    """
+    from workflow.campaign import CampaignFormatError, read_run
+
+    try:
+        record = read_run(campaign_dir, path, campaign)
+    except CampaignFormatError as error:
+        return None, [str(error)]
+    problems = [f"{path}: {problem}" for problem in quality.run_quality_checks(record, quality_settings)]
+    return record, problems
+
+
+def collect_tables(*, segment_paths, status_paths, mode_paths, campaign) -> dict[str, pd.DataFrame]:
+    """Merge the per-run outputs into the campaign's tables.
+
+    Returns ``segments`` (kept segments of used runs: the output contract's
+    table), ``rejected`` (every other segment, with its reason), ``runs`` (one
+    row per run file, used or excluded) and ``modes`` (one row per configuration).
+    """
+    import json
+    from pathlib import Path
+
+    from workflow.tables import read_table
+
+    statuses = pd.DataFrame([json.loads(Path(path).read_text()) for path in status_paths])
+    runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
+    frames = [read_table(path) for path in segment_paths]
+    frames = [frame for frame in frames if len(frame)]
+    all_segments = pd.concat(frames, ignore_index=True) if frames else empty_segments()
+    used = set(zip(runs.loc[runs["status"] == "used", "configuration"], runs.loc[runs["status"] == "used", "run"]))
+    run_used = np.array([(c, r) in used for c, r in zip(all_segments["configuration"], all_segments["run"])], dtype=bool)
+    keep = run_used & all_segments["kept"].to_numpy(dtype=bool)
+    rejected = all_segments[~keep].copy()
+    rejected.loc[~run_used[~keep], "reject_reason"] = "run excluded (see runs.parquet)"
+    areas = {
+        name: (spec.bearing_area_in2 if spec.bearing_area_in2 is not None else np.nan)
+        for name, spec in campaign.configurations.items()
+    }
+    segments = all_segments[keep].drop(columns=["kept", "reject_reason"]).copy()
+    segments["bearing_area_in2"] = segments["configuration"].map(areas).astype(float)
+
+    mode_rows = []
+    for path in mode_paths:
+        name = Path(path).stem
+        document = json.loads(Path(path).read_text())
+        band = document.get("band_hz", [np.nan, np.nan])
+        mode_rows.append(
+            {
+                "configuration": name,
+                "mode_hz": document.get("mode_hz", np.nan),
+                "band_low_hz": band[0],
+                "band_high_hz": band[1],
+                "method": document.get("method", "not found"),
+                "coherence_at_mode": document.get("coherence_at_mode") or np.nan,
+                "bearing_area_in2": areas.get(name, np.nan),
+                "error": document.get("error", ""),
+            }
+        )
+    return {
+        "segments": segments.reset_index(drop=True),
+        "rejected": rejected.reset_index(drop=True),
+        "runs": runs,
+        "modes": pd.DataFrame(mode_rows),
+    }
+
+
+def fit_damping_curves(
+    segments: pd.DataFrame,
+    areas_in2: dict[str, float | None],
+    *,
+    max_degree: int,
+    log_amplitude: bool,
+    bootstrap_samples: int,
+    confidence: float,
+    seed: int,
+    grid_points: int = 60,
+    area_amplitudes: int = 5,
+) -> dict[str, pd.DataFrame]:
+    """Polynomial fits of damping vs velocity amplitude per configuration, their
+    bootstrap-over-runs bands, the paper's two hypotheses, and damping vs area.
+
+    Returns ``fits`` (one row per configuration), ``curves`` (fit and band on a
+    grid over each configuration's amplitude range), ``hypotheses`` and ``area``
+    (fitted damping of each configuration at amplitudes common to all).
+    """
+    from workflow import curves
+
+    fit_rows, curve_frames, by_configuration, fits = [], [], {}, {}
+    for offset, (name, part) in enumerate(segments.groupby("configuration", sort=False)):
+        v = part["velocity_amplitude_in_s"].to_numpy(float)
+        zeta = part["zeta"].to_numpy(float)
+        run = part["run"].to_numpy(str)
+        fit = curves.fit_damping_polynomial(v, zeta, run, max_degree=max_degree, log_amplitude=log_amplitude)
+        fits[name] = fit
+        by_configuration[name] = (v, zeta, run)
+        grid = np.geomspace(v.min(), v.max(), grid_points)
+        lower, centre, upper = curves.bootstrap_band(
+            v, zeta, run, fit.degree, grid, n_boot=bootstrap_samples, confidence=confidence,
+            seed=seed + offset, log_amplitude=log_amplitude,
+        )
+        area = areas_in2.get(name)
+        curve_frames.append(pd.DataFrame({
+            "configuration": name,
+            "bearing_area_in2": np.nan if area is None else area,
+            "velocity_amplitude_in_s": grid,
+            "zeta": centre,
+            "zeta_low": lower,
+            "zeta_high": upper,
+        }))
+        fit_rows.append({
+            "configuration": name,
+            "bearing_area_in2": np.nan if area is None else area,
+            "degree": fit.degree,
+            "coefficients": [float(c) for c in fit.coefficients],
+            "x_transform": fit.x_transform,
+            "cv_scheme": fit.cv_scheme,
+            "cv_rmse_at_degree": float(fit.cv_rmse[fit.degree]),
+            "n_runs": fit.n_runs,
+            "n_segments": fit.n_points,
+            "amplitude_low_in_s": fit.amplitude_range_in_s[0],
+            "amplitude_high_in_s": fit.amplitude_range_in_s[1],
+        })
+    known_areas = {name: a for name, a in areas_in2.items() if a is not None and name in fits}
+    hypotheses = curves.hypothesis_tests(
+        segments, known_areas or None, max_degree=max_degree, log_amplitude=log_amplitude,
+        n_boot=bootstrap_samples, confidence=confidence, seed=seed,
+    )
+    area_rows = []
+    common = curves.common_amplitude_range(by_configuration) if len(by_configuration) > 1 else None
+    if common is not None and len(known_areas) >= 2:
+        amplitudes = np.geomspace(common[0], common[1], area_amplitudes + 2)[1:-1]
+        for offset, name in enumerate(known_areas):
+            v, zeta, run = by_configuration[name]
+            lower, centre, upper = curves.bootstrap_band(
+                v, zeta, run, fits[name].degree, amplitudes, n_boot=bootstrap_samples,
+                confidence=confidence, seed=seed + 100 + offset, log_amplitude=log_amplitude,
+            )
+            for amplitude, low, mid, high in zip(amplitudes, lower, centre, upper):
+                area_rows.append({
+                    "configuration": name, "bearing_area_in2": known_areas[name],
+                    "velocity_amplitude_in_s": amplitude, "zeta": mid,
+                    "zeta_low": low, "zeta_high": high,
+                })
+    area = pd.DataFrame(area_rows, columns=[
+        "configuration", "bearing_area_in2", "velocity_amplitude_in_s", "zeta", "zeta_low", "zeta_high",
+    ])
+    return {
+        "fits": pd.DataFrame(fit_rows),
+        "curves": pd.concat(curve_frames, ignore_index=True) if curve_frames else pd.DataFrame(),
+        "hypotheses": hypotheses,
+        "area": area,
+    }

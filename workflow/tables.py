@@ -1,0 +1,105 @@
+"""Parquet tables with units in the schema, written atomically.
+
+A table is first written to a temporary file beside its target and then renamed,
+so an interrupted run never leaves a truncated table that a later rule would
+read as valid.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Mapping
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+#: Units of the columns that the output contract and the project's tables use.
+COLUMN_UNITS: dict[str, str] = {
+    "t_s": "s",
+    "response_amplitude": "response unit (see response_unit)",
+    "velocity_amplitude_in_s": "in/s",
+    "frequency_hz": "Hz",
+    "zeta": "1 (fraction of critical damping)",
+    "bearing_area_in2": "in^2",
+    "mode_hz": "Hz",
+    "band_low_hz": "Hz",
+    "band_high_hz": "Hz",
+    "fit_rms": "1 (rms residual of ln envelope)",
+}
+
+
+def atomic_write_bytes(path: Path | str, payload: bytes) -> None:
+    """Write ``payload`` to ``path`` through a temporary file and a rename."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+    try:
+        with os.fdopen(handle, "wb") as stream:
+            stream.write(payload)
+        os.replace(temporary, target)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def write_json(path: Path | str, document: object) -> None:
+    """Write a JSON document atomically (sorted keys for stable diffs)."""
+    text = json.dumps(document, indent=2, sort_keys=False, allow_nan=False, default=_json_default)
+    atomic_write_bytes(path, (text + "\n").encode())
+
+
+def _json_default(value: object) -> object:
+    # numpy scalars and arrays appear in computed documents
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def write_table(frame: pd.DataFrame, path: Path | str, units: Mapping[str, str] | None = None) -> None:
+    """Write ``frame`` as Parquet with each column's unit as field metadata.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The table; its index is dropped.
+    path : path
+        Target file; written atomically.
+    units : mapping, optional
+        Extra ``column -> unit`` entries beside :data:`COLUMN_UNITS`.
+    """
+    all_units = {**COLUMN_UNITS, **(units or {})}
+    table = pa.Table.from_pandas(frame.reset_index(drop=True), preserve_index=False)
+    fields = [
+        field.with_metadata({"unit": all_units[field.name]}) if field.name in all_units else field
+        for field in table.schema
+    ]
+    table = table.cast(pa.schema(fields, metadata=table.schema.metadata))
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+    os.close(handle)
+    try:
+        pq.write_table(table, temporary)
+        os.replace(temporary, target)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def read_table(path: Path | str) -> pd.DataFrame:
+    """Read a Parquet table written by :func:`write_table`."""
+    return pq.read_table(path).to_pandas()
+
+
+def column_units(path: Path | str) -> dict[str, str]:
+    """The ``unit`` field metadata of each column of a Parquet file."""
+    schema = pq.read_schema(path)
+    return {
+        field.name: field.metadata[b"unit"].decode()
+        for field in schema
+        if field.metadata and b"unit" in field.metadata
+    }
