@@ -55,9 +55,10 @@ class AnalysisSettings(_Strict):
 class QualitySettings(_Strict):
     """Per-run quality checks; a run failing one is excluded with its reason."""
 
-    clip_fraction_of_peak: float = Field(0.999, gt=0.5, le=1.0)
+    clip_fraction_of_peak: float = Field(0.9999, gt=0.5, le=1.0)
     """Samples within this fraction of the record's absolute peak count as
-    'at the peak'."""
+    'at the peak'. 0.9999 keeps a clean sine peak below 2 such samples up to
+    about 300 samples per cycle, while a clipped flat top has many."""
 
     clip_max_samples: int = Field(3, ge=1)
     """More samples than this at the peak (a flat top) means the response clipped."""

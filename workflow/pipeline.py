@@ -237,7 +237,7 @@ def read_and_check(
         record = read_run(campaign_dir, path, campaign)
     except CampaignFormatError as error:
         return None, [str(error)]
-    problems = [f"{path}: {problem}" for problem in quality.run_quality_checks(record, quality_settings)]
+    problems = [f"{path}: {problem}" for problem in quality.run_quality_checks(record, quality_settings, mode_hz=campaign.mode_hz)]
     return record, problems
 
 

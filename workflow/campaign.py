@@ -1,0 +1,1084 @@
+"""Reading a measurement campaign: campaign.yaml and the ASCII run files.
+
+This module implements the input contract of ``campaign-format.md``. Every malformed
+input becomes a :class:`CampaignFormatError` that names the file, the line (when the
+problem belongs to one) and what is wrong, so that a person can fix the file; the raw
+files are only ever opened for reading.
+
+Run files are parsed in two passes. The fast pass hands the numeric block (everything
+after the header) to pandas' C parser, which reads the 131,072-line real record in a
+few tens of milliseconds. Whenever it fails or its result is suspicious, a careful
+line-by-line pass re-reads the block to find and name the first bad line, so speed
+never costs an exact error message.
+
+Decisions where the contract leaves room (documented here because outside campaigns
+are run against them):
+
+- ``name`` may be omitted from campaign.yaml; the campaign folder's name is used.
+- A configuration given with no settings (``decay:`` or ``decay: {}``) takes the defaults.
+- Run files are matched by the configuration's glob; names starting with ``.`` (e.g.
+  macOS ``._run01.txt`` companions) are skipped, as a shell glob would. Runs are
+  sorted by plain (lexical) file name.
+- A response column whose unit (in parentheses) differs from campaign.yaml's response
+  unit is an error naming both, not a silent conversion: the contract makes any
+  file/campaign.yaml disagreement an error, and one of the two labels is then wrong.
+  The same holds for a force unit that contradicts campaign.yaml's ``force.unit``.
+  A force column's own unit (lbf or N) is always converted to lbf; a force column with
+  no unit anywhere is taken to be in lbf (the original lab's unit).
+- Columns whose names match no role are ignored; two columns with the same role are
+  an error.
+- A trailing delimiter at the end of every row (some exporters write one) is accepted.
+  Blank lines are accepted after the numbers, not among them.
+- Without a line of names, a single text line directly before one-column numbers is
+  indistinguishable from a header line and is treated as header.
+- ``Pre-trigger`` in the header may be given in samples (``25 samples`` or ``25``) or
+  in seconds (``0.01 s``, ``10 ms``), converted with the sample rate.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+import yaml
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from workflow import units
+
+MIN_SAMPLES: int = 256
+"""Fewest samples a run file must hold. Below this a record cannot hold even a few
+cycles of the mode plus the filter's settling time, and such short files are in
+practice truncated exports ("fewer than a few hundred samples" in the contract)."""
+
+TIME_STEP_REL_TOLERANCE: float = 0.01
+"""A time step may differ from the record's mean step by this fraction of it, plus
+the resolution with which the time column is printed (rounding of the last digit)."""
+
+SAMPLE_RATE_REL_TOLERANCE: float = 1e-3
+"""Sample rates from two sources (campaign.yaml, header, time column) agree when they
+differ by less than this fraction (plus the time column's print resolution over the
+record length)."""
+
+HEAD_ROWS: int = 11
+"""Numeric rows whose majority decides the delimiter and the column count, so that a
+single bad first row is reported as bad instead of setting the format."""
+
+CAMPAIGN_FILE: str = "campaign.yaml"
+
+# --------------------------------------------------------------------------------------
+# Errors
+
+
+class CampaignFormatError(ValueError):
+    """A campaign file breaks the input contract.
+
+    Attributes
+    ----------
+    path : str
+        The offending file.
+    line : int or None
+        1-based line number, or None when the problem is not tied to one line.
+    problem : str
+        What is wrong, in words a person can act on.
+    """
+
+    def __init__(self, path: str | Path, line: int | None, problem: str) -> None:
+        self.path = Path(path).as_posix() if isinstance(path, Path) else str(path)
+        self.line = line
+        self.problem = problem
+        super().__init__(self._message())
+
+    def _message(self) -> str:
+        if self.line is None:
+            return f"{self.path}: {self.problem}"
+        return f"{self.path}:{self.line}: {self.problem}"
+
+    def __str__(self) -> str:
+        return self._message()
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Exceptions are re-created from args when pickled (e.g. across processes).
+        return (type(self), (self.path, self.line, self.problem))
+
+
+# --------------------------------------------------------------------------------------
+# campaign.yaml
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, coerce_numbers_to_str=True)
+
+
+class ResponseSpec(_Strict):
+    """The recorded response channel."""
+
+    quantity: Literal["acceleration", "velocity", "displacement"]
+    unit: str
+    """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in)."""
+
+    @model_validator(mode="after")
+    def _unit_fits_quantity(self) -> "ResponseSpec":
+        canonical = units.normalize_unit(self.unit)
+        allowed = units.known_units(self.quantity)
+        if canonical not in allowed:
+            raise ValueError(
+                f"unit {self.unit!r} is not a unit of {self.quantity}; "
+                f"expected one of {', '.join(allowed)}"
+            )
+        object.__setattr__(self, "unit", canonical)
+        return self
+
+
+class ForceSpec(_Strict):
+    """The recorded hammer-force channel."""
+
+    unit: str
+    """Canonical unit name (lbf or N)."""
+
+    @field_validator("unit")
+    @classmethod
+    def _force_unit(cls, unit: str) -> str:
+        canonical = units.normalize_unit(unit)
+        if canonical not in units.known_units("force"):
+            raise ValueError(f"unit {unit!r} is not a force unit; expected lbf or N")
+        return canonical
+
+
+class ConfigurationSpec(_Strict):
+    """One joint configuration."""
+
+    bearing_area_in2: float | None = Field(None, gt=0.0)
+    files: str
+    """Glob relative to the campaign folder (default ``<name>/*.txt``)."""
+    window_s: tuple[float, float] | None = None
+    """Part of every run to analyse, [start, end] in s from the start of the file."""
+
+    @field_validator("files")
+    @classmethod
+    def _relative_glob(cls, files: str) -> str:
+        if not files.strip():
+            raise ValueError("files must be a non-empty glob")
+        if Path(files).is_absolute() or files.startswith(("/", "\\")):
+            raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
+        return files
+
+    @field_validator("window_s")
+    @classmethod
+    def _ordered_window(cls, window: tuple[float, float] | None) -> tuple[float, float] | None:
+        if window is not None and not (0.0 <= window[0] < window[1]):
+            raise ValueError(f"window_s must be [start, end] with 0 <= start < end, got {list(window)}")
+        return window
+
+
+class Campaign(_Strict):
+    """Validated content of campaign.yaml (see campaign-format.md)."""
+
+    name: str
+    sample_rate_hz: float | None = Field(None, gt=0.0)
+    pretrigger_samples: int = Field(0, ge=0)
+    mode_hz: float | None = Field(None, gt=0.0)
+    band_hz: tuple[float, float] | None = None
+    response: ResponseSpec
+    force: ForceSpec | None = None
+    configurations: dict[str, ConfigurationSpec] = Field(min_length=1)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_files(cls, raw: Any) -> Any:
+        # The files default depends on the configuration's name, so fill it in here.
+        if not isinstance(raw, dict) or not isinstance(raw.get("configurations"), dict):
+            return raw
+        filled = {}
+        for name, spec in raw["configurations"].items():
+            spec = {} if spec is None else spec
+            if isinstance(spec, dict) and "files" not in spec:
+                spec = {**spec, "files": f"{name}/*.txt"}
+            filled[name] = spec
+        return {**raw, "configurations": filled}
+
+    @field_validator("band_hz")
+    @classmethod
+    def _ordered_band(cls, band: tuple[float, float] | None) -> tuple[float, float] | None:
+        if band is not None and not (0.0 < band[0] < band[1]):
+            raise ValueError(f"band_hz must be [low, high] with 0 < low < high, got {list(band)}")
+        return band
+
+    @property
+    def pretrigger_given(self) -> bool:
+        """Whether campaign.yaml states ``pretrigger_samples`` (rather than the default 0)."""
+        return "pretrigger_samples" in self.model_fields_set
+
+
+_ALLOWED_KEYS: dict[str, tuple[str, ...]] = {
+    "": tuple(Campaign.model_fields),
+    "response": tuple(ResponseSpec.model_fields),
+    "force": tuple(ForceSpec.model_fields),
+    "configuration": tuple(ConfigurationSpec.model_fields),
+}
+
+
+def _allowed_keys(loc: tuple[Any, ...]) -> tuple[str, ...]:
+    """Keys allowed in the mapping that holds the key at ``loc``."""
+    parent = loc[:-1]
+    if not parent:
+        return _ALLOWED_KEYS[""]
+    if parent[0] == "configurations" and len(parent) == 2:
+        return _ALLOWED_KEYS["configuration"]
+    return _ALLOWED_KEYS.get(str(parent[0]), ())
+
+
+def _node_line(root: yaml.Node | None, loc: tuple[Any, ...]) -> int | None:
+    """1-based line of the YAML node at ``loc`` (or of its deepest existing parent)."""
+    node, line = root, None
+    for part in loc:
+        if isinstance(node, yaml.MappingNode):
+            match = next(
+                ((key, value) for key, value in node.value if str(key.value) == str(part)), None
+            )
+            if match is None:
+                return line  # a missing key: the line of its parent (None at top level)
+            line = match[0].start_mark.line + 1
+            node = match[1]
+        elif isinstance(node, yaml.SequenceNode) and isinstance(part, int) and part < len(node.value):
+            node = node.value[part]
+            line = node.start_mark.line + 1
+        else:
+            break
+    return line
+
+
+def _duplicate_key(node: yaml.Node | None) -> tuple[str, int] | None:
+    """First key that appears twice in one mapping (PyYAML keeps the last silently)."""
+    if isinstance(node, yaml.MappingNode):
+        seen: set[str] = set()
+        for key, value in node.value:
+            name = str(key.value)
+            if name in seen:
+                return name, key.start_mark.line + 1
+            seen.add(name)
+            found = _duplicate_key(value)
+            if found:
+                return found
+    elif isinstance(node, yaml.SequenceNode):
+        for item in node.value:
+            found = _duplicate_key(item)
+            if found:
+                return found
+    return None
+
+
+def load_campaign(campaign_dir: str | Path) -> Campaign:
+    """Read and validate ``campaign_dir/campaign.yaml``.
+
+    Parameters
+    ----------
+    campaign_dir : str or Path
+        The campaign folder.
+
+    Returns
+    -------
+    Campaign
+        The validated metadata, with every configuration's ``files`` glob filled in.
+
+    Raises
+    ------
+    CampaignFormatError
+        Missing or unreadable file, YAML syntax error, unknown key, duplicate key or bad
+        value; the message names campaign.yaml, the line and the key.
+    """
+    path = Path(campaign_dir) / CAMPAIGN_FILE
+    if not path.is_file():
+        raise CampaignFormatError(
+            path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
+        )
+    text = path.read_text(encoding="utf-8-sig", errors="replace")
+    try:
+        root = yaml.compose(text, Loader=yaml.SafeLoader)
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        problem = getattr(error, "problem", None) or str(error)
+        raise CampaignFormatError(
+            path, None if mark is None else mark.line + 1, f"not valid YAML: {problem}"
+        ) from None
+    if not isinstance(raw, dict):
+        raise CampaignFormatError(path, 1, "must be a mapping of keys (name, response, configurations, ...)")
+    duplicate = _duplicate_key(root)
+    if duplicate:
+        raise CampaignFormatError(path, duplicate[1], f"{duplicate[0]}: key given twice")
+    if "name" not in raw:
+        raw = {**raw, "name": Path(campaign_dir).resolve().name}
+    try:
+        return Campaign.model_validate(raw)
+    except ValidationError as error:
+        problems, first_line = [], None
+        for item in error.errors():
+            loc = tuple(item["loc"])
+            key = ".".join(str(part) for part in loc) or "(top level)"
+            if item["type"] == "extra_forbidden":
+                message = f"unknown key (allowed here: {', '.join(_allowed_keys(loc))})"
+            elif item["type"] == "missing":
+                message = "required key is missing"
+            else:
+                message = item["msg"]
+            problems.append(f"{key}: {message}")
+            if first_line is None:
+                first_line = _node_line(root, loc)
+        raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
+
+
+# --------------------------------------------------------------------------------------
+# Run discovery
+
+
+@dataclass(frozen=True)
+class RunFile:
+    """One run file of a configuration."""
+
+    configuration: str
+    run: str
+    """File name without extension."""
+    path: str
+    """Path relative to the campaign folder, with ``/`` separators."""
+
+
+def list_runs(campaign_dir: str | Path, campaign: Campaign) -> list[RunFile]:
+    """All run files, configurations in campaign.yaml order, runs sorted by file name.
+
+    Parameters
+    ----------
+    campaign_dir : str or Path
+        The campaign folder.
+    campaign : Campaign
+        Its validated campaign.yaml.
+
+    Returns
+    -------
+    list of RunFile
+        Name order is run order; files starting with ``.`` are skipped.
+
+    Raises
+    ------
+    CampaignFormatError
+        Two runs of one configuration with the same name (their rows would collide).
+    """
+    root = Path(campaign_dir)
+    runs: list[RunFile] = []
+    for configuration, spec in campaign.configurations.items():
+        matches = sorted(
+            (p for p in root.glob(spec.files) if p.is_file() and not p.name.startswith(".")),
+            key=lambda p: (p.name, p.as_posix()),
+        )
+        seen: dict[str, str] = {}
+        for match in matches:
+            relative = match.relative_to(root).as_posix()
+            if match.stem in seen:
+                raise CampaignFormatError(
+                    root / CAMPAIGN_FILE,
+                    None,
+                    f"configurations.{configuration}.files matches two runs named "
+                    f"{match.stem!r}: {seen[match.stem]} and {relative}",
+                )
+            seen[match.stem] = relative
+            runs.append(RunFile(configuration, match.stem, relative))
+    return runs
+
+
+# --------------------------------------------------------------------------------------
+# Run files: tokens and rows
+
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+_KEY_VALUE = re.compile(r"\s*([^:]*[^:\s])\s*:\s*(.*?)\s*")
+_VALUE_WITH_UNIT = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*")
+_NAME_WITH_UNIT = re.compile(r"(.*?)\s*(?:\(([^)]*)\)|\[([^\]]*)\])\s*")
+_SPACES = " "  # marker: columns separated by runs of spaces
+_DELIMITER_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", _SPACES: "spaces"}
+# Characters a numeric block may hold; anything else sends it to the careful pass.
+_FOREIGN = {
+    "\t": re.compile(r"[^0-9eE+\-. \t\n]"),
+    ",": re.compile(r"[^0-9eE+\-. ,\n]"),
+    ";": re.compile(r"[^0-9eE+\-. ;\n]"),
+    _SPACES: re.compile(r"[^0-9eE+\-. \n]"),
+}
+
+
+def _line_delimiter(line: str) -> str:
+    """The delimiter a single row appears to use (tab, comma, semicolon, else spaces)."""
+    for delimiter in ("\t", ",", ";"):
+        if delimiter in line:
+            return delimiter
+    return _SPACES
+
+
+def _split_row(line: str, delimiter: str) -> list[str]:
+    """Cells of one row; a single trailing comma/semicolon is tolerated."""
+    if delimiter == _SPACES:
+        return line.split()
+    cells = [cell.strip() for cell in line.strip().split(delimiter)]
+    if len(cells) > 1 and cells[-1] == "":
+        cells.pop()
+    return cells
+
+
+def _is_numeric_row(line: str) -> bool:
+    cells = _split_row(line, _line_delimiter(line))
+    return bool(cells) and all(_NUMBER.fullmatch(cell) for cell in cells)
+
+
+def _is_data_like(cell: str) -> bool:
+    """A token that looks like a measured value (decimal, exponent, NaN or inf)."""
+    if _NON_FINITE.fullmatch(cell):
+        return True
+    return bool(_NUMBER.fullmatch(cell)) and ("." in cell or "e" in cell.lower())
+
+
+def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) -> str | None:
+    """What is wrong with one row of the numeric block, or None if it is fine."""
+    stripped = line.strip()
+    if not stripped:
+        return "blank line among the numbers"
+    for other in ("\t", ",", ";"):
+        if other != delimiter and other in stripped:
+            return (
+                f"mixed delimiters: {_DELIMITER_NAMES[other]} in a row separated by "
+                f"{_DELIMITER_NAMES[delimiter]} (as set by the numbers from line {format_line})"
+                + ("; note that '.' is the decimal point" if other == "," else "")
+            )
+    cells = _split_row(stripped, delimiter)
+    if delimiter != _SPACES and any(re.search(r"\s", cell) for cell in cells):
+        return (
+            f"mixed delimiters: spaces inside a cell of a row separated by "
+            f"{_DELIMITER_NAMES[delimiter]}"
+        )
+    if len(cells) != n_columns:
+        return (
+            f"ragged row: {len(cells)} value{'s' if len(cells) != 1 else ''}, expected "
+            f"{n_columns} like the rows from line {format_line}"
+        )
+    for column, cell in enumerate(cells, start=1):
+        if cell == "":
+            return f"empty cell in column {column}"
+        if _NON_FINITE.fullmatch(cell):
+            return f"NaN/inf value {cell!r} in column {column}"
+        if not _NUMBER.fullmatch(cell):
+            return f"non-numeric cell {cell!r} in column {column}"
+        if not math.isfinite(float(cell)):
+            return f"value {cell!r} in column {column} overflows a float"
+    return None
+
+
+CAREFUL_CHUNK_ROWS: int = 2048
+"""Rows per chunk when hunting for a bad line: clean chunks still go through the C
+parser, so only the chunk holding the bad line is read line by line."""
+
+
+def _parse_block_careful(
+    rows: list[str], first_line: int, delimiter: str, n_columns: int, path: str
+) -> NDArray[np.float64]:
+    """Parse that names the first bad line (chunked; line by line where needed)."""
+    values = np.empty((len(rows), n_columns))
+    for start in range(0, len(rows), CAREFUL_CHUNK_ROWS):
+        chunk = rows[start:start + CAREFUL_CHUNK_ROWS]
+        fast = _parse_block_fast("\n".join(chunk), delimiter, len(chunk), n_columns)
+        if fast is not None:
+            values[start:start + len(chunk)] = fast
+            continue
+        for index, row in enumerate(chunk, start=start):
+            problem = _row_problem(row, delimiter, n_columns, first_line)
+            if problem is not None:
+                raise CampaignFormatError(path, first_line + index, problem)
+            values[index] = [float(cell) for cell in _split_row(row, delimiter)]
+    return values
+
+
+def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -> NDArray[np.float64] | None:
+    """C-parser read of the numeric block; None whenever the careful pass must decide."""
+    if _FOREIGN[delimiter].search(block):
+        return None
+    try:
+        frame = pd.read_csv(
+            io.StringIO(block),
+            sep=r"\s+" if delimiter == _SPACES else delimiter,
+            header=None,
+            dtype=np.float64,
+            engine="c",
+            quoting=csv.QUOTE_NONE,
+            skip_blank_lines=False,
+        )
+    except (ValueError, pd.errors.ParserError):
+        return None
+    values = frame.to_numpy(dtype=np.float64)
+    if delimiter != _SPACES and values.shape[1] == n_columns + 1 and np.isnan(values[:, -1]).all():
+        values = values[:, :n_columns]  # one trailing delimiter on every row
+    if values.shape != (n_rows, n_columns) or not np.isfinite(values).all():
+        return None
+    return np.ascontiguousarray(values)
+
+
+def _print_resolution(tokens: list[str]) -> float:
+    """Spacing of the last printed digit of the coarsest of some numbers.
+
+    ``'0.0000195'`` -> 1e-7, ``'1.28e+01'`` -> 0.1. Bare integers (such as a first
+    time stamp written ``0``) say nothing about the precision and are skipped unless
+    all tokens are integers.
+    """
+    resolutions = []
+    for token in tokens:
+        mantissa, marker, exponent = token.lower().partition("e")
+        if "." in mantissa or marker:
+            decimals = len(mantissa.partition(".")[2])
+            resolutions.append(10.0 ** (int(exponent or 0) - decimals))
+    return max(resolutions) if resolutions else 1.0
+
+
+# --------------------------------------------------------------------------------------
+# Run files: header
+
+
+def _split_name_unit(name: str) -> tuple[str, str | None]:
+    """``"Force (lbf)"`` -> ``("Force", "lbf")``; ``"Force"`` -> ``("Force", None)``."""
+    match = _NAME_WITH_UNIT.fullmatch(name.strip())
+    if match and match.group(1):
+        return match.group(1), (match.group(2) if match.group(2) is not None else match.group(3)).strip()
+    return name.strip(), None
+
+
+def _column_role(name: str) -> str | None:
+    """time, force or response from a column name (campaign-format.md rules)."""
+    base = _split_name_unit(name)[0].lower()
+    if base.startswith("time"):
+        return "time"
+    if "force" in base or "hammer" in base:
+        return "force"
+    if any(key in base for key in ("acc", "vel", "resp", "disp")):
+        return "response"
+    return None
+
+
+def _merge_unit_tokens(tokens: list[str]) -> list[str]:
+    """Re-join whitespace tokens so that ``Time (s)`` stays one name."""
+    merged: list[str] = []
+    for token in tokens:
+        open_unit = merged and merged[-1].count("(") > merged[-1].count(")")
+        if merged and (token.startswith(("(", "[")) or open_unit):
+            merged[-1] += " " + token
+        else:
+            merged.append(token)
+    return merged
+
+
+def _split_names(line: str, delimiter: str, n_columns: int) -> list[str] | None:
+    """The line's cells when some reading of it gives exactly ``n_columns`` names."""
+    stripped = line.strip()
+    candidates = []
+    if delimiter != _SPACES:
+        candidates.append(_split_row(stripped, delimiter))
+    candidates += [[cell.strip() for cell in stripped.split(d)] for d in ("\t", ",", ";")]
+    candidates.append(re.split(r"\s{2,}", stripped))
+    candidates.append(_merge_unit_tokens(stripped.split()))
+    for names in candidates:
+        if len(names) == n_columns and all(names):
+            return names
+    return None
+
+
+def _names_of(line: str, delimiter: str, n_columns: int) -> list[str] | None:
+    names = _split_names(line, delimiter, n_columns)
+    if names is not None and any(_column_role(name) for name in names):
+        return names
+    return None
+
+
+_KNOWN_UNIT_WORDS = {"s", "ms", "sec", "lbf", "N", "g", "m/s^2", "in/s^2", "m/s", "in/s", "m", "in"}
+
+
+def _is_units_row(line: str, delimiter: str, n_columns: int) -> list[str] | None:
+    """Cells of a line of bare units under the names (``s  lbf  g``), else None."""
+    cells = _split_names(line, delimiter, n_columns)
+    if cells is None:
+        return None
+    bare = [cell.strip("()[] ") for cell in cells]
+    if all(units.normalize_unit(cell) in _KNOWN_UNIT_WORDS for cell in bare):
+        return bare
+    return None
+
+
+def _canonical_header_key(key: str) -> tuple[str, str | None]:
+    """``"Sample rate (Hz)"`` -> ``("sample rate", "Hz")``."""
+    name, unit = _split_name_unit(key)
+    return re.sub(r"[\s_\-]+", " ", name.lower()).strip(), unit
+
+
+_SAMPLE_RATE_KEYS = {
+    "sample rate", "sampling rate", "sample frequency", "sampling frequency",
+    "sampling freq", "sample freq", "fs",
+}
+_PRETRIGGER_KEYS = {
+    "pre trigger", "pretrigger", "pre trigger samples", "pretrigger samples",
+    "pre trigger length", "pretrigger length",
+}
+_RATE_FACTORS_HZ = {"": 1.0, "hz": 1.0, "khz": 1e3, "sps": 1.0, "samples/s": 1.0, "s/s": 1.0}
+_PRETRIGGER_SAMPLE_UNITS = {"", "samples", "sample", "points", "pts"}
+_PRETRIGGER_TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
+
+
+@dataclass(frozen=True)
+class _HeaderValues:
+    sample_rate_hz: float | None = None
+    sample_rate_line: int | None = None
+    pretrigger_samples: int | None = None
+    pretrigger_s: float | None = None
+    pretrigger_line: int | None = None
+    entries: dict[str, str] = field(default_factory=dict)
+
+
+def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
+    """``key: value`` lines of the header, with sample rate and pre-trigger understood."""
+    entries: dict[str, str] = {}
+    rate = rate_line = pre_samples = pre_s = pre_line = None
+    for number, line in lines:
+        match = _KEY_VALUE.fullmatch(line)
+        if not match:
+            continue
+        key, value = match.group(1), match.group(2)
+        entries.setdefault(key, value)
+        name, key_unit = _canonical_header_key(key)
+        if name in _SAMPLE_RATE_KEYS and rate is None:
+            parsed = _VALUE_WITH_UNIT.fullmatch(value)
+            unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
+            if not parsed or unit not in _RATE_FACTORS_HZ or float(parsed.group(1)) <= 0:
+                raise CampaignFormatError(
+                    path, number, f"cannot read a positive sample rate in Hz from {line.strip()!r}"
+                )
+            rate, rate_line = float(parsed.group(1)) * _RATE_FACTORS_HZ[unit], number
+        elif name in _PRETRIGGER_KEYS and pre_line is None:
+            parsed = _VALUE_WITH_UNIT.fullmatch(value)
+            unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
+            amount = float(parsed.group(1)) if parsed else -1.0
+            if parsed and amount >= 0 and unit in _PRETRIGGER_SAMPLE_UNITS and amount == round(amount):
+                pre_samples, pre_line = int(round(amount)), number
+            elif parsed and amount >= 0 and unit in _PRETRIGGER_TIME_UNITS_S:
+                pre_s, pre_line = amount * _PRETRIGGER_TIME_UNITS_S[unit], number
+            else:
+                raise CampaignFormatError(
+                    path, number,
+                    f"cannot read the pre-trigger from {line.strip()!r} "
+                    "(expected a whole number of samples, e.g. 'Pre-trigger: 25 samples')",
+                )
+    return _HeaderValues(rate, rate_line, pre_samples, pre_s, pre_line, entries)
+
+
+# --------------------------------------------------------------------------------------
+# Run files: the record
+
+
+@dataclass(frozen=True, eq=False)
+class RunRecord:
+    """One run file, read and checked.
+
+    Attributes
+    ----------
+    path : str
+        The file's path relative to the campaign folder (``/`` separators).
+    sample_rate_hz : float
+        Samples per second.
+    pretrigger_samples : int
+        Samples recorded before the trigger.
+    time_s : ndarray or None
+        The file's time column in s, when it has one.
+    force_lbf : ndarray or None
+        Hammer force in lbf, when recorded.
+    response : ndarray
+        The response in the campaign's response unit, as in the file.
+    response_quantity : str
+        acceleration, velocity or displacement.
+    response_unit : str
+        Canonical unit of ``response``.
+    header : dict
+        The header's ``key: value`` lines (raw strings).
+    n_samples : int
+        Number of samples.
+    column_names : tuple of str
+        Names from the header's line of names (empty without one).
+    sample_rate_source : str
+        Where the sample rate came from: ``campaign.yaml``, ``header`` or ``time column``.
+    pretrigger_source : str
+        ``campaign.yaml``, ``header`` or ``default`` (contract default 0, not stated).
+    """
+
+    path: str
+    sample_rate_hz: float
+    pretrigger_samples: int
+    time_s: NDArray[np.float64] | None
+    force_lbf: NDArray[np.float64] | None
+    response: NDArray[np.float64]
+    response_quantity: str
+    response_unit: str
+    header: dict[str, str]
+    n_samples: int
+    column_names: tuple[str, ...] = ()
+    sample_rate_source: str = "campaign.yaml"
+    pretrigger_source: str = "default"
+
+
+@dataclass(frozen=True)
+class _Columns:
+    roles: dict[str, int]
+    units: dict[str, str | None]
+    names: tuple[str, ...]
+    line: int | None
+
+
+def _read_text(path: Path, shown: str) -> str:
+    """File text with LF line ends (UTF-8, else Windows-1252 for old exports)."""
+    with open(path, "rb") as handle:  # read-only: raw files are never modified
+        raw = handle.read()
+    nul = raw.find(b"\x00")
+    if nul >= 0:
+        raise CampaignFormatError(
+            shown, raw.count(b"\n", 0, nul) + 1, "binary data (NUL byte): not a text export"
+        )
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("cp1252", errors="replace")
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    return text
+
+
+def _locate_numbers(text: str) -> tuple[list[tuple[int, str]], int, int]:
+    """Header lines, character offset and 1-based line of the first numeric row."""
+    header: list[tuple[int, str]] = []
+    position, number = 0, 0
+    while position < len(text):
+        end = text.find("\n", position)
+        end = len(text) if end < 0 else end
+        line = text[position:end]
+        number += 1
+        if line.strip() and _is_numeric_row(line):
+            return header, position, number
+        header.append((number, line))
+        position = end + 1
+    return header, -1, number
+
+
+def _majority(items: list[Any], fallback: Any) -> Any:
+    if not items:
+        return fallback
+    counts = Counter(items)
+    best = max(counts.values())
+    return next(item for item in items if counts[item] == best)
+
+
+def _find_columns(
+    header: list[tuple[int, str]], first_line: int, delimiter: str, n_columns: int,
+    campaign: Campaign, path: str,
+) -> _Columns:
+    """Column roles and units from the line of names, or the positional rules."""
+    text_lines = [
+        (number, line) for number, line in header
+        if line.strip() and not _KEY_VALUE.fullmatch(line)
+    ]
+    # A first data row with a bad cell is not numeric and so lands in the header:
+    # recognise it by its shape so that it is reported instead of silently dropped.
+    if text_lines and text_lines[-1][0] == first_line - 1:
+        number, line = text_lines[-1]
+        tokens = [t for t in re.split(r"[\t,;\s]+", line.strip()) if t]
+        # With several columns a bad row may also have lost or gained a cell; with one
+        # column only an exact match is taken, so that a title line stays a title.
+        counts = (n_columns,) if n_columns == 1 else (n_columns - 1, n_columns, n_columns + 1)
+        if len(tokens) in counts and any(_is_data_like(t) for t in tokens):
+            problem = _row_problem(line, delimiter, n_columns, first_line) or "not a numeric row"
+            raise CampaignFormatError(path, number, problem)
+
+    names, names_line, units_cells = None, None, None
+    if text_lines:
+        last_number, last_line = text_lines[-1]
+        names = _names_of(last_line, delimiter, n_columns)
+        names_line = last_number if names else None
+        if names is None and len(text_lines) >= 2:
+            above_number, above_line = text_lines[-2]
+            above = _names_of(above_line, delimiter, n_columns)
+            if above is not None:
+                units_cells = _is_units_row(last_line, delimiter, n_columns)
+                if units_cells is None:
+                    raise CampaignFormatError(
+                        path, last_number,
+                        f"unexpected text {last_line.strip()!r} between the column names "
+                        f"(line {above_number}) and the numbers",
+                    )
+                names, names_line = above, above_number
+        if names is None:
+            roles_in_line = {_column_role(t) for t in _merge_unit_tokens(last_line.split())} - {None}
+            if len(roles_in_line) >= 2:
+                raise CampaignFormatError(
+                    path, last_number,
+                    f"the column names do not match the {n_columns} column(s) of numbers",
+                )
+
+    if names is None:
+        if n_columns == 3:
+            order = ("time", "force", "response")
+        elif n_columns == 2:
+            order = ("force", "response") if campaign.force is not None else ("time", "response")
+        elif n_columns == 1:
+            order = ("response",)
+        else:
+            raise CampaignFormatError(
+                path, first_line,
+                f"{n_columns} columns and no line of column names: cannot tell which is "
+                "the response (name the columns, e.g. 'Time (s)  Force (lbf)  Acceleration (g)')",
+            )
+        return _Columns({role: i for i, role in enumerate(order)}, {}, (), None)
+
+    roles: dict[str, int] = {}
+    column_units: dict[str, str | None] = {}
+    for index, name in enumerate(names):
+        role = _column_role(name)
+        if role is None:
+            continue  # columns with other names (extra channels) are not used
+        if role in roles:
+            raise CampaignFormatError(
+                path, names_line,
+                f"two {role} columns: {names[roles[role]]!r} and {name!r}",
+            )
+        roles[role] = index
+        unit = _split_name_unit(name)[1]
+        if units_cells is not None:
+            unit = units_cells[index]
+        column_units[role] = unit
+    if "response" not in roles:
+        raise CampaignFormatError(
+            path, names_line,
+            f"no response column among {names} (a response column's name contains "
+            "acc, vel, resp or disp)",
+        )
+    response_name = _split_name_unit(names[roles["response"]])[0].lower()
+    for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
+        if word in response_name and quantity != campaign.response.quantity:
+            raise CampaignFormatError(
+                path, names_line,
+                f"response column {names[roles['response']]!r} is {quantity} but "
+                f"campaign.yaml says response quantity {campaign.response.quantity}",
+            )
+    return _Columns(roles, column_units, tuple(names), names_line)
+
+
+def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tuple[float, float]:
+    """Factors taking the time column to s and the force column to lbf; checks units."""
+    line = columns.line
+    time_factor_s = 1.0
+    time_unit = columns.units.get("time")
+    if time_unit:
+        time_factor_s = {"s": 1.0, "sec": 1.0, "ms": 1e-3}.get(time_unit.strip().lower(), 0.0)
+        if time_factor_s == 0.0:
+            raise CampaignFormatError(path, line, f"time column unit {time_unit!r}: expected s or ms")
+    response_unit = columns.units.get("response")
+    if response_unit and units.normalize_unit(response_unit) != campaign.response.unit:
+        raise CampaignFormatError(
+            path, line,
+            f"response column unit {response_unit!r} disagrees with campaign.yaml "
+            f"response unit {campaign.response.unit!r}",
+        )
+    force_factor_lbf = 1.0
+    if "force" in columns.roles:
+        file_unit = columns.units.get("force")
+        yaml_unit = campaign.force.unit if campaign.force is not None else None
+        if file_unit:
+            canonical = units.normalize_unit(file_unit)
+            if canonical not in units.known_units("force"):
+                raise CampaignFormatError(path, line, f"force column unit {file_unit!r}: expected lbf or N")
+            if yaml_unit is not None and canonical != yaml_unit:
+                raise CampaignFormatError(
+                    path, line,
+                    f"force column unit {file_unit!r} disagrees with campaign.yaml force unit {yaml_unit!r}",
+                )
+        # The column's own unit first; else campaign.yaml's; else the original lab's lbf.
+        unit = units.normalize_unit(file_unit) if file_unit else (yaml_unit or "lbf")
+        force_factor_lbf = units.factor_to_internal("force", unit)
+    return time_factor_s, force_factor_lbf
+
+
+def _check_time(
+    time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str
+) -> float:
+    """Sample rate (Hz) from a time column that must increase in uniform steps."""
+    steps = np.diff(time_s)
+    backwards = np.flatnonzero(steps <= 0.0)
+    if backwards.size:
+        i = int(backwards[0])
+        raise CampaignFormatError(
+            path, first_line + i + 1,
+            f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s",
+        )
+    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
+    tolerance_s = TIME_STEP_REL_TOLERANCE * mean_step_s + resolution_s
+    uneven = np.flatnonzero(np.abs(steps - mean_step_s) > tolerance_s)
+    if uneven.size:
+        i = int(uneven[0])
+        raise CampaignFormatError(
+            path, first_line + i + 1,
+            f"time column not uniform: step {steps[i]:.6g} s differs from the mean step "
+            f"{mean_step_s:.6g} s by {100 * abs(steps[i] / mean_step_s - 1):.3g} % "
+            f"(tolerance {100 * tolerance_s / mean_step_s:.3g} %)",
+        )
+    return 1.0 / mean_step_s
+
+
+def _rates_agree(a_hz: float, b_hz: float, extra_rel: float = 0.0) -> bool:
+    return abs(a_hz - b_hz) <= (SAMPLE_RATE_REL_TOLERANCE + extra_rel) * max(a_hz, b_hz)
+
+
+def read_run(
+    campaign_dir: str | Path, run_file_or_path: RunFile | str | Path, campaign: Campaign
+) -> RunRecord:
+    """Read one run file and check it against the input contract.
+
+    Parameters
+    ----------
+    campaign_dir : str or Path
+        The campaign folder.
+    run_file_or_path : RunFile, str or Path
+        The run, or its path (relative to ``campaign_dir``, or absolute).
+    campaign : Campaign
+        The campaign's validated campaign.yaml.
+
+    Returns
+    -------
+    RunRecord
+        Response in the campaign's unit, force in lbf, time in s.
+
+    Raises
+    ------
+    CampaignFormatError
+        Any malformed input; the message names the file (as
+        ``campaign_dir/relative path``), the line and the problem.
+    """
+    root = Path(campaign_dir)
+    given = Path(run_file_or_path.path if isinstance(run_file_or_path, RunFile) else run_file_or_path)
+    full = given if given.is_absolute() else root / given
+    try:
+        relative = full.relative_to(root).as_posix()
+    except ValueError:
+        relative = full.as_posix()
+    shown = full.as_posix()
+    if not full.is_file():
+        raise CampaignFormatError(shown, None, "no such file")
+
+    text = _read_text(full, shown)
+    if not text.strip():
+        raise CampaignFormatError(shown, 1, "the file is empty")
+    header, offset, first_line = _locate_numbers(text)
+    if offset < 0:
+        last_line = len(text.rstrip("\n").split("\n"))
+        raise CampaignFormatError(
+            shown, last_line,
+            f"no numeric rows: all {last_line} line(s) are header text (expected numbers "
+            "after the header, one sample per line)",
+        )
+
+    block = text[offset:].rstrip()
+    rows_head = block.split("\n", HEAD_ROWS)[:HEAD_ROWS]
+    rows_head = [row for row in rows_head if row.strip()]
+    delimiter = _majority([_line_delimiter(row) for row in rows_head], _SPACES)
+    n_columns = _majority([len(_split_row(row, delimiter)) for row in rows_head], 1)
+    n_rows = block.count("\n") + 1
+
+    header_values = _header_values(header, shown)
+    columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
+    time_factor_s, force_factor_lbf = _column_unit_factors(columns, campaign, shown)
+
+    values = _parse_block_fast(block, delimiter, n_rows, n_columns)
+    if values is None:
+        values = _parse_block_careful(block.split("\n"), first_line, delimiter, n_columns, shown)
+    last_data_line = first_line + n_rows - 1
+    if n_rows < MIN_SAMPLES:
+        raise CampaignFormatError(
+            shown, last_data_line,
+            f"only {n_rows} samples; a run needs at least {MIN_SAMPLES}",
+        )
+
+    # Sample rate: campaign.yaml, then the header, then the time column; any two
+    # sources that are present must agree.
+    sources: list[tuple[str, float, int | None, float]] = []
+    if campaign.sample_rate_hz is not None:
+        sources.append(("campaign.yaml sample_rate_hz", campaign.sample_rate_hz, None, 0.0))
+    if header_values.sample_rate_hz is not None:
+        sources.append(("header", header_values.sample_rate_hz, header_values.sample_rate_line, 0.0))
+    time_s = None
+    if "time" in columns.roles:
+        time_s = values[:, columns.roles["time"]] * time_factor_s
+        first_row, last_row = rows_head[0], block.rsplit("\n", 1)[-1]
+        resolution_s = time_factor_s * _print_resolution(
+            [_split_row(row, delimiter)[columns.roles["time"]] for row in (first_row, last_row)]
+        )
+        rate_hz = _check_time(time_s, resolution_s, first_line, shown)
+        duration_s = time_s[-1] - time_s[0]
+        sources.append(("time column", rate_hz, first_line, 2.0 * resolution_s / duration_s))
+    if not sources:
+        raise CampaignFormatError(
+            shown, None,
+            "sample rate missing: no time column, no 'Sample rate: ... Hz' header line "
+            "and no sample_rate_hz in campaign.yaml",
+        )
+    for i, (name_a, rate_a, line_a, slack_a) in enumerate(sources):
+        for name_b, rate_b, line_b, slack_b in sources[i + 1:]:
+            if not _rates_agree(rate_a, rate_b, slack_a + slack_b):
+                raise CampaignFormatError(
+                    shown, line_b if line_b is not None else line_a,
+                    f"sample rate {rate_b:.9g} Hz from the {name_b} disagrees with "
+                    f"{rate_a:.9g} Hz from the {name_a}",
+                )
+    source_name, sample_rate_hz = sources[0][0], sources[0][1]
+    sample_rate_source = "campaign.yaml" if source_name.startswith("campaign") else source_name
+
+    pretrigger_samples, pretrigger_source = campaign.pretrigger_samples, "default"
+    if header_values.pretrigger_line is not None:
+        header_pre = header_values.pretrigger_samples
+        if header_pre is None:
+            header_pre = int(round(header_values.pretrigger_s * sample_rate_hz))
+        if campaign.pretrigger_given and header_pre != campaign.pretrigger_samples:
+            raise CampaignFormatError(
+                shown, header_values.pretrigger_line,
+                f"pre-trigger {header_pre} samples in the header disagrees with "
+                f"campaign.yaml pretrigger_samples {campaign.pretrigger_samples}",
+            )
+        pretrigger_samples, pretrigger_source = header_pre, "header"
+    if campaign.pretrigger_given:
+        pretrigger_source = "campaign.yaml"
+    if pretrigger_samples >= n_rows:
+        raise CampaignFormatError(
+            shown, header_values.pretrigger_line,
+            f"pre-trigger of {pretrigger_samples} samples is not shorter than the record ({n_rows} samples)",
+        )
+
+    force_lbf = None
+    if "force" in columns.roles:
+        force_lbf = values[:, columns.roles["force"]] * force_factor_lbf
+    response = np.ascontiguousarray(values[:, columns.roles["response"]])
+    return RunRecord(
+        path=relative,
+        sample_rate_hz=float(sample_rate_hz),
+        pretrigger_samples=int(pretrigger_samples),
+        time_s=None if time_s is None else np.ascontiguousarray(time_s),
+        force_lbf=None if force_lbf is None else np.ascontiguousarray(force_lbf),
+        response=response,
+        response_quantity=campaign.response.quantity,
+        response_unit=campaign.response.unit,
+        header=dict(header_values.entries),
+        n_samples=int(n_rows),
+        column_names=columns.names,
+        sample_rate_source=sample_rate_source,
+        pretrigger_source=pretrigger_source,
+    )

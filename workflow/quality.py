@@ -1,0 +1,305 @@
+"""Per-run quality checks.
+
+Each check is a pure function over arrays that returns None when the run passes, or a
+short reason saying which check failed and by how much (the reason is what
+runs.parquet shows a person for an excluded run). :func:`run_quality_checks` applies
+the checks that need no decay analysis; :func:`check_snr` is applied by the analysis,
+which knows the in-band envelope and noise floor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from workflow.campaign import RunRecord
+from workflow.config import QualitySettings
+
+TRIGGER_TOLERANCE_SAMPLES: int = 5
+"""How far (in samples) the force's first crossing of the trigger level may sit from
+the pre-trigger length: the recorder triggers on its own copy of the signal, and the
+hammer pulse rises over a few samples."""
+
+MIN_RECORD_CYCLES: float = 20.0
+"""Default shortest record, in cycles of the mode: enough for three 10-cycle
+log-decrement segments overlapping by half (the analysis defaults) plus margin."""
+
+
+def _oriented_force(force_lbf: ArrayLike) -> NDArray[np.float64]:
+    """Force with the hammer pulse positive (some exports record compression < 0)."""
+    force = np.asarray(force_lbf, dtype=np.float64)
+    if force.size and abs(force.min()) > abs(force.max()):
+        return -force
+    return force
+
+
+def check_clipping(
+    response: ArrayLike, clip_fraction_of_peak: float, clip_max_samples: int, unit: str = ""
+) -> str | None:
+    """Flat-topped (clipped) response: too many samples at the record's absolute peak.
+
+    Parameters
+    ----------
+    response : array_like
+        The response, any unit.
+    clip_fraction_of_peak : float
+        Samples with ``|x| >= clip_fraction_of_peak * max|x|`` count as at the peak.
+    clip_max_samples : int
+        More samples than this at the peak means the response clipped.
+    unit : str, optional
+        Unit of ``response``, only for the message.
+
+    Returns
+    -------
+    str or None
+        None when the run passes, else the reason.
+    """
+    magnitude = np.abs(np.asarray(response, dtype=np.float64))
+    if magnitude.size == 0:
+        return "response is empty"
+    peak = float(magnitude.max())
+    if peak == 0.0:
+        return "response is zero throughout"
+    at_peak = int(np.count_nonzero(magnitude >= clip_fraction_of_peak * peak))
+    if at_peak <= clip_max_samples:
+        return None
+    return (
+        f"response clipped: {at_peak} samples within {100 * (1 - clip_fraction_of_peak):.3g} % "
+        f"of the peak {peak:.4g}{' ' + unit if unit else ''} (limit {clip_max_samples})"
+    )
+
+
+def check_double_hit(
+    force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float
+) -> str | None:
+    """Two hammer pulses: a second one larger than ``ratio`` of the main one.
+
+    Pulses are the stretches where the force exceeds ``ratio`` times its peak; a
+    stretch whose own peak lies at least ``gap_s`` from the main peak is a second hit
+    (closer stretches are the same pulse dipping below the level).
+
+    Parameters
+    ----------
+    force_lbf : array_like
+        Hammer force, lbf.
+    fs_hz : float
+        Sample rate, Hz.
+    ratio : float
+        Fraction of the main peak above which a second pulse counts.
+    gap_s : float
+        Least separation of the two peaks, s.
+
+    Returns
+    -------
+    str or None
+        None when the run passes, else the reason.
+    """
+    force = _oriented_force(force_lbf)
+    if force.size == 0:
+        return None
+    main_index = int(np.argmax(force))
+    main_peak_lbf = float(force[main_index])
+    if main_peak_lbf <= 0.0:
+        return None  # no pulse at all: check_excitation reports it
+    above = force > ratio * main_peak_lbf
+    # Boundaries of the stretches above the level.
+    edges = np.flatnonzero(np.diff(above.astype(np.int8)))
+    starts = np.concatenate(([0] if above[0] else [], edges[~above[edges]] + 1)).astype(int)
+    stops = np.concatenate((edges[above[edges]] + 1, [force.size] if above[-1] else [])).astype(int)
+    gap_samples = gap_s * fs_hz
+    second_index, second_peak_lbf = -1, -math.inf
+    for start, stop in zip(starts, stops):
+        index = start + int(np.argmax(force[start:stop]))
+        if abs(index - main_index) >= gap_samples and force[index] > second_peak_lbf:
+            second_index, second_peak_lbf = index, float(force[index])
+    if second_index < 0:
+        return None
+    separation_ms = 1e3 * (second_index - main_index) / fs_hz
+    when = f"{abs(separation_ms):.3g} ms {'after' if separation_ms > 0 else 'before'}"
+    return (
+        f"double hit: a second force pulse of {second_peak_lbf:.3g} lbf "
+        f"({second_peak_lbf / main_peak_lbf:.2f} of the main {main_peak_lbf:.3g} lbf pulse) "
+        f"{when} it (limit {ratio:.2f})"
+    )
+
+
+def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> str | None:
+    """Missing or tiny hammer hit.
+
+    Parameters
+    ----------
+    force_lbf : array_like
+        Hammer force, lbf.
+    min_peak_force_lbf : float
+        Smallest acceptable peak force, lbf.
+
+    Returns
+    -------
+    str or None
+        None when the run passes, else the reason.
+    """
+    force = _oriented_force(force_lbf)
+    peak_lbf = float(force.max()) if force.size else 0.0
+    if peak_lbf >= min_peak_force_lbf and peak_lbf > 0.0:
+        return None
+    return f"no real hit: peak force {peak_lbf:.3g} lbf is below {min_peak_force_lbf:.3g} lbf"
+
+
+def check_trigger(
+    force_lbf: ArrayLike,
+    pretrigger_samples: int,
+    trigger_lbf: float = 1.0,
+    tolerance_samples: int = TRIGGER_TOLERANCE_SAMPLES,
+) -> str | None:
+    """The force first reaches the trigger level where the pre-trigger says it should.
+
+    A triggered record holds ``pretrigger_samples`` samples before the trigger, so the
+    force first reaches ``trigger_lbf`` near that sample. Much earlier means the
+    record caught an earlier event (or a wrong pre-trigger); much later means the
+    recorder did not trigger on this hit.
+
+    Parameters
+    ----------
+    force_lbf : array_like
+        Hammer force, lbf.
+    pretrigger_samples : int
+        Samples before the trigger, from the header or campaign.yaml.
+    trigger_lbf : float, optional
+        Trigger level, lbf (the original lab's 1 lbf).
+    tolerance_samples : int, optional
+        Accepted distance of the first crossing from ``pretrigger_samples``.
+
+    Returns
+    -------
+    str or None
+        None when the run passes, else the reason.
+    """
+    force = _oriented_force(force_lbf)
+    crossings = np.flatnonzero(force >= trigger_lbf)
+    if crossings.size == 0:
+        return f"trigger: the force never reaches the trigger level {trigger_lbf:.3g} lbf"
+    first = int(crossings[0])
+    offset = first - pretrigger_samples
+    if abs(offset) <= tolerance_samples:
+        return None
+    return (
+        f"trigger: the force first reaches {trigger_lbf:.3g} lbf at sample {first}, "
+        f"{abs(offset)} samples {'after' if offset > 0 else 'before'} the pre-trigger "
+        f"length {pretrigger_samples} (tolerance {tolerance_samples})"
+    )
+
+
+def check_record_length(
+    n_samples: int, fs_hz: float, mode_hz: float, min_cycles: float
+) -> str | None:
+    """Record long enough to hold ``min_cycles`` cycles of the mode.
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples in the record.
+    fs_hz : float
+        Sample rate, Hz.
+    mode_hz : float
+        Frequency of the mode, Hz.
+    min_cycles : float
+        Fewest cycles needed.
+
+    Returns
+    -------
+    str or None
+        None when the run passes, else the reason.
+    """
+    duration_s = n_samples / fs_hz
+    cycles = duration_s * mode_hz
+    if cycles >= min_cycles:
+        return None
+    return (
+        f"record too short: {duration_s:.3g} s holds {cycles:.3g} cycles of the "
+        f"{mode_hz:.4g} Hz mode (need {min_cycles:.3g})"
+    )
+
+
+def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> str | None:
+    """Peak in-band envelope over the noise floor, in dB, at least ``min_snr_db``.
+
+    Parameters
+    ----------
+    peak_envelope : float
+        Largest envelope amplitude of the filtered response (response unit).
+    noise_floor : float
+        In-band noise amplitude (same unit).
+    min_snr_db : float
+        Smallest acceptable 20 log10(peak / noise).
+
+    Returns
+    -------
+    str or None
+        None when the run passes, else the reason.
+    """
+    if not peak_envelope > 0.0:
+        return f"signal-to-noise: no signal (peak envelope {peak_envelope:.3g})"
+    if not noise_floor > 0.0:
+        return None  # a noiseless record has unlimited signal-to-noise
+    snr_db = 20.0 * math.log10(peak_envelope / noise_floor)
+    if snr_db >= min_snr_db:
+        return None
+    return (
+        f"signal-to-noise {snr_db:.3g} dB is below {min_snr_db:.3g} dB "
+        f"(peak envelope {peak_envelope:.3g}, noise floor {noise_floor:.3g})"
+    )
+
+
+def run_quality_checks(
+    record: RunRecord,
+    settings: QualitySettings,
+    *,
+    mode_hz: float | None = None,
+    min_cycles: float = MIN_RECORD_CYCLES,
+) -> list[str]:
+    """Apply the checks that need no decay analysis to one run.
+
+    Force checks run only when the record has a force; the trigger check only when
+    the pre-trigger was stated (header or campaign.yaml), since the contract's default
+    of 0 says nothing about how the record was triggered; the record-length check
+    only when ``mode_hz`` is known. The trigger check is skipped after a failed
+    excitation check (no hit to trigger on).
+
+    Parameters
+    ----------
+    record : RunRecord
+        The run.
+    settings : QualitySettings
+        Thresholds.
+    mode_hz : float, optional
+        Frequency of the mode (campaign.yaml ``mode_hz``), Hz.
+    min_cycles : float, optional
+        Shortest record in cycles of the mode.
+
+    Returns
+    -------
+    list of str
+        Reasons of the failed checks (empty: the run passes).
+    """
+    reasons = [
+        check_clipping(
+            record.response, settings.clip_fraction_of_peak, settings.clip_max_samples,
+            record.response_unit,
+        )
+    ]
+    if record.force_lbf is not None:
+        excitation = check_excitation(record.force_lbf, settings.min_peak_force_lbf)
+        reasons.append(excitation)
+        reasons.append(
+            check_double_hit(
+                record.force_lbf, record.sample_rate_hz,
+                settings.double_hit_ratio, settings.double_hit_gap_s,
+            )
+        )
+        if excitation is None and record.pretrigger_source != "default":
+            reasons.append(check_trigger(record.force_lbf, record.pretrigger_samples))
+    if mode_hz is not None:
+        reasons.append(check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, min_cycles))
+    return [reason for reason in reasons if reason is not None]

@@ -1,0 +1,201 @@
+"""Unit conversion to the internal units: inch, second, pound-force.
+
+The original study worked in in, in/s, in/s^2 and lbf, so every number that leaves
+the reader for the analysis is expressed in those units. Campaign files may use any
+unit listed in campaign-format.md; this module knows the exact factors.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+METRE_IN: float = 1.0 / 0.0254
+"""Inches in one metre (the inch is defined as exactly 0.0254 m)."""
+
+STANDARD_GRAVITY_IN_S2: float = 9.80665 / 0.0254
+"""Standard gravity g in in/s^2 (9.80665 m/s^2 exactly; about 386.0886)."""
+
+NEWTON_LBF: float = 1.0 / (0.45359237 * 9.80665)
+"""Pound-force in one newton (1 lbf = 0.45359237 kg * 9.80665 m/s^2 exactly)."""
+
+RESPONSE_QUANTITIES: tuple[str, ...] = ("acceleration", "velocity", "displacement")
+"""Response quantities a campaign may record."""
+
+INTERNAL_UNITS: dict[str, str] = {
+    "acceleration": "in/s^2",
+    "velocity": "in/s",
+    "displacement": "in",
+    "force": "lbf",
+}
+"""The internal unit of each quantity."""
+
+_FACTORS_TO_INTERNAL: dict[str, dict[str, float]] = {
+    "acceleration": {"g": STANDARD_GRAVITY_IN_S2, "m/s^2": METRE_IN, "in/s^2": 1.0},
+    "velocity": {"m/s": METRE_IN, "in/s": 1.0},
+    "displacement": {"m": METRE_IN, "in": 1.0},
+    "force": {"lbf": 1.0, "N": NEWTON_LBF},
+}
+
+# Spellings seen in instrument exports, mapped to the canonical names above.
+# Keys are lower-case with spaces removed; "G" for g is an accelerometer convention.
+_ALIASES: dict[str, str] = {
+    "g": "g",
+    "gs": "g",
+    "m/s^2": "m/s^2",
+    "m/s2": "m/s^2",
+    "m/s/s": "m/s^2",
+    "ms^-2": "m/s^2",
+    "in/s^2": "in/s^2",
+    "in/s2": "in/s^2",
+    "in/s/s": "in/s^2",
+    "m/s": "m/s",
+    "ms^-1": "m/s",
+    "in/s": "in/s",
+    "ips": "in/s",
+    "m": "m",
+    "in": "in",
+    "inch": "in",
+    "lbf": "lbf",
+    "lb": "lbf",
+    "lbs": "lbf",
+    "n": "N",
+    "newton": "N",
+    "newtons": "N",
+}
+
+
+def normalize_unit(unit: str) -> str:
+    """Canonical spelling of a unit name (``"m/s2"`` -> ``"m/s^2"``, ``"N"`` -> ``"N"``).
+
+    Parameters
+    ----------
+    unit : str
+        A unit as written in campaign.yaml or a column name, e.g. ``"m/s²"``.
+
+    Returns
+    -------
+    str
+        The canonical name used by this module, or the input with spaces removed
+        when the unit is not known (callers then report it).
+    """
+    compact = unit.strip().replace(" ", "").replace("²", "^2").replace("**", "^")
+    return _ALIASES.get(compact.lower(), compact)
+
+
+def known_units(quantity: str) -> tuple[str, ...]:
+    """Canonical units accepted for ``quantity`` (a response quantity or ``"force"``)."""
+    if quantity not in _FACTORS_TO_INTERNAL:
+        raise ValueError(
+            f"unknown quantity {quantity!r}; expected one of "
+            f"{', '.join(_FACTORS_TO_INTERNAL)}"
+        )
+    return tuple(_FACTORS_TO_INTERNAL[quantity])
+
+
+def factor_to_internal(quantity: str, unit: str) -> float:
+    """Multiplier taking values of ``quantity`` in ``unit`` to the internal unit.
+
+    Parameters
+    ----------
+    quantity : str
+        ``"acceleration"``, ``"velocity"``, ``"displacement"`` or ``"force"``.
+    unit : str
+        Unit of the values (any spelling :func:`normalize_unit` understands).
+
+    Returns
+    -------
+    float
+        Factor to in/s^2, in/s, in or lbf.
+
+    Raises
+    ------
+    ValueError
+        For an unknown quantity or a unit that does not belong to the quantity;
+        the message names both.
+    """
+    units = _FACTORS_TO_INTERNAL.get(quantity)
+    if units is None:
+        raise ValueError(
+            f"unknown quantity {quantity!r} (with unit {unit!r}); expected one of "
+            f"{', '.join(_FACTORS_TO_INTERNAL)}"
+        )
+    canonical = normalize_unit(unit)
+    if canonical not in units:
+        raise ValueError(
+            f"unit {unit!r} is not a unit of {quantity}; expected one of {', '.join(units)}"
+        )
+    return units[canonical]
+
+
+def to_internal(values: ArrayLike, quantity: str, unit: str) -> NDArray[np.float64]:
+    """Convert values to the internal unit of their quantity.
+
+    Parameters
+    ----------
+    values : array_like
+        Values in ``unit``.
+    quantity : str
+        ``"acceleration"``, ``"velocity"``, ``"displacement"`` or ``"force"``.
+    unit : str
+        g, m/s^2, in/s^2, m/s, in/s, m, in, lbf or N.
+
+    Returns
+    -------
+    ndarray
+        Values in in/s^2, in/s, in or lbf.
+
+    Raises
+    ------
+    ValueError
+        Unknown unit/quantity combination (the message names it).
+    """
+    return np.asarray(values, dtype=np.float64) * factor_to_internal(quantity, unit)
+
+
+def velocity_amplitude_in_s(
+    amplitude: ArrayLike, quantity: str, unit: str, frequency_hz: ArrayLike
+) -> NDArray[np.float64]:
+    """Velocity amplitude (in/s) of a harmonic with the given response amplitude.
+
+    For a harmonic at angular frequency w = 2 pi f, velocity amplitude is the
+    acceleration amplitude / w, or the displacement amplitude * w.
+
+    Parameters
+    ----------
+    amplitude : array_like
+        Amplitude of the response in ``unit``.
+    quantity : str
+        ``"acceleration"``, ``"velocity"`` or ``"displacement"``.
+    unit : str
+        Unit of ``amplitude``.
+    frequency_hz : array_like
+        Frequency of the harmonic in Hz (broadcast against ``amplitude``; must be > 0).
+
+    Returns
+    -------
+    ndarray
+        Velocity amplitude in in/s.
+
+    Raises
+    ------
+    ValueError
+        Unknown quantity/unit, or a frequency that is zero or negative.
+    """
+    if quantity not in RESPONSE_QUANTITIES:
+        raise ValueError(
+            f"unknown response quantity {quantity!r} (with unit {unit!r}); expected one of "
+            f"{', '.join(RESPONSE_QUANTITIES)}"
+        )
+    internal = to_internal(amplitude, quantity, unit)
+    if quantity == "velocity":
+        return internal
+    frequency = np.asarray(frequency_hz, dtype=np.float64)
+    if np.any(frequency <= 0.0):
+        raise ValueError(f"frequency must be positive to convert {quantity} to velocity")
+    omega_rad_s = 2.0 * math.pi * frequency
+    if quantity == "acceleration":
+        return internal / omega_rad_s
+    return internal * omega_rad_s
