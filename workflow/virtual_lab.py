@@ -1,0 +1,577 @@
+"""Virtual lab: simulated impact-hammer ring-down campaigns with known truth.
+
+The specimen's first mode is nonlinear (joint friction); it is simulated with
+the averaged (slow-flow) equations ``da/dt = -zeta(a) omega(a) a``,
+``dtheta/dt = omega_d(a)`` using the describing-function damping and
+frequency of :mod:`workflow.contact`.  These are autonomous, so time and phase
+are tabulated once per joint as functions of ``ln a`` (quadrature) and every
+run is an interpolation: fast, and accurate for this weak nonlinearity.
+Higher flexible modes and the two rigid-body suspension modes (bounce and
+pitch on the rubber tubing) respond linearly to the hammer pulse.
+
+The campaign folder follows ``campaign-format.md``; the truth is written
+beside it as ``<campaign_dir>.truth.json``, never inside.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.optimize
+
+from workflow import contact, specimen
+
+SAMPLE_RATE_HZ = 2560.0
+N_SAMPLES = 8192
+PRETRIGGER_SAMPLES = 25
+TRIGGER_LBF = 1.0
+ADC_BITS = 24
+ACCELERATION_RANGE_G = 500.0
+FORCE_RANGE_LBF = 500.0
+REFERENCE_VELOCITY_IN_S = 3.0
+"""Accelerometer velocity amplitude at which effect sizes are defined, in/s."""
+
+PAPER_CONFIGURATIONS = {"no_washer": 1.36, "large_washer": 0.66, "small_washer": 0.17}
+"""Configuration name -> bearing area (in^2), paper order."""
+
+EFFECT_CAUSES = {None: None, "quadratic_damping": "quadratic_damping",
+                 "stiffness_nonlinearity": "stiffness_nonlinearity",
+                 "run_drift": "run_drift", "second_mode": "unknown"}
+DEFAULT_EFFECT_SIZES = {"quadratic_damping": 0.003, "stiffness_nonlinearity": 0.01,
+                        "run_drift": 0.4, "second_mode": 0.5}
+EFFECT_SIZE_MEANING = {
+    "quadratic_damping": "damping ratio added by c2 v|v| at the reference velocity amplitude",
+    "stiffness_nonlinearity": "fractional frequency drop at the reference velocity amplitude "
+                              "(saturating contact-opening softening; asymptote twice that)",
+    "run_drift": "fractional fall of the Dahl friction limit Fc from the first to the last run",
+    "second_mode": "initial acceleration amplitude of a linear mode at 1.08 f1, relative to mode 1",
+}
+SECOND_MODE_FREQUENCY_RATIO = 1.08
+
+
+@dataclass(frozen=True)
+class LabSettings:
+    """Instrument and specimen settings of the virtual lab."""
+
+    zeta0: float = 0.0008
+    """Linear modal damping of mode 1 (material, suspension, air)."""
+    higher_mode_zeta: float = 0.003
+    suspension_hz: tuple[float, float] = (2.5, 3.6)
+    """Bounce and pitch frequencies on the rubber tubing, Hz."""
+    suspension_zeta: float = 0.03
+    peak_force_lbf: tuple[float, float] = (5.0, 40.0)
+    """Range of hammer peak forces (log-uniform)."""
+    pulse_duration_s: tuple[float, float] = (0.5e-3, 1.0e-3)
+    acceleration_noise_g: float = 0.002
+    force_noise_lbf: float = 0.005
+    amplitude_points: int = 1500
+    joint: contact.JointParameters = field(default_factory=contact.JointParameters)
+
+
+# ------------------------------------------------------------ linear modes
+
+
+def half_sine_response(t_s, omega_rad_s, zeta, peak, duration_s):
+    """Response of ``q'' + 2 zeta w q' + w^2 q = f(t)`` to a half-sine pulse.
+
+    ``f = peak sin(pi t / duration)`` for ``0 <= t <= duration``, else 0; the
+    oscillator is at rest before ``t = 0``.  Closed form of the Duhamel
+    integral with the complex pole ``lam = -zeta w + i w_d``.
+
+    Returns
+    -------
+    q, q_dot, q_ddot : ndarray
+    """
+    t = np.asarray(t_s, dtype=float)
+    wd = omega_rad_s * np.sqrt(1.0 - zeta**2)
+    lam = -zeta * omega_rad_s + 1j * wd
+    big_omega = np.pi / duration_s
+    tc = np.clip(t, 0.0, duration_s)
+    integral = (np.exp(-lam * tc) * (-lam * np.sin(big_omega * tc) - big_omega
+                * np.cos(big_omega * tc)) + big_omega) / (lam**2 + big_omega**2)
+    z = np.exp(lam * np.clip(t, 0.0, None)) * integral * peak / wd
+    q = z.imag
+    qd = (lam * z).imag
+    force = np.where((t >= 0) & (t <= duration_s), peak * np.sin(big_omega * tc), 0.0)
+    qdd = force - 2 * zeta * omega_rad_s * qd - omega_rad_s**2 * q
+    started = t >= 0
+    return q * started, qd * started, qdd * started
+
+
+# ------------------------------------------------------- nonlinear mode 1
+
+
+@dataclass(frozen=True)
+class ModeTable:
+    """Averaged dynamics of the nonlinear mode on a log-amplitude grid.
+
+    ``log_a`` decreasing from the largest amplitude; ``time_s`` is the time to
+    decay from ``a_max`` to ``a`` and ``phase_rad`` the phase accumulated meanwhile.
+    """
+
+    log_a: np.ndarray
+    zeta: np.ndarray
+    omega_rad_s: np.ndarray
+    time_s: np.ndarray
+    phase_rad: np.ndarray
+
+    @classmethod
+    def build(cls, amplitude, zeta, omega_rad_s) -> "ModeTable":
+        order = np.argsort(amplitude)[::-1]
+        log_a = np.log(np.asarray(amplitude)[order])
+        z, w = np.asarray(zeta)[order], np.asarray(omega_rad_s)[order]
+        z = np.minimum(z, 0.5)  # beyond any physical joint; keeps sqrt(1 - z^2) real
+        rate = z * w  # -d ln a / dt
+        wd = w * np.sqrt(1 - z**2)
+        d = -np.diff(log_a)
+        time = np.concatenate([[0.0], np.cumsum(0.5 * d * (1 / rate[1:] + 1 / rate[:-1]))])
+        phase = np.concatenate([[0.0], np.cumsum(0.5 * d * (wd[1:] / rate[1:]
+                                                            + wd[:-1] / rate[:-1]))])
+        return cls(log_a, z, w, time, phase)
+
+    def evolve(self, a0, t_s):
+        """Amplitude and phase increment ``t_s`` seconds after amplitude ``a0``.
+
+        Below the grid the decay continues at the smallest amplitude's rate.
+        """
+        t0 = np.interp(np.log(a0), self.log_a[::-1], self.time_s[::-1])
+        p0 = np.interp(np.log(a0), self.log_a[::-1], self.phase_rad[::-1])
+        tt = t0 + np.asarray(t_s, dtype=float)
+        log_a = np.interp(tt, self.time_s, self.log_a)
+        phase = np.interp(tt, self.time_s, self.phase_rad)
+        beyond = tt > self.time_s[-1]
+        rate = self.zeta[-1] * self.omega_rad_s[-1]
+        extra = np.where(beyond, tt - self.time_s[-1], 0.0)
+        log_a = log_a - rate * extra
+        phase = phase + self.omega_rad_s[-1] * np.sqrt(1 - self.zeta[-1] ** 2) * extra
+        return np.exp(log_a), phase - p0
+
+    def at(self, a):
+        """Damping ratio and undamped frequency (rad/s) at amplitude ``a``."""
+        la = np.log(a)
+        return (np.interp(la, self.log_a[::-1], self.zeta[::-1]),
+                np.interp(la, self.log_a[::-1], self.omega_rad_s[::-1]))
+
+
+def nonlinear_mode_response(t_s, table: ModeTable, omega0_rad_s, zeta0, modal_peak, duration_s):
+    """Modal coordinate acceleration of the nonlinear mode after a half-sine pulse.
+
+    During the pulse (a fraction of a cycle) the mode is linear with its stuck
+    properties; afterwards the slow flow from the pulse-end state.
+    """
+    t = np.asarray(t_s, dtype=float)
+    _, _, acc = half_sine_response(t, omega0_rad_s, zeta0, modal_peak, duration_s)
+    q1, v1, _ = half_sine_response(np.array([duration_s]), omega0_rad_s, zeta0, modal_peak,
+                                   duration_s)
+    # amplitude and phase at the pulse end, with the amplitude's own frequency
+    a0 = np.hypot(q1[0], v1[0] / omega0_rad_s)
+    for _ in range(3):
+        _, w = table.at(a0)
+        a0 = np.hypot(q1[0], v1[0] / w)
+    theta0 = np.arctan2(-v1[0] / w, q1[0])
+    after = t > duration_s
+    a, dphase = table.evolve(a0, t[after] - duration_s)
+    zeta, w = table.at(a)
+    wd = w * np.sqrt(1 - zeta**2)
+    theta = theta0 + dphase
+    xi = a * np.cos(theta)
+    xi_dot = -a * (wd * np.sin(theta) + zeta * w * np.cos(theta))
+    acc = acc.copy()
+    acc[after] = -(w**2) * xi - 2 * zeta * w * xi_dot
+    return acc
+
+
+def integrate_patch_ringdown(xi0, omega0_rad_s, zeta0, slip_per_xi, stiffness_lbf_in,
+                             slip_force_lbf, dt_s, n_steps):
+    """Direct time integration of mode 1 with the patch forces (for validation).
+
+    ``xi'' + 2 zeta0 w0 xi' + w0^2 xi + sum s (F - k s xi) = 0`` (the stuck
+    stiffness is already in ``w0``), central differences, Jenkins forces
+    updated from each step's slip increment.  Starts at rest at ``xi0``
+    with every patch unloaded-then-stuck at that displacement (virgin loading).
+
+    Returns
+    -------
+    xi : ndarray, shape (n_steps,)
+    """
+    s = np.asarray(slip_per_xi, dtype=float).ravel()
+    k = np.broadcast_to(stiffness_lbf_in, np.shape(slip_per_xi)).ravel()
+    fs = np.broadcast_to(slip_force_lbf, np.shape(slip_per_xi)).ravel()
+    force = contact.jenkins_force_update(np.zeros_like(s), s * xi0, k, fs)
+    xi = np.empty(n_steps)
+    x_prev, x = xi0, xi0
+    v = 0.0
+    # first step from rest (Taylor)
+    acc = -omega0_rad_s**2 * x - np.dot(s, force - k * s * x)
+    x_next = x + 0.5 * dt_s**2 * acc
+    xi[0] = x
+    for n in range(1, n_steps):
+        x_prev, x = x, x_next
+        force = contact.jenkins_force_update(force, s * (x - x_prev), k, fs)
+        v = (x - x_prev) / dt_s
+        acc = -omega0_rad_s**2 * x - 2 * zeta0 * omega0_rad_s * v - np.dot(s, force - k * s * x)
+        # v lags half a step; with >= 200 steps per cycle the damping error is < 1 %
+        x_next = 2 * x - x_prev + dt_s**2 * acc
+        xi[n] = x
+    return xi
+
+
+# --------------------------------------------------------- configurations
+
+
+@dataclass
+class JointSetup:
+    """One configuration's linear modes and nonlinear first-mode description."""
+
+    name: str
+    bearing_area_in2: float | None
+    joint_modes: contact.JointModes
+    omega0_rad_s: float
+    dahl_sigma: float
+    dahl_coulomb: float
+
+    @property
+    def mode(self) -> specimen.FirstMode:
+        return self.joint_modes.mode
+
+
+def _amplitude_grid(mode: specimen.FirstMode, omega0, points):
+    """Modal amplitudes spanning 1e-5 .. 300 in/s at the accelerometer."""
+    phi = abs(mode.accelerometer_participation)
+    return np.logspace(np.log10(1e-5 / (phi * omega0)), np.log10(300.0 / (phi * omega0)), points)
+
+
+def _patch_curves(setup: JointSetup, a):
+    p = setup.joint_modes.patches
+    return contact.patch_describing_function(a, setup.joint_modes.slip_per_xi,
+                                             p.stiffness_lbf_in, p.slip_force_lbf)
+
+
+def _dahl_curves(a, sigma, coulomb):
+    d = contact.dahl_dissipation_per_cycle(a, sigma, coulomb)
+    loss = sigma - contact.dahl_secant_stiffness(a, sigma, coulomb)
+    return d, loss
+
+
+def _fit_dahl(setup: JointSetup, zeta0, patch_d, patch_loss, a):
+    """Dahl (modal sigma, Fc) matching the patch model's damping over 0.1-10 in/s.
+
+    Makes the Dahl-joint demo look like the same specimen (same damping level
+    and area ordering), with the single-state model's shape.
+    """
+    phi = abs(setup.mode.accelerometer_participation)
+    v = phi * setup.omega0_rad_s * a
+    sel = (v > 0.1) & (v < 10.0)
+    target, _ = contact.equivalent_damping(a[sel], setup.omega0_rad_s, zeta0, patch_d[sel],
+                                           patch_loss[sel])
+
+    def residual(log_p):
+        sigma, fc = np.exp(log_p)
+        d, loss = _dahl_curves(a[sel], sigma, fc)
+        z, _ = contact.equivalent_damping(a[sel], setup.omega0_rad_s, zeta0, d, loss)
+        return np.log(z) - np.log(target)
+
+    # starting point: sigma a tenth of the stuck contact stiffness, Fc at the
+    # modal force of the mid-range amplitude
+    s = setup.joint_modes.slip_per_xi
+    k = setup.joint_modes.patches.stiffness_lbf_in
+    sigma0 = 0.1 * float(np.sum(s**2 * k))
+    fc0 = sigma0 * np.median(a[sel])
+    fit = scipy.optimize.least_squares(residual, np.log([sigma0, fc0]),
+                                       bounds=(np.log([1.0, 1e-9]), np.log([1e9, 1e6])))
+    return tuple(float(x) for x in np.exp(fit.x))
+
+
+@functools.lru_cache(maxsize=16)
+def _configuration_physics(area_in2: float, settings: LabSettings):
+    """Modes, describing-function curves and Dahl fit of one bearing area (cached:
+    campaigns generated in one process share them)."""
+    jm = contact.joint_first_mode(area_in2, settings.joint)
+    setup = JointSetup("", area_in2, jm, jm.omega_rad_s, 0.0, 0.0)
+    a = _amplitude_grid(jm.mode, setup.omega0_rad_s, settings.amplitude_points)
+    d, loss = _patch_curves(setup, a)
+    sigma, coulomb = _fit_dahl(setup, settings.zeta0, d, loss, a)
+    for array in (a, d, loss):
+        array.setflags(write=False)
+    return jm, sigma, coulomb, (a, d, loss)
+
+
+def setup_configuration(name, bearing_area_in2, settings: LabSettings) -> tuple[JointSetup, tuple]:
+    """Build a configuration's modes and curves ``(amplitude, dissipation, loss)``.
+
+    A configuration without an area gets the paper's no-washer contact.
+    """
+    area = bearing_area_in2 if bearing_area_in2 is not None else PAPER_CONFIGURATIONS["no_washer"]
+    jm, sigma, coulomb, curves = _configuration_physics(float(area), settings)
+    return JointSetup(name, bearing_area_in2, jm, jm.omega_rad_s, sigma, coulomb), curves
+
+
+def joint_curves(setup: JointSetup, patch_curves, settings: LabSettings, joint, effect,
+                 effect_size, run_fraction=0.0):
+    """Dissipation per cycle and stiffness loss of the whole mode-1 joint model.
+
+    ``run_fraction`` in [0, 1] is the run's position in the campaign (drift).
+    """
+    a, patch_d, patch_loss = patch_curves
+    if joint == "patches":
+        d, loss = patch_d.copy(), patch_loss.copy()
+    else:
+        coulomb = setup.dahl_coulomb
+        if effect == "run_drift":
+            coulomb = coulomb * (1.0 - effect_size * run_fraction)
+        d, loss = _dahl_curves(a, setup.dahl_sigma, coulomb)
+    w0 = setup.omega0_rad_s
+    a_ref = REFERENCE_VELOCITY_IN_S / (abs(setup.mode.accelerometer_participation) * w0)
+    if effect == "quadratic_damping":
+        # c2 xi'|xi'| dissipates 8/3 c2 w^2 a^3 per cycle: zeta = 4 c2 a / (3 pi)
+        c2 = effect_size * 3 * np.pi / (4 * a_ref)
+        d = d + 8.0 / 3.0 * c2 * w0**2 * a**3
+    elif effect == "stiffness_nonlinearity":
+        r2 = (a / a_ref) ** 2
+        ratio = 1.0 - 2.0 * effect_size * r2 / (1.0 + r2)
+        loss = loss + w0**2 * (1.0 - ratio**2)
+    return d, loss
+
+
+def mode_table(setup, patch_curves, settings, joint, effect, effect_size, run_fraction=0.0):
+    a = patch_curves[0]
+    d, loss = joint_curves(setup, patch_curves, settings, joint, effect, effect_size,
+                           run_fraction)
+    zeta, omega = contact.equivalent_damping(a, setup.omega0_rad_s, settings.zeta0, d, loss)
+    return ModeTable.build(a, zeta, omega)
+
+
+def truth_curves(setup: JointSetup, table: ModeTable, velocity_in_s):
+    """True damping ratio and damped frequency vs accelerometer velocity amplitude."""
+    phi = abs(setup.mode.accelerometer_participation)
+    a_grid = np.exp(table.log_a[::-1])
+    v_grid = phi * table.omega_rad_s[::-1] * a_grid
+    a = np.exp(np.interp(np.log(velocity_in_s), np.log(v_grid), np.log(a_grid)))
+    zeta, w = table.at(a)
+    return zeta, w * np.sqrt(1 - zeta**2) / (2 * np.pi)
+
+
+# ------------------------------------------------------------------ runs
+
+
+def quantise(values, full_scale, bits=ADC_BITS):
+    """Round to the ADC step ``2 full_scale / 2^bits`` and clip to the range."""
+    step = 2.0 * full_scale / 2**bits
+    return np.clip(np.round(values / step), -(2 ** (bits - 1)), 2 ** (bits - 1) - 1) * step
+
+
+def boxcar_half_sine(t_start_s, dt_s, t0_s, peak, duration_s):
+    """Mean of a half-sine pulse over each sample interval ``[t, t + dt)``.
+
+    An ideal integrating ADC: the sum of the samples times dt is the impulse.
+    """
+    big_omega = np.pi / duration_s
+
+    def primitive(t):  # integral of the pulse from t0 to t
+        tc = np.clip(t - t0_s, 0.0, duration_s)
+        return peak / big_omega * (1.0 - np.cos(big_omega * tc))
+
+    return (primitive(t_start_s + dt_s) - primitive(t_start_s)) / dt_s
+
+
+def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng,
+                 second_mode_ratio=0.0):
+    """One triggered record: (time s, force lbf, acceleration g) and run facts."""
+    dt = 1.0 / SAMPLE_RATE_HZ
+    lo, hi = settings.peak_force_lbf
+    peak = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+    duration = float(rng.uniform(*settings.pulse_duration_s))
+    extra = 16
+    n = N_SAMPLES + extra
+    t = np.arange(n) * dt
+    t0 = (PRETRIGGER_SAMPLES + float(rng.uniform(0.0, 1.0))) * dt
+    force = boxcar_half_sine(t, dt, t0, peak, duration)
+    force = force + settings.force_noise_lbf * rng.standard_normal(n)
+    trigger = int(np.argmax(force >= TRIGGER_LBF))
+    mode = setup.mode
+    tau = t - t0
+    phi_h = mode.hammer_participation
+    acc = mode.accelerometer_participation * nonlinear_mode_response(
+        tau, table, setup.omega0_rad_s, settings.zeta0, phi_h * peak, duration)
+    for m in mode.higher_modes:
+        _, _, q = half_sine_response(tau, 2 * np.pi * m.frequency_hz, settings.higher_mode_zeta,
+                                     m.hammer_participation * peak, duration)
+        acc += m.accelerometer_participation * q
+    if second_mode_ratio:
+        _, _, q = half_sine_response(tau, SECOND_MODE_FREQUENCY_RATIO * setup.omega0_rad_s,
+                                     settings.zeta0, phi_h * peak, duration)
+        # An extra (e.g. torsional) mode that the beam model lacks: excited like
+        # mode 1, seen at the accelerometer with the chosen relative amplitude.
+        acc += second_mode_ratio * mode.accelerometer_participation * q
+    # rigid-body bounce and pitch on the suspension
+    geo = settings.joint.geometry
+    lever_acc = geo.accelerometer_x_in - mode.centre_of_mass_in
+    lever_ham = geo.hammer_x_in - mode.centre_of_mass_in
+    for f_hz, gain in ((settings.suspension_hz[0], 1.0 / mode.total_mass_lbf_s2_in),
+                       (settings.suspension_hz[1],
+                        lever_acc * lever_ham / mode.pitch_inertia_lbf_s2_in)):
+        _, _, q = half_sine_response(tau, 2 * np.pi * f_hz, settings.suspension_zeta,
+                                     gain * peak, duration)
+        acc += q
+    acc_g = acc / specimen.G_IN_S2 + settings.acceleration_noise_g * rng.standard_normal(n)
+    sl = slice(trigger - PRETRIGGER_SAMPLES, trigger - PRETRIGGER_SAMPLES + N_SAMPLES)
+    force_q = quantise(force[sl], FORCE_RANGE_LBF)
+    acc_q = quantise(acc_g[sl], ACCELERATION_RANGE_G)
+    facts = {"peak_force_lbf": peak, "pulse_duration_s": duration}
+    return np.arange(N_SAMPLES) * dt, force_q, acc_q, facts
+
+
+def format_run(time_s, force_lbf, acceleration_g) -> str:
+    """The run file text (Dactron-like ASCII export)."""
+    lines = ["Virtual lab ASCII export (lapjoint)",
+             f"Sample rate: {SAMPLE_RATE_HZ:g} Hz",
+             f"Pre-trigger: {PRETRIGGER_SAMPLES} samples",
+             "Time (s)\tForce (lbf)\tAcceleration (g)"]
+    body = np.char.add(np.char.add(np.char.add(np.char.add(
+        np.char.mod("%.6f", time_s), "\t"), np.char.mod("%.10g", force_lbf)), "\t"),
+        np.char.mod("%.10g", acceleration_g))
+    return "\n".join(lines + body.tolist()) + "\n"
+
+
+def _campaign_yaml(name, configurations, mode_hz) -> str:
+    lines = [f"name: {name}", f"sample_rate_hz: {SAMPLE_RATE_HZ:g}",
+             f"pretrigger_samples: {PRETRIGGER_SAMPLES}", f"mode_hz: {mode_hz:g}",
+             "response: {quantity: acceleration, unit: g}", "force: {unit: lbf}",
+             "configurations:"]
+    for cname, area in configurations.items():
+        area_part = f"bearing_area_in2: {area:g}, " if area is not None else ""
+        lines.append(f"  {cname}: {{{area_part}files: \"{cname}/*.txt\"}}")
+    return "\n".join(lines) + "\n"
+
+
+def run_name(index: int) -> str:
+    """File stem of the ``index``-th run (0-based); name order is run order."""
+    return f"run{index + 1:02d}"
+
+
+def planned_run_files(runs_per_configuration: int, configurations=None) -> list:
+    """The run files :func:`generate_campaign` writes, known before it runs.
+
+    The workflow plans the demo campaign's DAG from this list, so the campaign
+    can be generated by a rule.
+    """
+    from workflow.campaign import RunFile
+
+    names = configurations if configurations is not None else PAPER_CONFIGURATIONS
+    return [
+        RunFile(configuration=name, run=run_name(i), path=f"{name}/{run_name(i)}.txt")
+        for name in names
+        for i in range(runs_per_configuration)
+    ]
+
+
+def truth_path(out_dir) -> Path:
+    """Where the truth JSON of a campaign folder lives (beside it, not inside)."""
+    out = Path(out_dir)
+    return out.parent / (out.name + ".truth.json")
+
+
+def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="patches",
+                      effect=None, effect_size=None, configurations=None) -> dict:
+    """Write a simulated campaign folder and its truth; return the truth dict.
+
+    Parameters
+    ----------
+    out_dir : path
+        Campaign folder to create (existing run files in it are overwritten).
+    seed : int
+        Random seed; the same seed gives byte-identical files.
+    runs_per_configuration : int
+    joint : {"patches", "dahl"}
+        ``patches``: micro-slip contact patches (true cause ``microslip_power_law``);
+        ``dahl``: single-state Dahl joint fitted to the same specimen (cause ``none``).
+    effect : {None, "quadratic_damping", "stiffness_nonlinearity", "run_drift", "second_mode"}
+        One added effect; requires ``joint="dahl"`` (the baseline it departs from).
+    effect_size : float, optional
+        Physical size of the effect (see ``EFFECT_SIZE_MEANING``); default
+        ``DEFAULT_EFFECT_SIZES[effect]``.
+    configurations : dict, optional
+        Name -> bearing area in^2 (or None for a campaign without areas);
+        default the paper's three.
+    """
+    if joint not in ("patches", "dahl"):
+        raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")
+    if effect not in EFFECT_CAUSES:
+        raise ValueError(f"effect must be one of {sorted(k for k in EFFECT_CAUSES if k)} "
+                         f"or None, got {effect!r}")
+    if effect is not None and joint != "dahl":
+        raise ValueError("an added effect departs from the Dahl baseline: pass joint='dahl'")
+    if effect is not None and effect_size is None:
+        effect_size = DEFAULT_EFFECT_SIZES[effect]
+    if runs_per_configuration < 1:
+        raise ValueError("runs_per_configuration must be at least 1")
+    configurations = dict(PAPER_CONFIGURATIONS if configurations is None else configurations)
+    settings = LabSettings()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    root_seq = np.random.SeedSequence(seed)
+    children = root_seq.spawn(len(configurations))
+    velocity = np.logspace(-3, 2, 101)
+    cause = EFFECT_CAUSES[effect] if effect else ("microslip_power_law" if joint == "patches"
+                                                  else "none")
+    truth = {"campaign_dir": out.name, "seed": seed, "joint": joint, "effect": effect,
+             "effect_size": effect_size,
+             "effect_size_meaning": EFFECT_SIZE_MEANING.get(effect),
+             "reference_velocity_in_s": REFERENCE_VELOCITY_IN_S,
+             "expected_cause": cause,
+             "lab_settings": {k: v for k, v in asdict(settings).items() if k != "joint"},
+             "joint_parameters": {k: v for k, v in asdict(settings.joint).items()
+                                  if k != "geometry"},
+             "preload_lbf": settings.joint.preload_lbf,
+             "geometry": asdict(settings.joint.geometry),
+             "velocity_amplitude_in_s": velocity.tolist(),
+             "configurations": {}}
+    setups = {}
+    for (cname, area), child in zip(configurations.items(), children):
+        setup, curves = setup_configuration(cname, area, settings)
+        setups[cname] = (setup, curves)
+    mode_hz = float(np.mean([s.mode.frequency_hz for s, _ in setups.values()]))
+    (out / "campaign.yaml").write_text(
+        _campaign_yaml(f"virtual-lab-{joint}-{effect or 'baseline'}-{seed}", configurations,
+                       round(mode_hz)))
+    for (cname, (setup, curves)), child in zip(setups.items(), children):
+        folder = out / cname
+        folder.mkdir(exist_ok=True)
+        for stale in folder.glob("run*.txt"):
+            stale.unlink()
+        rng = np.random.default_rng(child)
+        base_table = mode_table(setup, curves, settings, joint, effect, effect_size)
+        zeta, fd = truth_curves(setup, base_table, velocity)
+        mode = setup.mode
+        entry = {"bearing_area_in2": setup.bearing_area_in2,
+                 "linear_frequency_hz": mode.frequency_hz,
+                 "node_positions_in": mode.node_positions_in.tolist(),
+                 "accelerometer_participation": mode.accelerometer_participation,
+                 "hammer_participation": mode.hammer_participation,
+                 "higher_modes_hz": [m.frequency_hz for m in mode.higher_modes],
+                 "dahl_sigma_modal": setup.dahl_sigma, "dahl_coulomb_modal": setup.dahl_coulomb,
+                 "n_patches_per_interface": int(setup.joint_modes.patches.x_rel_in.size),
+                 "zeta": zeta.tolist(), "damped_frequency_hz": fd.tolist(), "runs": []}
+        for i in range(runs_per_configuration):
+            fraction = i / (runs_per_configuration - 1) if runs_per_configuration > 1 else 0.0
+            table = base_table
+            if effect == "run_drift":
+                table = mode_table(setup, curves, settings, joint, effect, effect_size, fraction)
+            ratio = effect_size if effect == "second_mode" else 0.0
+            t, f, acc, facts = simulate_run(setup, table, settings, rng, ratio)
+            name = run_name(i)
+            (folder / f"{name}.txt").write_text(format_run(t, f, acc))
+            run_entry = {"run": name, **facts}
+            if effect == "run_drift":
+                z_run, f_run = truth_curves(setup, table, velocity)
+                run_entry.update(zeta=z_run.tolist(), damped_frequency_hz=f_run.tolist(),
+                                 dahl_coulomb_modal=setup.dahl_coulomb
+                                 * (1 - effect_size * fraction))
+            entry["runs"].append(run_entry)
+        truth["configurations"][cname] = entry
+    truth_path(out).write_text(json.dumps(truth, indent=1))
+    return truth
