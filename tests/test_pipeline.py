@@ -1,0 +1,78 @@
+"""The measured-data chain, through the same library calls the rules make, against
+the virtual lab's known truth (the amplitude-dependent damping and frequency of mode 1)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from workflow.campaign import list_runs, load_campaign
+from workflow.config import AnalysisSettings, QualitySettings
+from workflow.pipeline import analyse_run, analysis_window, identify_mode, read_and_check
+from workflow.virtual_lab import generate_campaign
+
+
+@pytest.fixture(scope="module")
+def analysed(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("lab") / "campaign"
+    truth = generate_campaign(folder, seed=11, runs_per_configuration=4,
+                              configurations={"no_washer": 1.36, "small_washer": 0.17})
+    campaign = load_campaign(folder)
+    analysis = AnalysisSettings().model_dump(exclude={"band_half_width", "mode_search_hz", "mode_search_fraction"})
+    quality = QualitySettings()
+    results = {}
+    for name in campaign.configurations:
+        records = []
+        for run_file in list_runs(folder, campaign):
+            if run_file.configuration == name:
+                record, problems = read_and_check(folder, run_file.path, campaign, quality)
+                assert not problems, problems
+                records.append((run_file.run, record))
+        windows = [analysis_window(record, None) for _, record in records]
+        mode = identify_mode([record for _, record in records], windows=windows,
+                             campaign_mode_hz=campaign.mode_hz, campaign_band_hz=None,
+                             band_half_width=0.2, mode_search_hz=None, mode_search_fraction=0.3)
+        frames = []
+        for (run, record), window in zip(records, windows):
+            frame, problems = analyse_run(record, configuration=name, run=run, mode=mode, window=window,
+                                          min_snr_db=quality.min_snr_db, min_segments=quality.min_segments,
+                                          **analysis)
+            assert not problems, problems
+            frames.append(frame[frame["kept"]])
+        results[name] = (mode, pd.concat(frames, ignore_index=True))
+    return truth, results
+
+
+def truth_at(truth, name, velocity_in_s, key):
+    grid = np.log(truth["velocity_amplitude_in_s"])
+    return np.interp(np.log(velocity_in_s), grid, truth["configurations"][name][key])
+
+
+@pytest.mark.parametrize("name", ["no_washer", "small_washer"])
+def test_mode_found_by_h1_at_the_true_frequency(analysed, name):
+    truth, results = analysed
+    mode, _ = results[name]
+    assert mode.method == "h1"
+    assert mode.coherence_at_mode > 0.9
+    # the H1 peak lies on the amplitude-dependent backbone; 0.5 % covers its spread
+    backbone = truth["configurations"][name]["damped_frequency_hz"]
+    assert min(backbone) * 0.995 < mode.mode_hz < max(backbone) * 1.005
+
+
+@pytest.mark.parametrize("name", ["no_washer", "small_washer"])
+def test_damping_and_frequency_recover_the_truth(analysed, name):
+    truth, results = analysed
+    _, segments = results[name]
+    velocity = segments["velocity_amplitude_in_s"].to_numpy()
+    relative = segments["zeta"].to_numpy() / truth_at(truth, name, velocity, "zeta") - 1
+    # Pooled over amplitude bins (each ~40 segments of 4 runs) the noise error of a
+    # median is below 1 %; the issue's target for an amplitude-dependent decay is 3 %.
+    edges = np.geomspace(velocity.min(), velocity.max() * 1.0001, 7)
+    bins = np.digitize(velocity, edges)
+    for label in np.unique(bins):
+        assert abs(np.median(relative[bins == label])) < 0.03
+    frequency_error = segments["frequency_hz"].to_numpy() - truth_at(truth, name, velocity, "damped_frequency_hz")
+    assert np.max(np.abs(frequency_error)) < 0.05
+    assert abs(np.median(frequency_error)) < 0.01
+    # the decay is followed over more than a decade of amplitude for the no-washer joint
+    if name == "no_washer":
+        assert velocity.max() / velocity.min() > 10

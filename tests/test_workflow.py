@@ -1,0 +1,146 @@
+"""The real ``snakemake`` on small campaigns: contract outputs, bad runs, re-runs."""
+
+import hashlib
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from workflow.tables import column_units
+from workflow.virtual_lab import generate_campaign
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+
+
+def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    return subprocess.run(
+        [*SNAKEMAKE, "-s", str(REPO / "Snakefile"), "-d", str(workdir), *args],
+        capture_output=True, text=True, env=env, timeout=900,
+    )
+
+
+def job_counts(dry_run_output: str) -> dict[str, int]:
+    """Rule -> job count from the 'Job stats' table of a dry run."""
+    table = dry_run_output.split("Job stats:", 1)[1]
+    counts = {}
+    for line in table.splitlines()[3:]:
+        match = re.match(r"^(\w+)\s+(\d+)$", line.strip())
+        if not match:
+            break
+        counts[match.group(1)] = int(match.group(2))
+    return counts
+
+
+def checksums(folder: Path) -> dict[str, str]:
+    return {
+        str(path.relative_to(folder)): hashlib.sha256(path.read_bytes()).hexdigest()
+        for path in sorted(folder.rglob("*")) if path.is_file()
+    }
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    """A 2-configuration x 3-run virtual-lab campaign with one corrupted run, analysed."""
+    root = tmp_path_factory.mktemp("study")
+    campaign = root / "campaign"
+    generate_campaign(campaign, seed=7, runs_per_configuration=3,
+                      configurations={"no_washer": 1.36, "small_washer": 0.17})
+    good = (campaign / "no_washer" / "run03.txt").read_text().splitlines()
+    # line 40 of the file: a cell that is not a number
+    good[39] = good[39].replace(good[39].split("\t")[1], "1.2.3", 1)
+    (campaign / "no_washer" / "run04.txt").write_text("\n".join(good) + "\n")
+    before = checksums(campaign)
+    workdir = root / "work"
+    workdir.mkdir()
+    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}")
+    assert result.returncode == 0, result.stderr[-4000:]
+    return campaign, workdir, before
+
+
+def test_segments_table_follows_the_contract(finished_run):
+    _, workdir, _ = finished_run
+    path = workdir / "results/tables/segments.parquet"
+    segments = pd.read_parquet(path)
+    for column in ["configuration", "run", "t_s", "response_amplitude",
+                   "velocity_amplitude_in_s", "frequency_hz", "zeta"]:
+        assert column in segments.columns
+    units = column_units(path)
+    assert units["velocity_amplitude_in_s"] == "in/s"
+    assert units["frequency_hz"] == "Hz"
+    assert units["t_s"] == "s"
+    assert units["response_amplitude"].startswith("g")
+    assert set(segments["configuration"]) == {"no_washer", "small_washer"}
+    # every used run contributes segments; damping and frequency are physical
+    assert segments.groupby("run").size().min() >= 3
+    assert segments["zeta"].between(1e-5, 0.05).all()
+    assert segments["frequency_hz"].between(100, 150).all()
+
+
+def test_bad_run_is_listed_with_file_and_line_and_others_complete(finished_run):
+    campaign, workdir, _ = finished_run
+    runs = pd.read_parquet(workdir / "results/tables/runs.parquet")
+    assert len(runs) == 7  # every file found, read or not
+    bad = runs[runs["run"] == "run04"].iloc[0]
+    assert bad["status"] == "excluded"
+    assert "no_washer/run04.txt" in bad["reason"]
+    assert ":40:" in bad["reason"] and "1.2.3" in bad["reason"]
+    used = runs[runs["status"] == "used"]
+    assert len(used) == 6
+    assert (used["reason"] == "").all()
+    segments = pd.read_parquet(workdir / "results/tables/segments.parquet")
+    assert set(zip(segments["configuration"], segments["run"])) == set(zip(used["configuration"], used["run"]))
+
+
+def test_raw_files_are_never_modified(finished_run):
+    campaign, _, before = finished_run
+    assert checksums(campaign) == before
+
+
+def test_figures_and_fit_tables_exist(finished_run):
+    _, workdir, _ = finished_run
+    figures = workdir / "results/figures"
+    for name in ["fig09_time_history.png", "fig10_damping_no_washer.png",
+                 "fig11_damping_small_washer.png", "fig13_area_fits.png",
+                 "backbone_no_washer.png", "backbone_small_washer.png"]:
+        assert (figures / name).stat().st_size > 10_000, name
+    hypotheses = pd.read_parquet(workdir / "results/tables/hypotheses.parquet")
+    assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive"}
+
+
+def test_nothing_to_do_after_a_complete_run(finished_run):
+    campaign, workdir, _ = finished_run
+    result = snakemake(workdir, "-n", "-c2", "all", "--config", f"campaign={campaign}")
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "Nothing to be done" in result.stdout + result.stderr
+
+
+def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
+    campaign, workdir, _ = finished_run
+    result = snakemake(workdir, "-n", "-c2", "all", "--config", f"campaign={campaign}",
+                       "analysis={segment_cycles: 8}")
+    assert result.returncode == 0, result.stderr[-2000:]
+    counts = job_counts(result.stdout)
+    assert counts["analyse_run"] == 7
+    assert "collect_tables" in counts and "fit_curves" in counts
+    assert "identify_mode" not in counts  # the mode search does not use segments
+
+
+def test_config_typo_stops_with_the_key_named(tmp_path):
+    result = snakemake(tmp_path, "-n", "all", "--config", "analysis={segment_cylces: 8}")
+    assert result.returncode != 0
+    assert "analysis.segment_cylces" in result.stdout + result.stderr
+
+
+def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
+    result = snakemake(tmp_path, "-n", "-c2", "all")
+    assert result.returncode == 0, result.stderr[-2000:]
+    counts = job_counts(result.stdout)
+    assert counts["demo_campaign"] == 1
+    assert counts["analyse_run"] == 30
+    assert counts["identify_mode"] == 3
