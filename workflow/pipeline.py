@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from workflow import decay, modal_id, quality, units
+from workflow import decay, quality, units
 from workflow.campaign import RunRecord
 
 
@@ -93,6 +93,8 @@ def identify_mode(
     recorded the force, the averaged response spectrum otherwise. The band is
     campaign.yaml's ``band_hz`` when given, else ``mode * (1 -/+ band_half_width)``.
     """
+    from workflow import modal_id  # scipy.signal: imported only by the rule that needs it
+
     if not records:
         raise ValueError("no readable run to identify the mode from")
     sample_rate_hz = records[0].sample_rate_hz
@@ -107,10 +109,16 @@ def identify_mode(
         mode_hz = modal_id.find_mode_hz(frequency_hz, np.abs(h1), search_hz)
         coherence_at_mode = float(np.interp(mode_hz, frequency_hz, coherence))
         method = "h1"
+        amplitude = np.abs(h1)
     else:
         frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
         mode_hz = modal_id.find_mode_hz(frequency_hz, psd, search_hz)
         method = "spectrum"
+        amplitude = np.sqrt(np.abs(psd))
+    # A noise ripple on the flank of a mode outside the range is not the mode.
+    not_a_resonance = quality.check_mode_found(frequency_hz, amplitude, mode_hz, search_hz)
+    if not_a_resonance:
+        raise ValueError(not_a_resonance)
     if campaign_band_hz is not None:
         band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
     else:
