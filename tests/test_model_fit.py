@@ -1,0 +1,93 @@
+"""Tests of friction-model fitting (workflow.model_fit)."""
+
+import numpy as np
+import pytest
+
+from workflow.decay import analyse_decay
+from workflow.model_fit import FitContext, fit_friction_model, measurement_scatter, model_space
+from workflow.modal_sim import simulate_ringdown
+
+FS, T, BAND = 2560.0, 3.2, (100.0, 150.0)
+
+
+def synthetic_campaign(seed=1, runs=10):
+    """Dahl campaign: ring-downs -> measurement chain -> run-to-run and segment scatter."""
+    rng = np.random.default_rng(seed)
+    w0 = 2 * np.pi * 125.0
+    r, knee, zeta0 = 0.05, 1.0, 0.002
+    sigma = r * w0**2
+    truth = {"sigma": sigma, "fc": sigma * knee / w0, "omega_rad_s": w0 * np.sqrt(1 - r)}
+    truth["zeta0"] = zeta0 * w0 / truth["omega_rad_s"]
+    starts = rng.uniform(3.0, 10.0, runs)
+    sim = simulate_ringdown("dahl", {"sigma": truth["sigma"], "fc": truth["fc"]},
+                            omega_rad_s=truth["omega_rad_s"], zeta0=truth["zeta0"],
+                            initial_velocity=starts, fs_out_hz=FS, duration_s=T)
+    v, z, f, run, peak = [], [], [], [], []
+    for i, x in enumerate(sim["acceleration"]):
+        x = x + rng.normal(0.0, 1e-3 * np.abs(x).max(), x.size)  # sensor noise, -60 dB
+        kept = analyse_decay(x, FS, BAND, mode_hz=125.0).kept
+        fr = kept["frequency_hz"]
+        v.append(kept["amplitude"] / (2 * np.pi * fr))
+        # 3 % run-to-run and 3 % segment scatter of damping, 2e-4 of frequency per run.
+        z.append(kept["zeta"] * np.exp(rng.normal(0, 0.03) + rng.normal(0, 0.03, fr.size)))
+        f.append(fr * (1 + rng.normal(0, 2e-4)))
+        run += [f"run{i}"] * fr.size
+        peak.append(np.abs(x).max() / (2 * np.pi * 125.0))
+    return truth, [np.concatenate(a) for a in (v, z, f)] + [np.array(run), np.array(peak)]
+
+
+@pytest.fixture(scope="module")
+def dahl_fit():
+    truth, (v, z, f, run, peak) = synthetic_campaign()
+    ctx = FitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
+    fit = fit_friction_model("dahl", v, z, f, run, peak, ctx, global_samples=64,
+                             local_starts=2, max_iterations=20)
+    return truth, fit
+
+
+def test_dahl_fit_recovers_parameters_within_uncertainty(dahl_fit):
+    truth, fit = dahl_fit
+    for key in ("sigma", "fc", "zeta0", "omega_rad_s"):
+        err = abs(fit.params[key] - truth[key])
+        assert err < 3.0 * fit.uncertainties[key], (key, fit.params[key], truth[key])
+        # and the uncertainty itself is informative (a few % at most for this campaign)
+        assert fit.uncertainties[key] < 0.1 * abs(truth[key])
+
+
+def test_dahl_fit_residuals_match_injected_scatter(dahl_fit):
+    _, fit = dahl_fit
+    # Injected: 3 % + 3 % damping scatter (4.2 % rms) plus the noise near the floor.
+    assert 0.02 < fit.rms_log_zeta < 0.6
+    assert fit.rms_rel_frequency < 2e-3
+    c = fit.curves
+    assert np.all(np.diff(c["velocity_amplitude_in_s"]) > 0)
+    assert fit.predicted["zeta"].shape == fit.predicted["velocity_amplitude_in_s"].shape
+
+
+def test_measurement_scatter_recovers_noise_level():
+    rng = np.random.default_rng(3)
+    v = 10 ** rng.uniform(-2, 1, 800)
+    trend = 0.004 * v / (1 + v)
+    z = trend * np.exp(rng.normal(0, 0.05, v.size))
+    f = 125.0 * (1 - 1e-3 * np.log(v) ** 2) * (1 + rng.normal(0, 1e-4, v.size))
+    s_z, s_f = measurement_scatter(v, z, f)
+    # 100 points per bin: the rms estimate is good to ~1/sqrt(200) = 7 %; allow 25 %.
+    np.testing.assert_allclose(s_z, 0.05, rtol=0.25)
+    np.testing.assert_allclose(s_f, 1e-4, rtol=0.25)
+
+
+def test_lugre_space_maps_to_valid_parameters():
+    v = np.array([0.01, 0.1, 1.0, 10.0])
+    z = np.array([0.001, 0.003, 0.008, 0.01])
+    f = np.array([125.0, 124.8, 124.0, 123.5])
+    ctx = FitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
+    space = model_space("lugre", v, z, f, ctx)
+    rng = np.random.default_rng(0)
+    theta = space.lower + rng.random((50, space.lower.size)) * (space.upper - space.lower)
+    p = space.to_physical(theta)
+    for key in ("sigma0", "alpha0", "v0", "vd", "omega_rad_s", "zeta0"):
+        assert np.all(p[key] > 0), key
+    assert np.all(p["alpha0"] + p["alpha1"] > 0)
+    # the stuck-joint frequency is the first search coordinate
+    f0 = np.sqrt(p["omega_rad_s"] ** 2 + p["sigma0"]) / (2 * np.pi)
+    np.testing.assert_allclose(f0, theta[:, 0], rtol=1e-12)
