@@ -17,9 +17,21 @@ include: "rules/common.smk"
 include: "rules/demo.smk"
 include: "rules/measured.smk"
 include: "rules/figures.smk"
+include: "rules/models.smk"
 
 
 rule all:
     input:
-        all_outputs(),
+        measured_outputs(),
+        model_outputs(),
     default_target: True
+
+
+rule measured:
+    input:
+        measured_outputs(),
+
+
+rule models:
+    input:
+        model_outputs(),

@@ -15,6 +15,14 @@ except ConfigError as error:
 CAMPAIGN = Path(SETTINGS.campaign)
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
+if workflow.is_main_process:
+    # After a hard kill, Snakemake's lock files stay behind; clear them when no other
+    # lapjoint run is alive here, so that `snakemake -c2 all` resumes (workflow/locks.py).
+    from workflow.locks import clear_stale_snakemake_locks
+
+    for _stale in clear_stale_snakemake_locks():
+        logger.info(f"removed stale lock .snakemake/locks/{_stale} (no lapjoint run is alive here)")
+
 
 def campaign_inventory():
     """Configurations and run files of the campaign, in campaign.yaml order.
@@ -82,7 +90,8 @@ def damping_figures():
     ]
 
 
-def all_outputs():
+def measured_outputs():
+    """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
         "results/tables/segments.parquet",
         "results/tables/runs.parquet",
@@ -92,4 +101,15 @@ def all_outputs():
         *damping_figures(),
         "results/figures/fig13_area_fits.png",
         *[f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS],
+    ]
+
+
+def model_outputs():
+    """The paper's models: figures 7, 8, 14, 15 and the fitted parameters."""
+    return [
+        "results/figures/fig07_dahl_loops.png",
+        "results/figures/fig08_lugre_loops.png",
+        "results/tables/model_fits.parquet",
+        *[f"results/figures/fig14_dahl_{name}.png" for name in CONFIGURATIONS],
+        *[f"results/figures/fig15_lugre_{name}.png" for name in CONFIGURATIONS],
     ]

@@ -13,6 +13,7 @@ rule identify_mode:
         band_half_width=SETTINGS.analysis.band_half_width,
         mode_search_hz=SETTINGS.analysis.mode_search_hz,
         mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
+        quality=SETTINGS.quality.model_dump(),
     log:
         "results/logs/identify_mode/{configuration}.log",
     benchmark:

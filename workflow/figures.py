@@ -200,3 +200,60 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
         figure.suptitle(title)
         figure.tight_layout()
     return figure
+
+
+def friction_loops(loops: list[tuple[float, np.ndarray, np.ndarray]], *, title: str) -> plt.Figure:
+    """Paper figures 7 and 8: friction force vs displacement for several amplitudes.
+
+    Parameters
+    ----------
+    loops : list of (amplitude_in, displacement_in, force_lbf)
+    """
+    with plt.rc_context(STYLE):
+        figure, axis = plt.subplots()
+        colours = run_colours([f"{amplitude:g}" for amplitude, _, _ in loops])
+        for amplitude, displacement, force in loops:
+            axis.plot(displacement, force, color=colours[f"{amplitude:g}"], linewidth=1.4,
+                      label=f"amplitude {amplitude:g} in")
+        axis.axhline(0, color="k", linewidth=0.5)
+        axis.axvline(0, color="k", linewidth=0.5)
+        axis.set_xlabel("relative displacement (in)")
+        axis.set_ylabel("friction force (lbf)")
+        axis.set_title(title)
+        axis.legend(loc="upper left")
+        figure.tight_layout()
+    return figure
+
+
+def model_comparison(
+    segments: pd.DataFrame,
+    models: dict[str, pd.DataFrame],
+    *,
+    title: str,
+) -> plt.Figure:
+    """Paper figures 14 and 15: measured damping and frequency vs velocity amplitude
+    with the fitted simulations (two panels sharing the amplitude axis)."""
+    with plt.rc_context(STYLE):
+        figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 7.0), sharex=True)
+        runs = list(dict.fromkeys(segments["run"]))
+        colours = run_colours(runs)
+        for run in runs:
+            part = segments[segments["run"] == run]
+            top.plot(part["velocity_amplitude_in_s"], 100 * part["zeta"], "o", markersize=2.5,
+                     color=colours[run], alpha=0.6, label=run)
+            bottom.plot(part["velocity_amplitude_in_s"], part["frequency_hz"], "o", markersize=2.5,
+                        color=colours[run], alpha=0.6)
+        for (name, frame), style in zip(models.items(), ("-", "--", "-.", ":")):
+            top.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style, color="k",
+                     linewidth=2.0, label=name)
+            bottom.plot(frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, color="k",
+                        linewidth=2.0, label=name)
+        top.set_xscale("log")
+        top.set_ylabel(DAMPING_LABEL)
+        top.set_title(title)
+        top.legend(ncol=3 if len(runs) > 6 else 2, loc="best", fontsize=7)
+        bottom.set_xlabel(VELOCITY_LABEL)
+        bottom.set_ylabel(FREQUENCY_LABEL)
+        bottom.legend(loc="best")
+        figure.tight_layout()
+    return figure

@@ -336,7 +336,7 @@ def _residuals(curves, v, ln_zeta, freq, s_z, s_f):
 def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, run,
                        start_velocity_in_s, ctx: FitContext, *, global_samples: int = 256,
                        local_starts: int = 4, max_iterations: int = 12, seed: int = 1976,
-                       start_margin: float = 1.3) -> FitResult:
+                       start_margin: float = 1.3, initial_points=None) -> FitResult:
     """Fit Dahl or LuGre (plus zeta0 and the linear frequency) to measured curves.
 
     Parameters
@@ -355,6 +355,10 @@ def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, 
         Levenberg-Marquardt iterations per start.
     start_margin : float
         The simulation starts at this times the largest run start amplitude.
+    initial_points : array_like, shape (K, n_coordinates), optional
+        Search coordinates evaluated beside the global sample (e.g. the optimum of
+        the averaged model, which is much cheaper to fit); they compete with it for
+        the local starts.
 
     Returns
     -------
@@ -392,6 +396,9 @@ def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, 
     sobol = qmc.Sobol(d=span.size, scramble=True, seed=seed)
     m = int(np.ceil(np.log2(max(global_samples, 2))))
     theta0 = space.lower + sobol.random_base2(m)[:global_samples] * span
+    if initial_points is not None:
+        extra = np.clip(np.atleast_2d(np.asarray(initial_points, float)), space.lower, space.upper)
+        theta0 = np.concatenate([extra, theta0])
     res0, _ = evaluate(theta0)
     cost0 = 0.5 * np.sum(res0**2, axis=1)
     best = np.argsort(cost0)[:local_starts]

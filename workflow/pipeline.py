@@ -24,6 +24,8 @@ class ModeInfo:
     method: str  # "h1" (force recorded), "spectrum" (response only) or "campaign" (given)
     coherence_at_mode: float | None
     n_runs: int
+    sample_rate_hz: float
+    record_duration_s: float  # median over the runs used
 
     def to_dict(self) -> dict:
         return {
@@ -32,6 +34,8 @@ class ModeInfo:
             "method": self.method,
             "coherence_at_mode": self.coherence_at_mode,
             "n_runs": self.n_runs,
+            "sample_rate_hz": self.sample_rate_hz,
+            "record_duration_s": self.record_duration_s,
         }
 
     @classmethod
@@ -42,6 +46,8 @@ class ModeInfo:
             method=str(document["method"]),
             coherence_at_mode=document.get("coherence_at_mode"),
             n_runs=int(document["n_runs"]),
+            sample_rate_hz=float(document["sample_rate_hz"]),
+            record_duration_s=float(document["record_duration_s"]),
         )
 
 
@@ -129,6 +135,8 @@ def identify_mode(
         method=method,
         coherence_at_mode=coherence_at_mode,
         n_runs=len(records),
+        sample_rate_hz=float(sample_rate_hz),
+        record_duration_s=float(np.median([(stop - start) for start, stop in windows]) / sample_rate_hz),
     )
 
 
@@ -290,6 +298,8 @@ def collect_tables(*, segment_paths, status_paths, mode_paths, campaign) -> dict
                 "band_low_hz": band[0],
                 "band_high_hz": band[1],
                 "method": document.get("method", "not found"),
+                "sample_rate_hz": document.get("sample_rate_hz", np.nan),
+                "record_duration_s": document.get("record_duration_s", np.nan),
                 "coherence_at_mode": document.get("coherence_at_mode") or np.nan,
                 "bearing_area_in2": areas.get(name, np.nan),
                 "error": document.get("error", ""),

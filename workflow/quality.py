@@ -22,6 +22,13 @@ TRIGGER_TOLERANCE_SAMPLES: int = 5
 the pre-trigger length: the recorder triggers on its own copy of the signal, and the
 hammer pulse rises over a few samples."""
 
+MIN_MODE_PROMINENCE: float = 2.0
+"""Least ratio of the spectral peak taken as the mode to the spectrum (amplitude, not
+power) at either end of the search range. A resonance inside the range stands far
+above both ends (40-170 x on the virtual lab and the real campaigns); the flank of a
+mode outside the range, with noise ripple on it, has its largest local maximum at
+about 1 x the end it rises towards."""
+
 MIN_RECORD_CYCLES: float = 20.0
 """Default shortest record, in cycles of the mode: enough for three 10-cycle
 log-decrement segments overlapping by half (the analysis defaults) plus margin."""
@@ -222,6 +229,53 @@ def check_record_length(
     )
 
 
+def check_mode_found(
+    frequency_hz: ArrayLike,
+    magnitude: ArrayLike,
+    mode_hz: float,
+    search_hz: tuple[float, float],
+    min_prominence: float = MIN_MODE_PROMINENCE,
+) -> str | None:
+    """The peak found in the search range is a resonance, not the flank of a mode outside it.
+
+    Parameters
+    ----------
+    frequency_hz : array_like
+        Increasing frequencies of the spectrum, Hz.
+    magnitude : array_like
+        Spectral amplitude (``|H1|`` or the square root of a PSD) at those frequencies.
+    mode_hz : float
+        The peak taken as the mode, Hz.
+    search_hz : (float, float)
+        The range the mode was searched in, Hz.
+    min_prominence : float, optional
+        Least ratio of the amplitude at ``mode_hz`` to the amplitude at each end of the
+        range.
+
+    Returns
+    -------
+    str or None
+        None when the mode stands out, else the reason.
+    """
+    frequency_hz = np.asarray(frequency_hz, dtype=np.float64)
+    magnitude = np.abs(np.asarray(magnitude))
+    low_hz, high_hz = float(search_hz[0]), float(search_hz[1])
+    peak = float(np.interp(mode_hz, frequency_hz, magnitude))
+    ends = {
+        "lower": float(np.interp(low_hz, frequency_hz, magnitude)),
+        "upper": float(np.interp(high_hz, frequency_hz, magnitude)),
+    }
+    end, level = max(ends.items(), key=lambda item: item[1])
+    if level <= 0.0 or peak >= min_prominence * level:
+        return None
+    return (
+        f"no resonance in the search range {low_hz:.4g}-{high_hz:.4g} Hz: its largest peak, at "
+        f"{mode_hz:.4g} Hz, stands only {peak / level:.3g} x above the spectrum at the range's "
+        f"{end} end (a resonance stands at least {min_prominence:g} x above both ends); the "
+        "mode lies outside the range (check mode_hz in campaign.yaml or analysis.mode_search_hz)"
+    )
+
+
 def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> str | None:
     """Peak in-band envelope over the noise floor, in dB, at least ``min_snr_db``.
 
@@ -303,3 +357,128 @@ def run_quality_checks(
     if mode_hz is not None:
         reasons.append(check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, min_cycles))
     return [reason for reason in reasons if reason is not None]
+
+
+QC_COLUMNS: list[str] = ["check", "applied", "passed", "value", "threshold", "unit", "reason"]
+"""Columns of a per-run quality table (one row per check; see :func:`quality_rows`)."""
+
+
+def _clip_count(response: ArrayLike, clip_fraction_of_peak: float) -> float:
+    magnitude = np.abs(np.asarray(response, dtype=np.float64))
+    if magnitude.size == 0 or magnitude.max() == 0.0:
+        return math.nan
+    return float(np.count_nonzero(magnitude >= clip_fraction_of_peak * magnitude.max()))
+
+
+def _second_pulse_ratio(force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float) -> float:
+    """Largest pulse at least ``gap_s`` from the main one (above ``ratio`` of it) over
+    the main peak; 0 when there is none (as decided by :func:`check_double_hit`)."""
+    force = _oriented_force(force_lbf)
+    if force.size == 0 or force.max() <= 0.0:
+        return math.nan
+    main_index = int(np.argmax(force))
+    main_peak = float(force[main_index])
+    above = force > ratio * main_peak
+    edges = np.flatnonzero(np.diff(above.astype(np.int8)))
+    starts = np.concatenate(([0] if above[0] else [], edges[~above[edges]] + 1)).astype(int)
+    stops = np.concatenate((edges[above[edges]] + 1, [force.size] if above[-1] else [])).astype(int)
+    best = 0.0
+    for start, stop in zip(starts, stops):
+        index = start + int(np.argmax(force[start:stop]))
+        if abs(index - main_index) >= gap_s * fs_hz:
+            best = max(best, float(force[index]) / main_peak)
+    return best
+
+
+def quality_rows(
+    record: RunRecord,
+    settings: QualitySettings,
+    *,
+    mode_hz: float | None = None,
+    min_cycles: float = MIN_RECORD_CYCLES,
+) -> list[dict]:
+    """The record-level checks of :func:`run_quality_checks`, one row per check.
+
+    Each row holds ``check`` (name), ``applied`` (False when the check does not apply:
+    no force column, pre-trigger not stated, mode unknown, or no hit to trigger on),
+    ``passed``, the measured ``value`` and its ``threshold`` and ``unit``, and the
+    ``reason`` (empty when passed). ``passed`` and ``reason`` come from the same
+    check functions :func:`run_quality_checks` uses, so the table and runs.parquet
+    never disagree. The decay-level checks (signal-to-noise, segment count) are
+    rows made by :func:`analysis_rows`.
+
+    Returns
+    -------
+    list of dict
+        Rows with the keys of :data:`QC_COLUMNS`, in a fixed order of checks.
+    """
+
+    def row(check, reason, value, threshold, unit, applied=True):
+        return {
+            "check": check, "applied": applied, "passed": applied and reason is None,
+            "value": float(value) if applied else math.nan,
+            "threshold": float(threshold), "unit": unit, "reason": reason or "",
+        }
+
+    rows = [row(
+        "clipping",
+        check_clipping(record.response, settings.clip_fraction_of_peak,
+                       settings.clip_max_samples, record.response_unit),
+        _clip_count(record.response, settings.clip_fraction_of_peak),
+        settings.clip_max_samples, "samples at the peak (at most)",
+    )]
+    force = record.force_lbf
+    has_force = force is not None
+    excitation = check_excitation(force, settings.min_peak_force_lbf) if has_force else None
+    rows.append(row(
+        "excitation", excitation,
+        float(_oriented_force(force).max()) if has_force and force.size else math.nan,
+        settings.min_peak_force_lbf, "lbf peak force (at least)", applied=has_force,
+    ))
+    rows.append(row(
+        "double_hit",
+        check_double_hit(force, record.sample_rate_hz, settings.double_hit_ratio,
+                         settings.double_hit_gap_s) if has_force else None,
+        _second_pulse_ratio(force, record.sample_rate_hz, settings.double_hit_ratio,
+                            settings.double_hit_gap_s) if has_force else math.nan,
+        settings.double_hit_ratio, "second pulse / main pulse (at most)", applied=has_force,
+    ))
+    trigger_applies = has_force and excitation is None and record.pretrigger_source != "default"
+    crossings = np.flatnonzero(_oriented_force(force) >= 1.0) if trigger_applies else np.array([])
+    rows.append(row(
+        "trigger",
+        check_trigger(force, record.pretrigger_samples) if trigger_applies else None,
+        abs(int(crossings[0]) - record.pretrigger_samples) if crossings.size else math.inf,
+        TRIGGER_TOLERANCE_SAMPLES, "samples from the pre-trigger length (at most)",
+        applied=trigger_applies,
+    ))
+    rows.append(row(
+        "record_length",
+        check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, min_cycles)
+        if mode_hz is not None else None,
+        record.n_samples / record.sample_rate_hz * mode_hz if mode_hz is not None else math.nan,
+        min_cycles, "cycles of the mode (at least)", applied=mode_hz is not None,
+    ))
+    return rows
+
+
+def analysis_rows(
+    peak_envelope: float, noise_floor: float, n_segments: int, settings: QualitySettings
+) -> list[dict]:
+    """The decay-level checks as rows of a quality table (see :func:`quality_rows`)."""
+    snr_reason = check_snr(peak_envelope, noise_floor, settings.min_snr_db)
+    snr_db = (20.0 * math.log10(peak_envelope / noise_floor)
+              if peak_envelope > 0.0 and noise_floor > 0.0 else
+              (math.inf if peak_envelope > 0.0 else -math.inf))
+    segments_reason = None
+    if n_segments < settings.min_segments:
+        segments_reason = (f"only {n_segments} usable log-decrement segments "
+                           f"(at least {settings.min_segments} needed)")
+    return [
+        {"check": "snr", "applied": True, "passed": snr_reason is None, "value": snr_db,
+         "threshold": float(settings.min_snr_db), "unit": "dB (at least)",
+         "reason": snr_reason or ""},
+        {"check": "segments", "applied": True, "passed": segments_reason is None,
+         "value": float(n_segments), "threshold": float(settings.min_segments),
+         "unit": "usable segments (at least)", "reason": segments_reason or ""},
+    ]

@@ -7,6 +7,7 @@ read as valid.
 
 from __future__ import annotations
 
+import glob
 import json
 import os
 import tempfile
@@ -32,11 +33,27 @@ COLUMN_UNITS: dict[str, str] = {
 }
 
 
+def _temporary_beside(target: Path) -> tuple[int, str]:
+    """A new temporary file beside ``target`` (open handle, path), for a rename onto it.
+
+    Temporaries that a killed job left for the same target are removed first (only
+    one job writes a given output), and the new one gets the permissions of a file
+    created normally (``mkstemp`` makes it 0600, which the rename would keep).
+    """
+    target.parent.mkdir(parents=True, exist_ok=True)
+    for stale in target.parent.glob(f".{glob.escape(target.name)}.*"):
+        stale.unlink(missing_ok=True)
+    handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(temporary, 0o666 & ~umask)
+    return handle, temporary
+
+
 def atomic_write_bytes(path: Path | str, payload: bytes) -> None:
     """Write ``payload`` to ``path`` through a temporary file and a rename."""
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+    handle, temporary = _temporary_beside(target)
     try:
         with os.fdopen(handle, "wb") as stream:
             stream.write(payload)
@@ -79,8 +96,7 @@ def write_table(frame: pd.DataFrame, path: Path | str, units: Mapping[str, str] 
     ]
     table = table.cast(pa.schema(fields, metadata=table.schema.metadata))
     target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.")
+    handle, temporary = _temporary_beside(target)
     os.close(handle)
     try:
         pq.write_table(table, temporary)

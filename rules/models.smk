@@ -1,0 +1,71 @@
+# The paper's models: friction loops (figures 7, 8), Dahl and LuGre fitted to each
+# configuration's damping and frequency curves, and their comparison (figures 14, 15).
+
+
+rule figure_friction_loops:
+    output:
+        dahl="results/figures/fig07_dahl_loops.png",
+        lugre="results/figures/fig08_lugre_loops.png",
+    log:
+        "results/logs/figure_friction_loops.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/figure_friction_loops.py"
+
+
+rule fit_friction_models:
+    input:
+        segments="results/tables/segments.parquet",
+        modes="results/tables/modes.parquet",
+        campaign_yaml=CAMPAIGN / "campaign.yaml",
+    output:
+        "results/models/{configuration}.json",
+    params:
+        campaign=str(CAMPAIGN),
+        analysis=SETTINGS.analysis.model_dump(include={"filter_order", "segment_cycles", "segment_overlap", "edge_time_constants"}),
+        models=SETTINGS.models.model_dump(),
+    log:
+        "results/logs/fit_friction_models/{configuration}.log",
+    benchmark:
+        "results/benchmarks/fit_friction_models/{configuration}.tsv"
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    script:
+        "../scripts/fit_friction_models.py"
+
+
+rule model_table:
+    input:
+        expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
+    output:
+        "results/tables/model_fits.parquet",
+    log:
+        "results/logs/model_table.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/model_table.py"
+
+
+rule figure_models:
+    input:
+        segments="results/tables/segments.parquet",
+        fit="results/models/{configuration}.json",
+    output:
+        dahl="results/figures/fig14_dahl_{configuration}.png",
+        lugre="results/figures/fig15_lugre_{configuration}.png",
+    log:
+        "results/logs/figure_models/{configuration}.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/figure_models.py"

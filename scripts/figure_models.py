@@ -1,0 +1,28 @@
+"""Rule figure_models: paper figures 14 (Dahl) and 15 (LuGre) for one configuration."""
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow import figures
+from workflow.logs import setup_script_logging
+from workflow.modelling import model_curve_frames
+from workflow.tables import read_table
+
+log = setup_script_logging(snakemake.log[0], "figure_models")
+configuration = snakemake.wildcards.configuration
+segments = read_table(snakemake.input.segments)
+mine = segments[segments["configuration"] == configuration]
+document = json.loads(Path(snakemake.input.fit).read_text())
+curves = model_curve_frames(document)
+for model, path, label in (("dahl", snakemake.output.dahl, "Dahl"), ("lugre", snakemake.output.lugre, "LuGre")):
+    fit = document["models"].get(model)
+    if fit is None:
+        title = f"{configuration}: {label} not fitted ({document.get('skipped', 'no fit')})"
+        figures.save(figures.model_comparison(mine, {}, title=title), path)
+        continue
+    title = (f"{configuration}: measured vs fitted {label} simulation\n"
+             f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)")
+    figures.save(figures.model_comparison(mine, {f"{label} + ζ0 (fitted)": curves[model]}, title=title), path)

@@ -1,0 +1,49 @@
+"""Rule fit_friction_models: Dahl and LuGre (plus zeta0 and the linear frequency)
+fitted to one configuration's measured damping and frequency curves."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow.campaign import load_campaign
+from workflow.logs import setup_script_logging
+from workflow.modelling import MIN_SEGMENTS_TO_FIT, choose_modal_coordinate, fit_configuration
+from workflow.tables import read_table, write_json
+
+log = setup_script_logging(snakemake.log[0], "fit_friction_models")
+configuration = snakemake.wildcards.configuration
+campaign = load_campaign(Path(snakemake.params.campaign))
+modes = read_table(snakemake.input.modes).set_index("configuration")
+segments = read_table(snakemake.input.segments)
+mine = segments[segments["configuration"] == configuration]
+
+if len(mine) < MIN_SEGMENTS_TO_FIT:
+    # a configuration whose runs were all excluded: the others still get their fits
+    document = {"models": {}, "skipped": f"only {len(mine)} usable segments "
+                f"(at least {MIN_SEGMENTS_TO_FIT} needed to fit); see runs.parquet"}
+    log.warning("%s: models not fitted: %s", configuration, document["skipped"])
+else:
+    areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
+    coordinate = choose_modal_coordinate(modes["mode_hz"].dropna().to_dict(), areas)
+    settings = snakemake.params.models
+    mode = modes.loc[configuration]
+    document = fit_configuration(
+        mine,
+        models=("dahl", "lugre"),
+        sample_rate_hz=float(mode["sample_rate_hz"]),
+        record_duration_s=float(mode["record_duration_s"]),
+        band_hz=(float(mode["band_low_hz"]), float(mode["band_high_hz"])),
+        response_quantity=campaign.response.quantity,
+        coordinate=coordinate,
+        analysis=snakemake.params.analysis,
+        global_samples=settings["global_samples"],
+        local_starts=settings["local_starts"],
+        local_iterations=settings["local_iterations"],
+        steps_per_period=settings["steps_per_period"],
+        seed=settings["seed"],
+    )
+    for model, fit in document["models"].items():
+        log.info("%s %s: rms ln zeta %.3f, rms rel f %.2e, %d ring-downs, %s", configuration, model,
+                 fit["rms_log_zeta"], fit["rms_rel_frequency"], fit["n_simulations"], fit["params"])
+write_json(snakemake.output[0], {"configuration": configuration, **document})

@@ -1,0 +1,196 @@
+"""The paper's models in the workflow: which modal coordinate, fits per configuration,
+and the tables and curves the figures and the report read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+#: Paper figure 7 (Dahl) and figure 8 (LuGre) parameter values, in the paper's units.
+PAPER_DAHL = {"sigma": (2 * np.pi) ** 2, "fc": 38.0}
+PAPER_LUGRE = {
+    "sigma0": (2 * np.pi) ** 2,
+    "sigma1": 0.008 * np.pi,
+    "alpha0": 38.0,
+    "alpha1": 0.5 * 38.0,
+    "alpha2": 0.008 * np.pi,
+    "v0": 1.0,
+    "vd": 1.0,
+}
+
+#: The specimen model stands for a campaign only if every measured mode lies this
+#: close (relative) to the model's first-mode frequency.
+SPECIMEN_FREQUENCY_TOLERANCE = 0.15
+
+#: Fewer kept segments than this: the configuration's models are not fitted.
+MIN_SEGMENTS_TO_FIT = 12
+
+
+@dataclass(frozen=True)
+class ModalCoordinate:
+    """How the modal coordinate xi of eq. 9 maps to the sensor.
+
+    ``response_per_modal`` is sensor displacement per unit xi (in). With the
+    specimen model, xi is the mass-normalised first mode and friction parameters
+    are modal (force per unit xi); otherwise xi is the sensor displacement itself.
+    """
+
+    source: str  # "specimen model" or "sensor"
+    response_per_modal: float
+    model_frequency_hz: float | None
+
+
+def choose_modal_coordinate(
+    mode_hz_by_configuration: dict[str, float],
+    areas_in2: dict[str, float | None],
+) -> ModalCoordinate:
+    """The specimen's FE mode when the campaign is plausibly the paper's specimen.
+
+    That is: every configuration has a bearing area and its measured mode lies
+    within :data:`SPECIMEN_FREQUENCY_TOLERANCE` of the model's first mode.
+    Otherwise the modal coordinate is the sensor's displacement.
+    """
+    if mode_hz_by_configuration and all(areas_in2.get(name) is not None for name in mode_hz_by_configuration):
+        from workflow import specimen
+
+        first = specimen.first_mode()
+        if all(
+            abs(mode_hz / first.frequency_hz - 1) <= SPECIMEN_FREQUENCY_TOLERANCE
+            for mode_hz in mode_hz_by_configuration.values()
+        ):
+            return ModalCoordinate("specimen model", abs(float(first.accelerometer_participation)), float(first.frequency_hz))
+    return ModalCoordinate("sensor", 1.0, None)
+
+
+def run_start_velocities(segments: pd.DataFrame) -> np.ndarray:
+    """Starting velocity amplitude of each run, in/s: its largest kept segment."""
+    return segments.groupby("run", sort=False)["velocity_amplitude_in_s"].max().to_numpy(float)
+
+
+def averaged_start(model: str, segments: pd.DataFrame, response_quantity: str, seed: int) -> np.ndarray:
+    """Search point of the time-domain fit from the averaged model's fit.
+
+    The averaged (describing-function) model of :mod:`workflow.describing` has the
+    same parameters as the time-domain search (stuck-joint frequency, the joint's
+    share of the stiffness, the velocity at which the joint slips, zeta0; LuGre's
+    stiction ratio and Stribeck velocity) and fits in seconds, so its optimum is a
+    good start for the expensive time-domain refinement.
+    """
+    from workflow import describing, discovery
+
+    data = discovery.prepare_configuration(
+        segments, str(segments["configuration"].iloc[0]), describing.RESPONSE_ORDER[response_quantity]
+    )
+    velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
+    context = discovery.FitContext(float(np.quantile(velocity, 0.9)))
+    fit = discovery.fit_model(model, data, discovery.scatter_of(data), context,
+                              settings=discovery.FitSettings(seed=seed))
+    p = fit.params
+    point = [p["f_lin_hz"], np.log10(p["joint_stiffness_fraction"]),
+             np.log10(p["slip_velocity_in_s"]), np.log10(p["zeta0"])]
+    if model == "lugre":
+        stribeck = np.log10(p["stribeck_velocity_in_s"])
+        point += [np.log10(max(p["stiction_ratio"], 1e-3)), stribeck, stribeck,
+                  p["micro_damping_ratio"] * p["zeta0"], 0.0]
+    return np.array(point)
+
+
+def fit_configuration(
+    segments: pd.DataFrame,
+    *,
+    models: tuple[str, ...],
+    sample_rate_hz: float,
+    record_duration_s: float,
+    band_hz: tuple[float, float],
+    response_quantity: str,
+    coordinate: ModalCoordinate,
+    analysis: dict,
+    global_samples: int,
+    local_starts: int,
+    local_iterations: int,
+    steps_per_period: int,
+    seed: int,
+) -> dict:
+    """Fit each friction model to one configuration's damping and frequency curves.
+
+    Returns a JSON-ready document: per model its parameters, one-sigma
+    uncertainties, fit-quality numbers and the simulated curves.
+    """
+    from workflow.model_fit import FitContext, fit_friction_model
+
+    context = FitContext(
+        fs_hz=sample_rate_hz,
+        band_hz=tuple(band_hz),
+        record_duration_s=record_duration_s,
+        slip_per_modal=1.0,
+        response_per_modal=coordinate.response_per_modal,
+        response=response_quantity,
+        filter_order=analysis["filter_order"],
+        segment_cycles=analysis["segment_cycles"],
+        segment_overlap=analysis["segment_overlap"],
+        edge_time_constants=analysis["edge_time_constants"],
+        steps_per_period=steps_per_period,
+    )
+    document = {"modal_coordinate": coordinate.source, "response_per_modal_in": coordinate.response_per_modal, "models": {}}
+    for offset, model in enumerate(models):
+        result = fit_friction_model(
+            model,
+            segments["velocity_amplitude_in_s"].to_numpy(float),
+            segments["zeta"].to_numpy(float),
+            segments["frequency_hz"].to_numpy(float),
+            segments["run"].to_numpy(str),
+            run_start_velocities(segments),
+            context,
+            global_samples=global_samples,
+            local_starts=local_starts,
+            max_iterations=local_iterations,
+            seed=seed + offset,
+            initial_points=averaged_start(model, segments, response_quantity, seed),
+        )
+        document["models"][model] = {
+            "params": {key: float(value) for key, value in result.params.items()},
+            "uncertainties": {key: float(value) for key, value in result.uncertainties.items()},
+            "cost": float(result.cost),
+            "rms_log_zeta": float(result.rms_log_zeta),
+            "rms_rel_frequency": float(result.rms_rel_frequency),
+            "n_simulations": int(result.n_simulations),
+            "curves": {key: np.asarray(value, float).tolist() for key, value in result.curves.items()},
+        }
+    return document
+
+
+def fit_table(documents: dict[str, dict]) -> pd.DataFrame:
+    """One row per configuration, model and parameter: value, uncertainty, fit quality."""
+    rows: list[dict] = []
+    for configuration, document in documents.items():
+        for model, fit in document["models"].items():
+            for name, value in fit["params"].items():
+                rows.append({
+                    "configuration": configuration,
+                    "model": model,
+                    "parameter": name,
+                    "value": value,
+                    "std": fit["uncertainties"].get(name, np.nan),
+                    "rms_log_zeta": fit["rms_log_zeta"],
+                    "rms_rel_frequency": fit["rms_rel_frequency"],
+                    "modal_coordinate": document["modal_coordinate"],
+                })
+    return pd.DataFrame(rows, columns=["configuration", "model", "parameter", "value", "std",
+                                       "rms_log_zeta", "rms_rel_frequency", "modal_coordinate"])
+
+
+def model_curve_frames(document: dict) -> dict[str, pd.DataFrame]:
+    """Model name -> simulated curves (velocity amplitude, zeta, frequency) for plotting."""
+    frames = {}
+    for model, fit in document["models"].items():
+        curves = fit["curves"]
+        frame = pd.DataFrame({
+            "velocity_amplitude_in_s": curves["velocity_amplitude_in_s"],
+            "zeta": curves["zeta"],
+            "frequency_hz": curves["frequency_hz"],
+        }).sort_values("velocity_amplitude_in_s")
+        frames[model] = frame
+    return frames
