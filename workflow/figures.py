@@ -50,6 +50,18 @@ def run_colours(runs: list[str]) -> dict[str, tuple]:
     return {run: cmap(0.9 * index / count) for index, run in enumerate(runs)}
 
 
+def _plot_runs(axis: plt.Axes, segments: pd.DataFrame, column: str, *, scale: float = 1.0,
+               markersize: float = 3.0, alpha: float = 0.8, labels: bool = True) -> list[str]:
+    """One marker series per run (coloured in run order); returns the run names."""
+    runs = list(dict.fromkeys(segments["run"]))
+    colours = run_colours(runs)
+    for run in runs:
+        part = segments[segments["run"] == run]
+        axis.plot(part["velocity_amplitude_in_s"], scale * part[column], "o", markersize=markersize,
+                  color=colours[run], alpha=alpha, label=run if labels else None)
+    return runs
+
+
 def time_history(
     time_s: np.ndarray,
     raw: np.ndarray,
@@ -104,12 +116,7 @@ def damping_vs_amplitude(
     """
     with plt.rc_context(STYLE):
         figure, axis = plt.subplots()
-        runs = list(dict.fromkeys(segments["run"]))
-        colours = run_colours(runs)
-        for run in runs:
-            part = segments[segments["run"] == run]
-            axis.plot(part["velocity_amplitude_in_s"], 100 * part["zeta"], "o", markersize=3,
-                      color=colours[run], alpha=0.8, label=run)
+        runs = _plot_runs(axis, segments, "zeta", scale=100)
         if curve is not None and len(curve):
             axis.fill_between(curve["velocity_amplitude_in_s"], 100 * curve["zeta_low"],
                               100 * curve["zeta_high"], color="k", alpha=0.12,
@@ -137,12 +144,7 @@ def frequency_vs_amplitude(
     """Backbone: local damped frequency vs velocity amplitude, per run (and models)."""
     with plt.rc_context(STYLE):
         figure, axis = plt.subplots()
-        runs = list(dict.fromkeys(segments["run"]))
-        colours = run_colours(runs)
-        for run in runs:
-            part = segments[segments["run"] == run]
-            axis.plot(part["velocity_amplitude_in_s"], part["frequency_hz"], "o", markersize=3,
-                      color=colours[run], alpha=0.8, label=run)
+        runs = _plot_runs(axis, segments, "frequency_hz")
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
             axis.plot(frame["velocity_amplitude_in_s"], frame["frequency_hz"], style,
                       linewidth=2.0, label=name)
@@ -235,14 +237,8 @@ def model_comparison(
     with the fitted simulations (two panels sharing the amplitude axis)."""
     with plt.rc_context(STYLE):
         figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 7.0), sharex=True)
-        runs = list(dict.fromkeys(segments["run"]))
-        colours = run_colours(runs)
-        for run in runs:
-            part = segments[segments["run"] == run]
-            top.plot(part["velocity_amplitude_in_s"], 100 * part["zeta"], "o", markersize=2.5,
-                     color=colours[run], alpha=0.6, label=run)
-            bottom.plot(part["velocity_amplitude_in_s"], part["frequency_hz"], "o", markersize=2.5,
-                        color=colours[run], alpha=0.6)
+        runs = _plot_runs(top, segments, "zeta", scale=100, markersize=2.5, alpha=0.6)
+        _plot_runs(bottom, segments, "frequency_hz", markersize=2.5, alpha=0.6, labels=False)
         for (name, frame), style in zip(models.items(), ("-", "--", "-.", ":")):
             top.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style, color="k",
                      linewidth=2.0, label=name)
@@ -254,6 +250,7 @@ def model_comparison(
         top.legend(ncol=3 if len(runs) > 6 else 2, loc="best", fontsize=7)
         bottom.set_xlabel(VELOCITY_LABEL)
         bottom.set_ylabel(FREQUENCY_LABEL)
-        bottom.legend(loc="best")
+        if models:
+            bottom.legend(loc="best")
         figure.tight_layout()
     return figure
