@@ -95,6 +95,7 @@ def measured_outputs():
     return [
         "results/tables/segments.parquet",
         "results/tables/runs.parquet",
+        "results/tables/quality.parquet",
         "results/tables/damping_fits.parquet",
         "results/tables/hypotheses.parquet",
         "results/figures/fig09_time_history.png",
@@ -113,3 +114,8 @@ def model_outputs():
         *[f"results/figures/fig14_dahl_{name}.png" for name in CONFIGURATIONS],
         *[f"results/figures/fig15_lugre_{name}.png" for name in CONFIGURATIONS],
     ]
+
+
+def discovery_outputs():
+    """The diagnosis of what the paper's model gets wrong (output contract)."""
+    return ["results/diagnosis.json", "results/tables/diagnosis_residuals.parquet"]

@@ -33,6 +33,7 @@ rule analyse_run:
         mode="results/interim/mode/{configuration}.json",
     output:
         segments="results/interim/segments/{configuration}/{run}.parquet",
+        quality="results/interim/quality/{configuration}/{run}.parquet",
         status="results/interim/status/{configuration}/{run}.json",
     params:
         campaign=str(CAMPAIGN),
@@ -54,6 +55,7 @@ rule analyse_run:
 rule collect_tables:
     input:
         segments=run_segment_tables(),
+        quality=[f"results/interim/quality/{run.configuration}/{run.run}.parquet" for run in RUN_FILES],
         status=run_status_files(),
         modes=expand("results/interim/mode/{configuration}.json", configuration=CONFIGURATIONS),
         campaign_yaml=CAMPAIGN / "campaign.yaml",
@@ -61,6 +63,7 @@ rule collect_tables:
         segments="results/tables/segments.parquet",
         rejected="results/tables/segments_rejected.parquet",
         runs="results/tables/runs.parquet",
+        quality="results/tables/quality.parquet",
         modes="results/tables/modes.parquet",
     params:
         campaign=str(CAMPAIGN),

@@ -1,4 +1,5 @@
-"""Rule analyse_run: band-pass, envelope and segmented log decrement of one run."""
+"""Rule analyse_run: band-pass, envelope and segmented log decrement of one run,
+with its quality checks."""
 
 import json
 import sys
@@ -6,10 +7,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
+import pandas as pd
+
 from workflow.campaign import load_campaign
 from workflow.config import QualitySettings
 from workflow.logs import setup_script_logging
-from workflow.pipeline import ModeInfo, analyse_run, analysis_window, empty_segments, read_and_check
+from workflow.pipeline import (ModeInfo, analyse_run_with_quality, analysis_window, empty_segments,
+                               failed_checks, read_with_quality)
+from workflow.quality import QC_COLUMNS
 from workflow.tables import write_json, write_table
 
 log = setup_script_logging(snakemake.log[0], "analyse_run")
@@ -18,16 +23,16 @@ campaign_dir = Path(snakemake.params.campaign)
 campaign = load_campaign(campaign_dir)
 run_path = Path(snakemake.input.run).relative_to(campaign_dir).as_posix()
 quality_settings = QualitySettings(**snakemake.params.quality)
-analysis = snakemake.params.analysis
 mode_document = json.loads(Path(snakemake.input.mode).read_text())
 
 segments = empty_segments()
-record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
+record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
+problems = failed_checks(run_path, rows)
 if record is not None and not problems:
     if "error" in mode_document:
         problems = [mode_document["error"]]
     else:
-        segments, decay_problems = analyse_run(
+        segments, decay_rows = analyse_run_with_quality(
             record,
             configuration=configuration,
             run=run,
@@ -35,9 +40,10 @@ if record is not None and not problems:
             window=analysis_window(record, campaign.configurations[configuration].window_s),
             min_snr_db=quality_settings.min_snr_db,
             min_segments=quality_settings.min_segments,
-            **analysis,
+            **snakemake.params.analysis,
         )
-        problems = [f"{run_path}: {problem}" for problem in decay_problems]
+        rows += decay_rows
+        problems = failed_checks(run_path, decay_rows)
 
 status = {
     "configuration": configuration,
@@ -52,5 +58,9 @@ if problems:
         raise SystemExit(f"strict mode: run excluded: {status['reason']}")
 else:
     log.info("%s: %d segments kept of %d", run_path, int(segments["kept"].sum()), len(segments))
-write_table(segments, snakemake.output.segments, units={"response_amplitude": record.response_unit if record else ""})
+quality_table = pd.DataFrame(rows, columns=QC_COLUMNS)
+quality_table.insert(0, "run", run)
+quality_table.insert(0, "configuration", configuration)
+write_table(segments, snakemake.output.segments)
+write_table(quality_table, snakemake.output.quality)
 write_json(snakemake.output.status, status)

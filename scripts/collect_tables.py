@@ -14,12 +14,13 @@ log = setup_script_logging(snakemake.log[0], "collect_tables")
 campaign = load_campaign(Path(snakemake.params.campaign))
 tables = collect_tables(
     segment_paths=snakemake.input.segments,
+    quality_paths=snakemake.input.quality,
     status_paths=snakemake.input.status,
     mode_paths=snakemake.input.modes,
     campaign=campaign,
 )
 response_unit = {"response_amplitude": f"{campaign.response.unit} ({campaign.response.quantity})"}
-for name in ("segments", "rejected", "runs", "modes"):
+for name in ("segments", "rejected", "runs", "quality", "modes"):
     write_table(tables[name], snakemake.output[name], units=response_unit)
 runs = tables["runs"]
 log.info(

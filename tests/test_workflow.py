@@ -144,3 +144,18 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert counts["demo_campaign"] == 1
     assert counts["analyse_run"] == 30
     assert counts["identify_mode"] == 3
+
+
+def test_quality_table_has_every_check_of_every_run_and_agrees_with_runs(finished_run):
+    _, workdir, _ = finished_run
+    quality = pd.read_parquet(workdir / "results/tables/quality.parquet")
+    runs = pd.read_parquet(workdir / "results/tables/runs.parquet")
+    assert set(zip(quality["configuration"], quality["run"])) == set(zip(runs["configuration"], runs["run"]))
+    bad = quality[quality["run"] == "run04"]
+    assert list(bad["check"]) == ["read"] and not bad["passed"].iloc[0]
+    used = quality[quality["run"] != "run04"]
+    # a used run passed every check that applied to it, read and decay checks alike
+    assert used.loc[used["applied"], "passed"].all()
+    assert {"clipping", "snr", "segments"} <= set(used["check"])
+    snr = used[used["check"] == "snr"]
+    assert (snr["value"] > snr["threshold"]).all()

@@ -13,6 +13,7 @@ import pandas as pd
 
 from workflow import decay, quality, units
 from workflow.campaign import RunRecord
+from workflow.config import QualitySettings
 
 
 @dataclass(frozen=True)
@@ -164,7 +165,7 @@ def empty_segments() -> pd.DataFrame:
     return frame
 
 
-def analyse_run(
+def analyse_run_with_quality(
     record: RunRecord,
     *,
     configuration: str,
@@ -178,8 +179,8 @@ def analyse_run(
     edge_time_constants: float,
     min_snr_db: float,
     min_segments: int,
-) -> tuple[pd.DataFrame, list[str]]:
-    """Band-pass, envelope and segmented log decrement of one run.
+) -> tuple[pd.DataFrame, list[dict]]:
+    """Band-pass, envelope and segmented log decrement of one run, with its checks.
 
     Returns
     -------
@@ -187,9 +188,9 @@ def analyse_run(
         Every segment with ``kept`` and ``reject_reason``; times are seconds from
         the start of the file; ``velocity_amplitude_in_s`` uses each segment's
         local frequency.
-    problems : list of str
-        Quality problems found by the decay analysis (too noisy, too few
-        segments); empty when the run is usable.
+    quality_rows : list of dict
+        The decay-level quality checks (signal-to-noise, usable segments) as rows
+        of the quality table (:func:`workflow.quality.analysis_rows`).
     """
     start, stop = window
     result = decay.analyse_decay(
@@ -226,43 +227,64 @@ def analyse_run(
         },
         columns=SEGMENT_COLUMNS,
     )
-    problems = []
     peak_envelope = float(np.max(result.envelope[result.start_index : stop]))
-    snr_problem = quality.check_snr(peak_envelope, result.noise_floor, min_snr_db)
-    if snr_problem:
-        problems.append(snr_problem)
-    n_kept = int(frame["kept"].sum())
-    if n_kept < min_segments:
-        problems.append(
-            f"only {n_kept} usable log-decrement segments (at least {min_segments} needed)"
-        )
-    return frame, problems
+    thresholds = QualitySettings(min_snr_db=min_snr_db, min_segments=min_segments)
+    rows = quality.analysis_rows(peak_envelope, result.noise_floor, int(frame["kept"].sum()), thresholds)
+    return frame, rows
 
 
-def read_and_check(
-    campaign_dir, path: str, campaign, quality_settings
-) -> tuple[RunRecord | None, list[str]]:
+def analyse_run(record: RunRecord, **arguments) -> tuple[pd.DataFrame, list[str]]:
+    """:func:`analyse_run_with_quality`, with the failed checks as messages.
+
+    Returns the segments and the list of problems (empty when the run is usable).
+    """
+    frame, rows = analyse_run_with_quality(record, **arguments)
+    return frame, [row["reason"] for row in rows if not row["passed"]]
+
+
+def read_with_quality(campaign_dir, path: str, campaign, quality_settings) -> tuple[RunRecord | None, list[dict]]:
     """Read one run file and apply the record-level quality checks.
 
-    Returns the record (None when it cannot be read) and the list of problems,
-    each a message that names the file and what is wrong.
+    Returns the record (None when it cannot be read) and one row per check
+    (:func:`workflow.quality.quality_rows`); an unreadable file gives a single
+    ``read`` row whose reason names the file, the line and what is wrong.
     """
     from workflow.campaign import CampaignFormatError, read_run
 
     try:
         record = read_run(campaign_dir, path, campaign)
     except CampaignFormatError as error:
-        return None, [str(error)]
-    problems = [f"{path}: {problem}" for problem in quality.run_quality_checks(record, quality_settings, mode_hz=campaign.mode_hz)]
-    return record, problems
+        return None, [{"check": "read", "applied": True, "passed": False, "value": float("nan"),
+                       "threshold": float("nan"), "unit": "", "reason": str(error)}]
+    return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
 
 
-def collect_tables(*, segment_paths, status_paths, mode_paths, campaign) -> dict[str, pd.DataFrame]:
+def failed_checks(path: str, rows: list[dict]) -> list[str]:
+    """Messages of the failed checks, each naming the file."""
+    return [
+        row["reason"] if row["check"] == "read" else f"{path}: {row['reason']}"
+        for row in rows
+        if row["applied"] and not row["passed"]
+    ]
+
+
+def read_and_check(campaign_dir, path: str, campaign, quality_settings) -> tuple[RunRecord | None, list[str]]:
+    """Read one run file and apply the record-level quality checks.
+
+    Returns the record (None when it cannot be read) and the list of problems,
+    each a message that names the file and what is wrong.
+    """
+    record, rows = read_with_quality(campaign_dir, path, campaign, quality_settings)
+    return record, failed_checks(path, rows)
+
+
+def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, campaign) -> dict[str, pd.DataFrame]:
     """Merge the per-run outputs into the campaign's tables.
 
     Returns ``segments`` (kept segments of used runs: the output contract's
     table), ``rejected`` (every other segment, with its reason), ``runs`` (one
-    row per run file, used or excluded) and ``modes`` (one row per configuration).
+    row per run file, used or excluded), ``quality`` (one row per run and quality
+    check: value, threshold, passed) and ``modes`` (one row per configuration).
     """
     import json
     from pathlib import Path
@@ -309,6 +331,7 @@ def collect_tables(*, segment_paths, status_paths, mode_paths, campaign) -> dict
         "segments": segments.reset_index(drop=True),
         "rejected": rejected.reset_index(drop=True),
         "runs": runs,
+        "quality": pd.concat([read_table(path) for path in quality_paths], ignore_index=True),
         "modes": pd.DataFrame(mode_rows),
     }
 
