@@ -16,13 +16,14 @@ configuration = snakemake.wildcards.configuration
 campaign_dir = Path(snakemake.params.campaign)
 campaign = load_campaign(campaign_dir)
 spec = campaign.configurations[configuration]
+quality_settings = QualitySettings(**snakemake.params.quality)
 
 records, windows, skipped = [], [], {}
 for run_file in list_runs(campaign_dir, campaign):
     if run_file.configuration != configuration:
         continue
     record, problems = read_and_check(
-        campaign_dir, run_file.path, campaign, QualitySettings(**snakemake.params.quality)
+        campaign_dir, run_file.path, campaign, quality_settings
     )
     if problems:
         skipped[run_file.run] = problems
@@ -40,6 +41,7 @@ try:
         band_half_width=snakemake.params.band_half_width,
         mode_search_hz=snakemake.params.mode_search_hz,
         mode_search_fraction=snakemake.params.mode_search_fraction,
+        min_mode_prominence=quality_settings.min_mode_prominence,
     )
     document = {**mode.to_dict(), "skipped_runs": skipped}
     log.info("configuration %s: mode %.3f Hz (%s), band %s", configuration, mode.mode_hz, mode.method, mode.band_hz)

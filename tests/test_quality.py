@@ -168,7 +168,7 @@ def test_run_quality_checks_good_run_passes():
 
 def test_run_quality_checks_collects_every_failure():
     bad = record(response=np.clip(ring_down(), -1.0, 1.0), force=hammer() + hammer(60.0, 400))
-    reasons = run_quality_checks(bad, QualitySettings(), mode_hz=5000.0, min_cycles=1e5)
+    reasons = run_quality_checks(bad, QualitySettings(min_record_cycles=1e5), mode_hz=5000.0)
     assert [r.split(":")[0] for r in reasons] == ["response clipped", "double hit", "record too short"]
 
 

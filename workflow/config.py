@@ -79,6 +79,21 @@ class QualitySettings(_Strict):
     min_segments: int = Field(3, ge=1)
     """A run that yields fewer usable segments than this is excluded."""
 
+    trigger_tolerance_samples: int = Field(5, ge=0)
+    """How far the force's first crossing of the 1 lbf trigger level may sit from
+    the stated pre-trigger length: the recorder triggers on its own copy of the
+    signal, and the hammer pulse rises over a few samples."""
+
+    min_record_cycles: float = Field(20.0, gt=0.0)
+    """Shortest record, in cycles of the mode: three 10-cycle segments overlapping
+    by half, plus margin."""
+
+    min_mode_prominence: float = Field(2.0, ge=1.0)
+    """Least ratio of the spectral peak taken as the mode to the spectrum at either
+    end of the search range: a resonance inside the range stands 40-170 x above
+    both ends (virtual lab and real campaigns), the flank of a mode outside it about
+    1 x the end it rises towards."""
+
 
 class FitSettings(_Strict):
     """Polynomial fits of damping vs velocity amplitude and area."""
@@ -120,6 +135,21 @@ class ModelSettings(_Strict):
     seed: int = 1976
 
 
+class DiscoverySettings(_Strict):
+    """Fitting the averaged candidate models and deciding the cause (docs/discovery.md)."""
+
+    global_samples: int = Field(256, ge=16)
+    """Quasi-random parameter sets in the global stage of each averaged-model fit."""
+
+    local_starts: int = Field(4, ge=1)
+    """Best global candidates refined locally."""
+
+    folds: int = Field(5, ge=2)
+    """Folds over runs for the held-out error (contiguous amplitude blocks with one run)."""
+
+    seed: int = 1976
+
+
 class DemoSettings(_Strict):
     """The built-in virtual-lab campaign generated when ``campaign`` points at ``path``."""
 
@@ -142,6 +172,7 @@ class WorkflowConfig(_Strict):
     quality: QualitySettings = QualitySettings()
     fits: FitSettings = FitSettings()
     models: ModelSettings = ModelSettings()
+    discovery: DiscoverySettings = DiscoverySettings()
     demo: DemoSettings = DemoSettings()
 
     @model_validator(mode="after")

@@ -93,6 +93,7 @@ def identify_mode(
     band_half_width: float,
     mode_search_hz: tuple[float, float] | None,
     mode_search_fraction: float,
+    min_mode_prominence: float = 2.0,
 ) -> ModeInfo:
     """First-mode frequency of a configuration from all its readable runs.
 
@@ -123,7 +124,8 @@ def identify_mode(
         method = "spectrum"
         amplitude = np.sqrt(np.abs(psd))
     # A noise ripple on the flank of a mode outside the range is not the mode.
-    not_a_resonance = quality.check_mode_found(frequency_hz, amplitude, mode_hz, search_hz)
+    not_a_resonance = quality.check_mode_found(frequency_hz, amplitude, mode_hz, search_hz,
+                                               min_prominence=min_mode_prominence)
     if not_a_resonance:
         raise ValueError(not_a_resonance)
     if campaign_band_hz is not None:

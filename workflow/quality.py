@@ -17,22 +17,6 @@ from numpy.typing import ArrayLike, NDArray
 from workflow.campaign import RunRecord
 from workflow.config import QualitySettings
 
-TRIGGER_TOLERANCE_SAMPLES: int = 5
-"""How far (in samples) the force's first crossing of the trigger level may sit from
-the pre-trigger length: the recorder triggers on its own copy of the signal, and the
-hammer pulse rises over a few samples."""
-
-MIN_MODE_PROMINENCE: float = 2.0
-"""Least ratio of the spectral peak taken as the mode to the spectrum (amplitude, not
-power) at either end of the search range. A resonance inside the range stands far
-above both ends (40-170 x on the virtual lab and the real campaigns); the flank of a
-mode outside the range, with noise ripple on it, has its largest local maximum at
-about 1 x the end it rises towards."""
-
-MIN_RECORD_CYCLES: float = 20.0
-"""Default shortest record, in cycles of the mode: enough for three 10-cycle
-log-decrement segments overlapping by half (the analysis defaults) plus margin."""
-
 
 def _oriented_force(force_lbf: ArrayLike) -> NDArray[np.float64]:
     """Force with the hammer pulse positive (some exports record compression < 0)."""
@@ -158,7 +142,7 @@ def check_trigger(
     force_lbf: ArrayLike,
     pretrigger_samples: int,
     trigger_lbf: float = 1.0,
-    tolerance_samples: int = TRIGGER_TOLERANCE_SAMPLES,
+    tolerance_samples: int = 5,
 ) -> str | None:
     """The force first reaches the trigger level where the pre-trigger says it should.
 
@@ -234,7 +218,7 @@ def check_mode_found(
     magnitude: ArrayLike,
     mode_hz: float,
     search_hz: tuple[float, float],
-    min_prominence: float = MIN_MODE_PROMINENCE,
+    min_prominence: float = 2.0,
 ) -> str | None:
     """The peak found in the search range is a resonance, not the flank of a mode outside it.
 
@@ -306,57 +290,13 @@ def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> st
     )
 
 
-def run_quality_checks(
-    record: RunRecord,
-    settings: QualitySettings,
-    *,
-    mode_hz: float | None = None,
-    min_cycles: float = MIN_RECORD_CYCLES,
-) -> list[str]:
-    """Apply the checks that need no decay analysis to one run.
+def run_quality_checks(record: RunRecord, settings: QualitySettings, *, mode_hz: float | None = None) -> list[str]:
+    """Reasons of the failed record-level checks of one run (empty: it passes).
 
-    Force checks run only when the record has a force; the trigger check only when
-    the pre-trigger was stated (header or campaign.yaml), since the contract's default
-    of 0 says nothing about how the record was triggered; the record-length check
-    only when ``mode_hz`` is known. The trigger check is skipped after a failed
-    excitation check (no hit to trigger on).
-
-    Parameters
-    ----------
-    record : RunRecord
-        The run.
-    settings : QualitySettings
-        Thresholds.
-    mode_hz : float, optional
-        Frequency of the mode (campaign.yaml ``mode_hz``), Hz.
-    min_cycles : float, optional
-        Shortest record in cycles of the mode.
-
-    Returns
-    -------
-    list of str
-        Reasons of the failed checks (empty: the run passes).
+    The checks and when they apply are those of :func:`quality_rows`.
     """
-    reasons = [
-        check_clipping(
-            record.response, settings.clip_fraction_of_peak, settings.clip_max_samples,
-            record.response_unit,
-        )
-    ]
-    if record.force_lbf is not None:
-        excitation = check_excitation(record.force_lbf, settings.min_peak_force_lbf)
-        reasons.append(excitation)
-        reasons.append(
-            check_double_hit(
-                record.force_lbf, record.sample_rate_hz,
-                settings.double_hit_ratio, settings.double_hit_gap_s,
-            )
-        )
-        if excitation is None and record.pretrigger_source != "default":
-            reasons.append(check_trigger(record.force_lbf, record.pretrigger_samples))
-    if mode_hz is not None:
-        reasons.append(check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, min_cycles))
-    return [reason for reason in reasons if reason is not None]
+    return [row["reason"] for row in quality_rows(record, settings, mode_hz=mode_hz)
+            if row["applied"] and not row["passed"]]
 
 
 QC_COLUMNS: list[str] = ["check", "applied", "passed", "value", "threshold", "unit", "reason"]
@@ -395,7 +335,6 @@ def quality_rows(
     settings: QualitySettings,
     *,
     mode_hz: float | None = None,
-    min_cycles: float = MIN_RECORD_CYCLES,
 ) -> list[dict]:
     """The record-level checks of :func:`run_quality_checks`, one row per check.
 
@@ -447,17 +386,18 @@ def quality_rows(
     crossings = np.flatnonzero(_oriented_force(force) >= 1.0) if trigger_applies else np.array([])
     rows.append(row(
         "trigger",
-        check_trigger(force, record.pretrigger_samples) if trigger_applies else None,
+        check_trigger(force, record.pretrigger_samples, tolerance_samples=settings.trigger_tolerance_samples)
+        if trigger_applies else None,
         abs(int(crossings[0]) - record.pretrigger_samples) if crossings.size else math.inf,
-        TRIGGER_TOLERANCE_SAMPLES, "samples from the pre-trigger length (at most)",
+        settings.trigger_tolerance_samples, "samples from the pre-trigger length (at most)",
         applied=trigger_applies,
     ))
     rows.append(row(
         "record_length",
-        check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, min_cycles)
+        check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, settings.min_record_cycles)
         if mode_hz is not None else None,
         record.n_samples / record.sample_rate_hz * mode_hz if mode_hz is not None else math.nan,
-        min_cycles, "cycles of the mode (at least)", applied=mode_hz is not None,
+        settings.min_record_cycles, "cycles of the mode (at least)", applied=mode_hz is not None,
     ))
     return rows
 
