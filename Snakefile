@@ -18,12 +18,16 @@ include: "rules/demo.smk"
 include: "rules/measured.smk"
 include: "rules/figures.smk"
 include: "rules/models.smk"
+include: "rules/discovery.smk"
+include: "rules/report.smk"  # last: it reads the names the others define
 
 
 rule all:
     input:
         measured_outputs(),
         model_outputs(),
+        discovery_outputs(),
+        report_outputs(),
     default_target: True
 
 
@@ -35,3 +39,8 @@ rule measured:
 rule models:
     input:
         model_outputs(),
+
+
+rule discovery:
+    input:
+        discovery_outputs(),

@@ -1,5 +1,6 @@
 # Helpers shared by the rules: validated config, the campaign's runs, target lists.
 
+import re
 import sys
 from pathlib import Path
 
@@ -53,7 +54,8 @@ if not RUN_FILES:
 
 
 wildcard_constraints:
-    configuration="|".join(CONFIGURATIONS),
+    configuration="|".join(re.escape(name) for name in CONFIGURATIONS),
+    number=r"\d\d",
 
 
 def run_file(wildcards):
@@ -118,4 +120,10 @@ def model_outputs():
 
 def discovery_outputs():
     """The diagnosis of what the paper's model gets wrong (output contract)."""
-    return ["results/diagnosis.json", "results/tables/diagnosis_residuals.parquet"]
+    return [
+        "results/diagnosis.json",
+        "results/tables/diagnosis_residuals.parquet",
+        *[f"results/figures/discovery_residuals_{name}.png" for name in CONFIGURATIONS],
+        "results/figures/discovery_candidates.png",
+        "results/figures/discovery_heldout.png",
+    ]

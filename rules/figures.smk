@@ -7,7 +7,13 @@ rule figure_time_history:
         modes="results/tables/modes.parquet",
         campaign_yaml=CAMPAIGN / "campaign.yaml",
     output:
-        "results/figures/fig09_time_history.png",
+        report(
+            "results/figures/fig09_time_history.png",
+            caption="../report/fig09_time_history.rst",
+            category="2 Measured data",
+            subcategory="2.1 Time history (fig. 9)",
+            labels={"figure": "fig. 9: raw, band-passed, envelope"},
+        ),
     params:
         campaign=str(CAMPAIGN),
         configuration=CONFIGURATIONS[0],
@@ -28,7 +34,13 @@ rule figure_damping:
         segments="results/tables/segments.parquet",
         curves="results/tables/damping_curves.parquet",
     output:
-        damping="results/figures/fig{number}_damping_{configuration}.png",
+        damping=report(
+            "results/figures/fig{number}_damping_{configuration}.png",
+            caption="../report/fig_damping.rst",
+            category="2 Measured data",
+            subcategory="2.2 Damping vs amplitude (figs. 10-12)",
+            labels={"figure": "fig. {number}: {configuration}"},
+        ),
     log:
         "results/logs/figure_damping/fig{number}_{configuration}.log",
     threads: 1
@@ -43,7 +55,13 @@ rule figure_backbone:
     input:
         segments="results/tables/segments.parquet",
     output:
-        "results/figures/backbone_{configuration}.png",
+        report(
+            "results/figures/backbone_{configuration}.png",
+            caption="../report/backbone.rst",
+            category="2 Measured data",
+            subcategory="2.3 Backbones (frequency vs amplitude)",
+            labels={"figure": "backbone: {configuration}"},
+        ),
     log:
         "results/logs/figure_backbone/{configuration}.log",
     threads: 1
@@ -59,7 +77,13 @@ rule figure_area_fits:
         curves="results/tables/damping_curves.parquet",
         area="results/tables/area_fits.parquet",
     output:
-        "results/figures/fig13_area_fits.png",
+        report(
+            "results/figures/fig13_area_fits.png",
+            caption="../report/fig13_area_fits.rst",
+            category="3 Damping and area fits",
+            subcategory="3.1 Damping vs bearing area (fig. 13)",
+            labels={"figure": "fig. 13: damping vs bearing area"},
+        ),
     params:
         campaign=str(CAMPAIGN),
     log:

@@ -4,8 +4,20 @@
 
 rule figure_friction_loops:
     output:
-        dahl="results/figures/fig07_dahl_loops.png",
-        lugre="results/figures/fig08_lugre_loops.png",
+        dahl=report(
+            "results/figures/fig07_dahl_loops.png",
+            caption="../report/fig07_dahl_loops.rst",
+            category="4 Friction models",
+            subcategory="4.1 The paper's friction laws (figs. 7, 8)",
+            labels={"figure": "fig. 7: Dahl loops"},
+        ),
+        lugre=report(
+            "results/figures/fig08_lugre_loops.png",
+            caption="../report/fig08_lugre_loops.rst",
+            category="4 Friction models",
+            subcategory="4.1 The paper's friction laws (figs. 7, 8)",
+            labels={"figure": "fig. 8: LuGre loops"},
+        ),
     log:
         "results/logs/figure_friction_loops.log",
     threads: 1
@@ -59,8 +71,20 @@ rule figure_models:
         segments="results/tables/segments.parquet",
         fit="results/models/{configuration}.json",
     output:
-        dahl="results/figures/fig14_dahl_{configuration}.png",
-        lugre="results/figures/fig15_lugre_{configuration}.png",
+        dahl=report(
+            "results/figures/fig14_dahl_{configuration}.png",
+            caption="../report/fig_models.rst",
+            category="4 Friction models",
+            subcategory="4.2 Fitted to the data (figs. 14, 15)",
+            labels={"configuration": "{configuration}", "model": "fig. 14: Dahl"},
+        ),
+        lugre=report(
+            "results/figures/fig15_lugre_{configuration}.png",
+            caption="../report/fig_models.rst",
+            category="4 Friction models",
+            subcategory="4.2 Fitted to the data (figs. 14, 15)",
+            labels={"configuration": "{configuration}", "model": "fig. 15: LuGre"},
+        ),
     log:
         "results/logs/figure_models/{configuration}.log",
     threads: 1

@@ -16,7 +16,11 @@ configuration = snakemake.wildcards.configuration
 segments = read_table(snakemake.input.segments)
 mine = segments[segments["configuration"] == configuration]
 document = json.loads(Path(snakemake.input.fit).read_text())
-curves = model_curve_frames(document)
+# the simulated curves only where they are compared with data (their ends carry the
+# simulation's own start-up and noise-floor effects)
+low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
+curves = {model: frame[frame["velocity_amplitude_in_s"].between(low, high)]
+          for model, frame in model_curve_frames(document).items()}
 for model, path, label in (("dahl", snakemake.output.dahl, "Dahl"), ("lugre", snakemake.output.lugre, "LuGre")):
     fit = document["models"].get(model)
     if fit is None:

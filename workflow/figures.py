@@ -13,6 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from matplotlib.ticker import FuncFormatter, LogLocator  # noqa: E402
 
 STYLE = {
     "figure.figsize": (7.0, 4.6),
@@ -41,6 +42,17 @@ def save(figure: plt.Figure, path: Path | str) -> None:
     figure.savefig(temporary, bbox_inches="tight")
     plt.close(figure)
     temporary.replace(target)
+
+
+def amplitude_axis(axis: plt.Axes) -> None:
+    """Logarithmic velocity-amplitude x axis with plain tick labels (0.2, 0.5, 1, 2 ...),
+    which stay legible whether the data span a fraction of a decade or several."""
+    plain = FuncFormatter(lambda value, _: f"{value:g}")
+    axis.set_xscale("log")
+    axis.xaxis.set_major_formatter(plain)
+    axis.xaxis.set_minor_locator(LogLocator(subs=(2.0, 5.0)))
+    axis.xaxis.set_minor_formatter(plain)
+    axis.set_xlabel(VELOCITY_LABEL)
 
 
 def run_colours(runs: list[str]) -> dict[str, tuple]:
@@ -86,7 +98,8 @@ def time_history(
         bottom.plot(time_s, -envelope, color="tab:red", linewidth=1.2)
         if decay_start_s is not None:
             for axis in (top, bottom):
-                axis.axvline(decay_start_s, color="k", linestyle=":", linewidth=0.8)
+                axis.axvline(decay_start_s, color="k", linestyle=":", linewidth=0.8,
+                             label="decay start (excitation peak)")
         bottom.set_xlabel("time (s)")
         bottom.set_ylabel(response_label)
         bottom.legend(loc="upper right")
@@ -126,8 +139,7 @@ def damping_vs_amplitude(
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
             axis.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style,
                       linewidth=2.0, label=name)
-        axis.set_xscale("log")
-        axis.set_xlabel(VELOCITY_LABEL)
+        amplitude_axis(axis)
         axis.set_ylabel(DAMPING_LABEL)
         axis.set_title(title)
         axis.legend(ncol=2 if len(runs) > 6 else 1, loc="best")
@@ -148,8 +160,7 @@ def frequency_vs_amplitude(
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
             axis.plot(frame["velocity_amplitude_in_s"], frame["frequency_hz"], style,
                       linewidth=2.0, label=name)
-        axis.set_xscale("log")
-        axis.set_xlabel(VELOCITY_LABEL)
+        amplitude_axis(axis)
         axis.set_ylabel(FREQUENCY_LABEL)
         axis.set_title(title)
         axis.legend(ncol=2 if len(runs) > 6 else 1, loc="best")
@@ -177,8 +188,7 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
             line, = left.plot(part["velocity_amplitude_in_s"], 100 * part["zeta"], linewidth=1.8, label=label)
             left.fill_between(part["velocity_amplitude_in_s"], 100 * part["zeta_low"],
                               100 * part["zeta_high"], color=line.get_color(), alpha=0.15)
-        left.set_xscale("log")
-        left.set_xlabel(VELOCITY_LABEL)
+        amplitude_axis(left)
         left.set_ylabel(DAMPING_LABEL)
         left.set_title("polynomial fits with 95 % bands")
         left.legend(loc="best")
@@ -244,11 +254,12 @@ def model_comparison(
                      linewidth=2.0, label=name)
             bottom.plot(frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, color="k",
                         linewidth=2.0, label=name)
-        top.set_xscale("log")
+        amplitude_axis(top)
+        top.set_xlabel("")
         top.set_ylabel(DAMPING_LABEL)
         top.set_title(title)
         top.legend(ncol=3 if len(runs) > 6 else 2, loc="best", fontsize=7)
-        bottom.set_xlabel(VELOCITY_LABEL)
+        amplitude_axis(bottom)
         bottom.set_ylabel(FREQUENCY_LABEL)
         if models:
             bottom.legend(loc="best")

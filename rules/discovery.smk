@@ -1,0 +1,81 @@
+# Model discovery: where the paper's model is wrong, the cause, the extended model
+# and its gain on held-out data (results/diagnosis.json, output contract).
+
+
+rule diagnose:
+    input:
+        segments="results/tables/segments.parquet",
+        campaign_yaml=CAMPAIGN / "campaign.yaml",
+    output:
+        diagnosis=report(
+            "results/diagnosis.json",
+            caption="../report/diagnosis_json.rst",
+            category="5 Diagnosis",
+            subcategory="5.2 Candidates and held-out prediction",
+            labels={"item": "file: diagnosis.json (download)"},
+        ),
+        residuals="results/tables/diagnosis_residuals.parquet",
+    params:
+        campaign=str(CAMPAIGN),
+        segment_cycles=SETTINGS.analysis.segment_cycles,
+        discovery=SETTINGS.discovery.model_dump(),
+    log:
+        "results/logs/diagnose.log",
+    benchmark:
+        "results/benchmarks/diagnose.tsv"
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    script:
+        "../scripts/diagnose.py"
+
+
+rule figure_discovery_residuals:
+    input:
+        diagnosis="results/diagnosis.json",
+        residuals="results/tables/diagnosis_residuals.parquet",
+    output:
+        report(
+            "results/figures/discovery_residuals_{configuration}.png",
+            caption="../report/discovery_residuals.rst",
+            category="5 Diagnosis",
+            subcategory="5.1 Residuals per configuration",
+            labels={"figure": "residuals: {configuration}"},
+        ),
+    log:
+        "results/logs/figure_discovery_residuals/{configuration}.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/figure_discovery_residuals.py"
+
+
+rule figure_discovery_summary:
+    input:
+        diagnosis="results/diagnosis.json",
+    output:
+        candidates=report(
+            "results/figures/discovery_candidates.png",
+            caption="../report/discovery_candidates.rst",
+            category="5 Diagnosis",
+            subcategory="5.2 Candidates and held-out prediction",
+            labels={"item": "figure: held-out error of every candidate"},
+        ),
+        heldout=report(
+            "results/figures/discovery_heldout.png",
+            caption="../report/discovery_heldout.rst",
+            category="5 Diagnosis",
+            subcategory="5.2 Candidates and held-out prediction",
+            labels={"item": "figure: prediction of a left-out bearing area"},
+        ),
+    log:
+        "results/logs/figure_discovery_summary.log",
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/figure_discovery_summary.py"

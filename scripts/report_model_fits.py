@@ -1,0 +1,15 @@
+"""Rule report_model_fits: the Dahl and LuGre parameters as a readable HTML table."""
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow.logs import setup_script_logging
+from workflow.report import model_fits_html
+from workflow.tables import atomic_write_bytes, read_table
+
+log = setup_script_logging(snakemake.log[0], "report_model_fits")
+fits = read_table(snakemake.input[0])
+atomic_write_bytes(snakemake.output[0], model_fits_html(fits).encode())
+log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())

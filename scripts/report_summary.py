@@ -1,0 +1,35 @@
+"""Rule report_summary: the report's first page (the verdict) and its tables as HTML."""
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow import report
+from workflow.logs import setup_script_logging
+from workflow.tables import atomic_write_bytes, read_table
+
+log = setup_script_logging(snakemake.log[0], "report_summary")
+document = json.loads(Path(snakemake.input.diagnosis).read_text())
+runs = read_table(snakemake.input.runs)
+hypotheses = read_table(snakemake.input.hypotheses)
+damping_fits = read_table(snakemake.input.damping_fits)
+areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]))
+
+pages = {
+    "verdict": report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas=areas),
+    "hypotheses": report.hypotheses_html(hypotheses),
+    "runs": report.runs_html(runs),
+    "rejected": report.rejected_segments_html(read_table(snakemake.input.rejected)),
+    "quality": report.quality_html(read_table(snakemake.input.quality)),
+    "damping_fits": report.damping_fits_html(damping_fits),
+    "candidates": report.candidates_html(document),
+}
+for name, text in pages.items():
+    atomic_write_bytes(snakemake.output[name], text.encode())
+# the report's first page: the verdict, then report/workflow.rst (see rules/report.smk)
+landing = report.landing_rst(report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
+                             Path(snakemake.input.description).read_text())
+atomic_write_bytes(snakemake.output.landing, landing.encode())
+log.info("verdict %s; %d pages written", document.get("cause"), len(pages))
