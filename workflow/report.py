@@ -93,30 +93,33 @@ tr.excluded td { background: #fff3f0; }
 
 
 # ------------------------------------------------------------------ formatting
-def fmt(value: Any, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits; '-' for missing or non-finite."""
+def _number(value: Any) -> float | str:
+    """``value`` as a float (nan when missing), or as text when it is no number."""
     if value is None:
-        return "–"
+        return math.nan
     try:
-        number = float(value)
+        return float(value)
     except (TypeError, ValueError):
         return str(value)
+
+
+def fmt(value: Any, digits: int = 3) -> str:
+    """A number with ``digits`` significant digits; '-' for missing or non-finite."""
+    number = _number(value)
+    if isinstance(number, str):
+        return number
     if not math.isfinite(number):
         return "–"
     if number != 0 and (abs(number) >= 10 ** (digits + 2) or abs(number) < 1e-3):
         return f"{number:.{digits - 1}e}"
-    text = f"{number:.{digits}g}"
-    return text
+    return f"{number:.{digits}g}"
 
 
 def ratio(value: Any) -> str:
     """A ratio with two decimals ('-' when missing)."""
-    if value is None:
-        return "–"
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        return str(value)
+    number = _number(value)
+    if isinstance(number, str):
+        return number
     return f"{number:.2f}" if math.isfinite(number) else "–"
 
 
