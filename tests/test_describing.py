@@ -1,0 +1,247 @@
+"""Averaged ring-down models against direct integration and closed forms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from workflow import describing as dsc
+from workflow import friction
+
+
+def _loop_averages(model, params, amplitude, frequency_hz=10.0, points=4000):
+    """Dissipation and in-phase first harmonic of a directly integrated steady loop."""
+    x, force = friction.hysteresis_loop(model, params, amplitude, frequency_hz=frequency_hz,
+                                        cycles=4, points_per_cycle=points)
+    d = friction.loop_dissipation(x, force, points)
+    f = np.asarray(force)[..., -(points + 1):-1]
+    phase = 2 * np.pi * np.arange(points) / points  # x = A sin(phase)
+    k1 = 2.0 / points * np.sum(f * np.sin(phase), axis=-1) / amplitude
+    return d, k1
+
+
+@pytest.mark.parametrize("y", [0.05, 0.5, 2.0, 8.0])
+def test_dahl_closed_forms_match_direct_integration_of_the_dahl_ode(y):
+    sigma, fc = 2133.4, 38.0
+    amplitude = y * fc / sigma
+    d, k1 = _loop_averages("dahl", {"sigma": sigma, "fc": fc}, amplitude)
+    av = dsc.dahl_averages(y)
+    # the issue's D = 4 Fc A - 4 Fc^2 / sigma tanh(sigma A / Fc), normalised by Fc^2/sigma
+    assert av.dissipation == pytest.approx(d / (fc**2 / sigma), rel=2e-3)
+    assert av.inphase == pytest.approx(k1 / sigma, rel=2e-3, abs=1e-5)
+
+
+def test_dahl_small_and_large_amplitude_limits():
+    y = np.array([1e-4, 1e-3 * 0.999, 1e-3, 50.0])
+    av = dsc.dahl_averages(y)
+    assert av.dissipation[0] == pytest.approx(4 * y[0] ** 3 / 3, rel=1e-6)
+    assert av.dissipation[1] == pytest.approx(av.dissipation[2], rel=1e-2)  # series/exact join
+    assert av.dissipation[3] == pytest.approx(4 * (50 - 1), rel=1e-9)       # Coulomb 4 Fc A
+    assert av.inphase[0] == pytest.approx(1.0, abs=1e-6)
+    # macro-slip: Coulomb friction has no in-phase part; Dahl's decays like y^-3/2
+    assert av.inphase[3] == pytest.approx(4 / (50 * np.sqrt(2 * np.pi * 50)), rel=2e-2)
+
+
+def test_lugre_without_stribeck_or_micro_damping_is_dahl():
+    y = np.geomspace(0.01, 100, 25)
+    lugre = dsc.lugre_averages(y, 1.0, 0.0, 0.0, n_steps=160)
+    dahl = dsc.dahl_averages(y)
+    np.testing.assert_allclose(lugre.dissipation, dahl.dissipation, rtol=1e-6)
+    np.testing.assert_allclose(lugre.inphase, dahl.inphase, rtol=1e-4, atol=1e-7)
+    np.testing.assert_allclose(lugre.tip_energy, 0.5 * np.tanh(y) ** 2, rtol=1e-6)
+
+
+@pytest.mark.parametrize("y,velocity_ratio", [(0.5, 0.5), (3.0, 2.0), (10.0, 0.3)])
+def test_lugre_steady_cycle_matches_direct_integration(y, velocity_ratio):
+    sigma0, alpha0, frequency = 1000.0, 2.0, 10.0
+    amplitude = y * alpha0 / sigma0
+    v0 = amplitude * 2 * np.pi * frequency / velocity_ratio
+    sigma1 = 0.3 * sigma0 / (2 * np.pi * frequency)
+    params = {"sigma0": sigma0, "sigma1": sigma1, "alpha0": alpha0, "alpha1": 0.7 * alpha0,
+              "alpha2": 0.0, "v0": v0, "vd": v0}
+    d, k1 = _loop_averages("lugre", params, amplitude, frequency_hz=frequency)
+    av = dsc.lugre_averages(y, velocity_ratio, 0.7, sigma1 * 2 * np.pi * frequency / sigma0,
+                            n_steps=400)
+    assert av.dissipation == pytest.approx(d / (alpha0**2 / sigma0), rel=5e-3)
+    assert av.inphase == pytest.approx(k1 / sigma0, rel=5e-3, abs=2e-4)
+
+
+def _iwan_discrete(x, chi, macro_ratio, n=20000):
+    """Sum over many Jenkins elements sampled from the Segalman density."""
+    # equal-weight quantiles of the density t^chi on (0, 1)
+    t = ((np.arange(n) + 0.5) / n) ** (1.0 / (chi + 1.0))
+    weights = np.full(n, 1.0 / (n * (1.0 + macro_ratio)))
+    macro = macro_ratio / (1.0 + macro_ratio)
+    onsets = np.append(t, 1.0)
+    weights = np.append(weights, macro)
+    d = np.sum(weights * dsc.jenkins_dissipation(x, onsets))
+    g = np.sum(weights * np.where(onsets >= x, 1.0, dsc.jenkins_inphase(onsets / x)))
+    return d, g
+
+
+@pytest.mark.parametrize("x", [0.03, 0.4, 0.99, 2.5])
+@pytest.mark.parametrize("chi", [-0.6, -0.2, 0.3])
+def test_iwan_averages_match_a_sum_of_jenkins_elements(x, chi):
+    av = dsc.iwan_averages(x, chi, 0.4)
+    d, g = _iwan_discrete(x, chi, 0.4)
+    assert av.dissipation == pytest.approx(d, rel=1e-2)
+    assert av.inphase == pytest.approx(g, rel=2e-3)
+
+
+@given(chi=st.floats(-0.9, 0.4), x=st.floats(1e-3, 0.1))
+@settings(max_examples=30, deadline=None)
+def test_iwan_micro_slip_power_law(chi, x):
+    """Below macro-slip D ~ x^(3 + chi): the damping ratio grows like x^(1 + chi)."""
+    d1 = dsc.iwan_averages(x, chi, 0.3).dissipation
+    d2 = dsc.iwan_averages(2 * x, chi, 0.3).dissipation
+    assert np.log2(d2 / d1) == pytest.approx(3 + chi, rel=1e-9)
+
+
+def test_iwan_tip_energy_slope_is_the_derivative_of_the_stored_energy():
+    x = np.linspace(0.05, 1.5, 300)
+    chi, beta = -0.4, 0.5
+    r = (chi + 1) / (1 + beta)
+    s = beta / (1 + beta)
+    m = np.minimum(x, 1.0)
+    # stored energy at the tip: stuck elements x^2/2, slipped ones t^2/2 (at their limit)
+    energy = (0.5 * x**2 * (r * (1 - m ** (chi + 1)) / (chi + 1) + np.where(x <= 1, s, 0.0))
+              + 0.5 * r * m ** (chi + 3) / (chi + 3) + np.where(x > 1, 0.5 * s, 0.0))
+    slope = dsc.iwan_averages(x, chi, beta).tip_energy_slope
+    smooth = np.abs(x - 1.0) > 0.02  # the slope jumps at macro-slip onset (x = 1)
+    smooth[[0, -1]] = False
+    np.testing.assert_allclose(np.gradient(energy, x)[smooth], slope[smooth], rtol=2e-2, atol=1e-4)
+
+
+def test_power_stiffness_harmonic_factor():
+    assert dsc.power_stiffness_harmonic_factor(2.0) == pytest.approx(0.75)   # cubic spring
+    assert dsc.power_stiffness_harmonic_factor(0.0) == pytest.approx(1.0)    # linear spring
+
+
+# ------------------------------------------------------------ direct integration
+def _simulate_dahl_oscillator(f_lin, zeta0, beta, v_slip, quadratic, y0, duration=1.5,
+                              fs=20000.0, sub=5):
+    """RK4 of xi'' + c xi' + k_nj xi + sigma z + c2 xi'|xi'| = 0, Dahl z (phi = psi = 1).
+
+    Returns time, displacement and acceleration sampled at ``fs``.
+    """
+    w = 2 * np.pi * f_lin
+    kappa = beta * w**2
+    k_nj, c = w**2 - kappa, 2 * zeta0 * w
+    a_s = v_slip / w
+    fc = kappa * a_s
+    c2 = 3 * np.pi * quadratic * w / 4  # zeta_q = (4 / 3 pi) c2 a = q V
+
+    def rhs(x, v, z):
+        acc = -c * v - k_nj * x - kappa * z - c2 * v * abs(v)
+        return v, acc, v - kappa * abs(v) * z / fc
+
+    dt, n = 1 / fs / sub, int(duration * fs)
+    x, v, z = 0.0, y0 * v_slip, 0.0
+    xs, accs = np.empty(n), np.empty(n)
+    for i in range(n):
+        xs[i], accs[i] = x, rhs(x, v, z)[1]
+        for _ in range(sub):
+            k1 = rhs(x, v, z)
+            k2 = rhs(x + dt / 2 * k1[0], v + dt / 2 * k1[1], z + dt / 2 * k1[2])
+            k3 = rhs(x + dt / 2 * k2[0], v + dt / 2 * k2[1], z + dt / 2 * k2[2])
+            k4 = rhs(x + dt * k3[0], v + dt * k3[1], z + dt * k3[2])
+            x += dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+            v += dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+            z += dt / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
+    return np.arange(n) / fs, xs, accs
+
+
+def _log_decrement(t, x, signal, cycles=10):
+    """Fundamental-harmonic amplitude per cycle of ``signal`` (between upward zero
+    crossings of x), then zeta, frequency and velocity amplitude per window of cycles."""
+    up = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
+    tc = t[up] - x[up] * (t[up + 1] - t[up]) / (x[up + 1] - x[up])
+    amp, mid = [], []
+    for k in range(tc.size - 1):
+        m = (t >= tc[k]) & (t < tc[k + 1])
+        period = tc[k + 1] - tc[k]
+        coef = 2 / period * np.sum(signal[m] * np.exp(-2j * np.pi * (t[m] - tc[k]) / period))
+        amp.append(abs(coef) * (t[1] - t[0]))
+        mid.append(0.5 * (tc[k] + tc[k + 1]))
+    amp, mid, periods = np.array(amp), np.array(mid), np.diff(tc)
+    rows = []
+    for k in range(0, mid.size - cycles, cycles // 2):
+        sl = slice(k, k + cycles)
+        s = -np.polyfit(mid[sl], np.log(amp[sl]), 1)[0]
+        wd = 2 * np.pi / np.mean(periods[sl])
+        rows.append((np.exp(np.mean(np.log(amp[sl]))) / wd, s / np.hypot(s, wd), wd / (2 * np.pi)))
+    return np.array(rows).T
+
+
+@pytest.mark.parametrize("beta,quadratic", [(0.08, 0.0), (0.03, 0.002)])
+def test_averaged_dahl_model_matches_direct_integration_of_the_ringdown(beta, quadratic):
+    """zeta(V) and f(V) of the acceleration envelope agree with the time integration within
+    3 % and 0.1 % from deep macro-slip (V = 30 V_s) down to the stuck joint."""
+    f_lin, zeta0, v_slip = 125.0, 0.001, 0.8
+    t, x, acc = _simulate_dahl_oscillator(f_lin, zeta0, beta, v_slip, quadratic, y0=30)
+    velocity, zeta, freq = _log_decrement(t, x, acc)
+    params = {"f_lin_hz": f_lin, "zeta0": zeta0, "joint_stiffness_fraction": beta,
+              "slip_velocity_in_s": v_slip, "quadratic_zeta_per_in_s": max(quadratic, 1e-12)}
+    model_zeta, model_f = dsc.model_curves("dahl_quadratic", params, velocity, response_order=2)
+    assert velocity.max() > 10 * v_slip and velocity.min() < 0.2 * v_slip
+    np.testing.assert_allclose(model_zeta, zeta, rtol=0.03)
+    np.testing.assert_allclose(model_f, freq, rtol=1e-3)
+
+
+def test_response_order_changes_the_envelope_decay_only_where_frequency_moves():
+    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.1,
+              "slip_velocity_in_s": 1.0}
+    v = np.geomspace(0.01, 100, 50)
+    z0, _ = dsc.model_curves("dahl", params, v, response_order=0)
+    z2, _ = dsc.model_curves("dahl", params, v, response_order=2)
+    # the frequency rises as the amplitude decays (softening joint): the acceleration
+    # envelope (omega^2 a) decays more slowly than the displacement's
+    assert np.all(z2 <= z0 * (1 + 1e-9))
+    assert np.max(1 - z2 / z0) > 0.01
+    assert abs(1 - z2[0] / z0[0]) < 1e-3 and abs(1 - z2[-1] / z0[-1]) < 1e-2
+
+
+def test_drift_model_at_the_middle_run_is_dahl_and_shifts_the_slip_scale():
+    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05,
+              "slip_velocity_in_s": 1.0}
+    v = np.geomspace(0.05, 5, 30)
+    runs = np.array([0, 1, 2])
+    grid = dsc.CurveGrid(np.tile(v, 3), run_index=np.repeat(runs, v.size), n_runs=3)
+    z_drift, f_drift = grid("dahl_drift", {**params, "drift": 0.6})
+    z_dahl, f_dahl = grid("dahl", params)
+    middle = slice(v.size, 2 * v.size)
+    np.testing.assert_allclose(z_drift[middle], z_dahl[middle], rtol=1e-12)
+    shifted = dsc.CurveGrid(v, grid_range=(v.min(), v.max()))(
+        "dahl", {**params, "slip_velocity_in_s": 1.0 * (1 + 0.6 * (2 - 1) / 3)})
+    np.testing.assert_allclose(z_drift[2 * v.size:], shifted[0], rtol=1e-9)
+
+
+def test_curve_grid_interpolation_is_accurate():
+    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05,
+              "slip_velocity_in_s": 0.3, "chi": -0.4, "macro_ratio": 0.2}
+    v = np.geomspace(0.01, 10, 333)
+    z_fine, f_fine = dsc.model_curves_on_grid(dsc.MODELS["iwan"], params, v)
+    z, f = dsc.CurveGrid(v)("iwan", params)
+    # the Iwan curve has a kink at macro-slip onset; elsewhere it is smooth
+    np.testing.assert_allclose(z, z_fine, rtol=1.5e-2)
+    assert np.median(np.abs(z / z_fine - 1)) < 1e-3
+    np.testing.assert_allclose(f, f_fine, rtol=5e-5)
+
+
+def test_stiffness_term_moves_frequency_not_damping():
+    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.01,
+              "slip_velocity_in_s": 1.0, "reference_velocity_in_s": 1.0,
+              "stiffness_exponent": 2.0}
+    v = np.append(np.geomspace(0.01, 3, 40), 1.0)
+    z0, f0 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": 0.0}, v,
+                              response_order=0)
+    z1, f1 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": -0.02}, v,
+                              response_order=0)
+    i = v.size - 1  # V = reference velocity
+    # omega^2 changes by -2 % at the reference amplitude: f by about -1 %
+    assert f1[i] / f0[i] - 1 == pytest.approx(-0.01, rel=0.05)
+    # a conservative spring changes the damping ratio only through omega and the stored
+    # energy: by no more than the (small) stiffness change itself below V_ref
+    below = v <= 1.0
+    assert np.max(np.abs(z1[below] / z0[below] - 1)) < 0.04

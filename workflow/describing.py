@@ -1,0 +1,678 @@
+"""Averaged (describing-function / energy-balance) ring-down models of one mode.
+
+A mass-normalised mode with a joint, ``xi'' + c xi' + k_nj xi + phi F_joint(phi xi) +
+f_extra = 0``, rings down slowly (damping ratio of a few percent at most). Over one
+cycle its motion is nearly ``xi = a cos(omega t)``; averaging the force laws over that
+cycle gives, as functions of the amplitude ``a``, everything a log-decrement analysis
+measures:
+
+* the **first-harmonic in-phase stiffness** ``K1(a)``, hence the oscillation frequency
+  ``omega^2 = k_nj + K1(a)``;
+* the **energy dissipated per cycle** ``D(a)``;
+* the **energy at a turning point** ``E(a)`` (velocity zero: elastic energy of the
+  structure plus what the joint stores at the loop tip).
+
+Energy balance between successive turning points, ``dE/da * da = -D(a) / 2`` per half
+cycle, gives the displacement-envelope decay rate ``s_a = -d ln a / dt =
+D omega / (2 pi a dE/da)``. The turning-point energy (not the equivalent linear system
+``k_eq a^2 / 2``) is what makes this exact to first order for hysteretic joints: it
+agrees with a direct integration of the Dahl oscillator to ~0.1 % where the
+equivalent-linear shortcut is off by up to 3 % (tests/test_describing.py).
+
+The pipeline measures the band-passed response, i.e. the fundamental harmonic of the
+recorded quantity, whose amplitude is ``omega^n a`` (``n`` = 0, 1, 2 for displacement,
+velocity, acceleration). Its envelope decays at ``s_a (1 + n dln(omega)/dln(a))``; the
+pipeline reports ``zeta = s / sqrt(s^2 + omega_d^2)`` and ``f = omega_d / 2 pi``
+(:mod:`workflow.decay`), and so does this module.
+
+Identifiable parametrisation
+----------------------------
+The sensor's mode-shape value ``psi`` and the joint's slip per modal coordinate
+``phi`` are unknown, so every model is written in quantities of the measured curves:
+
+``f_lin_hz``
+    small-amplitude (stuck-joint) natural frequency, Hz: ``omega_lin^2 = k_nj + kappa``.
+``zeta0``
+    linear viscous modal damping, ``c = 2 zeta0 omega_lin``.
+``joint_stiffness_fraction`` (``beta``)
+    joint share of the small-amplitude modal stiffness, ``kappa = beta omega_lin^2``
+    (``kappa = phi^2 sigma`` for Dahl). Full slip lowers ``omega^2`` by that fraction.
+``slip_velocity_in_s`` (``V_s``)
+    measured velocity amplitude at which the joint's slip amplitude reaches its slip
+    scale (Dahl ``Fc / sigma``; LuGre ``alpha0 / sigma0``; Iwan: the largest slip
+    threshold), evaluated at ``omega_lin``. The joint's normalised amplitude is
+    ``y = (V / V_s) (omega_lin / omega)``.
+
+Energies are then ``kappa a_s^2`` times dimensionless functions of ``y`` (``a_s`` the
+slip scale in modal units), and ``phi``, ``psi`` drop out.
+
+Joint laws (dimensionless, per :class:`JointAverages`)
+------------------------------------------------------
+* Dahl (closed form): ``d = 4 (y - tanh y)``, ``g = (2 / y)(1 + tanh y) e^-y I1(y)``,
+  ``e = tanh(y)^2 / 2``.
+* LuGre (paper eq. 5, ``g(v)`` in force units, ``v_d = v_0``, ``alpha2`` folded into
+  ``zeta0``): steady periodic cycle computed numerically (exact exponential stepping
+  of the linear-in-``z`` state equation over a half cycle, trapezoid rule in phase,
+  which is spectrally accurate for periodic integrands).
+* Iwan / Segalman four-parameter micro-slip: Jenkins elements whose slip thresholds
+  have density ``R t^chi`` on ``(0, 1)`` (``-1 < chi``) plus a macro-slip element of
+  weight ``S`` at ``t = 1``: ``D ~ y^(3 + chi)`` and ``zeta ~ y^(1 + chi)`` below
+  macro-slip.
+* Extensions used by :mod:`workflow.discovery`: quadratic damping ``c2 xi'|xi'|``,
+  a non-dissipative power-law stiffness, and a run-order drift of the slip scale.
+
+Units: velocity amplitudes in in/s, frequencies in Hz, angular frequencies in rad/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy import special
+
+__all__ = [
+    "JointAverages",
+    "ParamSpec",
+    "AveragedModel",
+    "MODELS",
+    "RESPONSE_ORDER",
+    "dahl_averages",
+    "jenkins_dissipation",
+    "jenkins_inphase",
+    "iwan_averages",
+    "lugre_averages",
+    "power_stiffness_harmonic_factor",
+    "ring_down_observables",
+    "CurveGrid",
+    "model_curves",
+]
+
+RESPONSE_ORDER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+"""Time-derivative order of each measurable response quantity."""
+
+
+# ----------------------------------------------------------------------------- joints
+@dataclass(frozen=True)
+class JointAverages:
+    """Dimensionless cycle averages of a joint at normalised slip amplitude ``y``.
+
+    With ``kappa`` the joint's small-amplitude modal stiffness and ``a_s`` its slip
+    scale in modal units (``a = a_s y``):
+
+    Attributes
+    ----------
+    dissipation : ndarray
+        ``d(y) = D / (kappa a_s^2)``, energy dissipated per cycle.
+    inphase : ndarray
+        ``g(y) = K1 / kappa``, first-harmonic in-phase stiffness (1 while stuck).
+    tip_energy_slope : ndarray or None
+        ``de/dy`` where ``e(y) = E_tip / (kappa a_s^2)`` is the energy the joint
+        stores at a turning point; None when only ``tip_energy`` is known.
+    tip_energy : ndarray or None
+        ``e(y)`` itself (used to differentiate numerically when the slope is None).
+    """
+
+    dissipation: np.ndarray
+    inphase: np.ndarray
+    tip_energy_slope: np.ndarray | None = None
+    tip_energy: np.ndarray | None = None
+
+
+def dahl_averages(y: ArrayLike) -> JointAverages:
+    """Cycle averages of the Dahl joint (paper eq. 4) under ``u = A cos(omega t)``.
+
+    Derivation (``y = sigma A / Fc``, force normalised by ``Fc``): the descending
+    branch from the tip is ``F/Fc = -1 + (1 + tanh y) exp(-y (1 - cos psi))``
+    (tip force ``Fc tanh y`` from loop symmetry). Then
+
+    * ``D = 4 Fc A - 4 Fc^2/sigma tanh(y)``  ->  ``d = 4 (y - tanh y)``;
+    * ``K1 = (1/(pi A)) int F cos psi dpsi``; with ``int_0^pi e^{y cos psi} cos psi dpsi
+      = pi I1(y)``: ``g = (2/y)(1 + tanh y) e^{-y} I1(y)`` (-> 1 - 3y^2/8 for small y,
+      -> 0 like ``y^-3/2`` in macro-slip: Coulomb friction has no in-phase part);
+    * tip energy ``sigma z_tip^2 / 2`` -> ``e = tanh(y)^2/2``, ``de/dy = tanh y sech^2 y``.
+
+    Parameters
+    ----------
+    y : array_like
+        Slip amplitude over the slip scale ``Fc / sigma`` (dimensionless, >= 0).
+
+    Returns
+    -------
+    JointAverages
+    """
+    y = np.abs(np.asarray(y, dtype=float))
+    small = y < 1e-3
+    ys = np.where(small, 1.0, y)
+    th = np.tanh(y)
+    d = np.where(small, 4.0 * (y**3 / 3.0 - 2.0 * y**5 / 15.0), 4.0 * (y - th))
+    g = np.where(small, 1.0 - 0.375 * y**2, (2.0 / ys) * (1.0 + th) * special.i1e(ys))
+    slope = th * (1.0 - th**2)
+    return JointAverages(d, g, tip_energy_slope=slope)
+
+
+def jenkins_dissipation(x: ArrayLike, t: ArrayLike) -> np.ndarray:
+    """Energy per cycle of a unit-stiffness Jenkins element, ``4 t (x - t)`` when ``x > t``.
+
+    Parameters
+    ----------
+    x : array_like
+        Slip amplitude (any length unit).
+    t : array_like
+        Slip onset (slider limit over stiffness), same unit.
+
+    Returns
+    -------
+    ndarray
+        Dissipation per unit element stiffness, unit^2.
+    """
+    x = np.asarray(x, dtype=float)
+    t = np.asarray(t, dtype=float)
+    return 4.0 * t * np.maximum(x - t, 0.0)
+
+
+def jenkins_inphase(tau: ArrayLike) -> np.ndarray:
+    """In-phase first-harmonic stiffness of a Jenkins element per unit stiffness.
+
+    ``h = (theta - sin(theta) cos(theta)) / pi`` with ``cos(theta) = 1 - 2 tau`` where
+    ``tau = onset / amplitude``; 1 while stuck (``tau >= 1``), ``~ (16 / 3 pi) tau^1.5``
+    deep in slip.
+
+    Parameters
+    ----------
+    tau : array_like
+        Slip onset over slip amplitude (dimensionless, >= 0).
+    """
+    tau = np.asarray(tau, dtype=float)
+    cos_t = np.clip(1.0 - 2.0 * tau, -1.0, 1.0)
+    theta = np.arccos(cos_t)
+    return (theta - np.sin(theta) * cos_t) / np.pi
+
+
+_GL_CACHE: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _gauss_legendre01(n: int) -> tuple[np.ndarray, np.ndarray]:
+    if n not in _GL_CACHE:
+        nodes, weights = np.polynomial.legendre.leggauss(n)
+        _GL_CACHE[n] = (0.5 * (nodes + 1.0), 0.5 * weights)
+    return _GL_CACHE[n]
+
+
+def iwan_averages(x: ArrayLike, chi: ArrayLike, macro_ratio: ArrayLike,
+                  n_nodes: int = 24) -> JointAverages:
+    """Cycle averages of Segalman's four-parameter Iwan joint (unit total stiffness).
+
+    Jenkins elements (unit stiffness density) with slip onsets ``t`` distributed as
+    ``rho(t) = R t^chi`` on ``0 < t < 1`` plus a macro-slip element of stiffness ``S`` at
+    ``t = 1``; ``R / (chi + 1) + S = 1`` and ``S / (R / (chi + 1)) = macro_ratio``.
+
+    * ``d(x) = int rho(t) 4 t (x - t) dt`` = ``4 R x^(chi+3) / ((chi+2)(chi+3))`` below
+      macro-slip (``x <= 1``), so ``zeta ~ x^(1 + chi)``;
+    * ``g(x) = int rho(t) h(t/x) dt`` (Gauss-Legendre in ``w = (t/m)^(chi+1)``, which
+      removes the ``t^chi`` singularity);
+    * only stuck elements store more energy as ``x`` grows: ``de/dx = x * (stiffness of
+      the elements with onset > x)``.
+
+    Parameters
+    ----------
+    x : array_like
+        Slip amplitude over the largest slip onset (macro-slip at ``x = 1``).
+    chi : array_like
+        Power-law exponent of the onset density, ``> -1``.
+    macro_ratio : array_like
+        Stiffness of the macro-slip element over that of the distributed elements, >= 0.
+    n_nodes : int
+        Quadrature nodes for ``g``.
+
+    Returns
+    -------
+    JointAverages
+    """
+    x, chi, beta = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, chi, macro_ratio)))
+    x = np.abs(x)
+    cp1 = chi + 1.0
+    r_density = cp1 / (1.0 + beta)
+    s_macro = beta / (1.0 + beta)
+    m = np.minimum(x, 1.0)
+    below = x <= 1.0
+    d_below = 4.0 * r_density * m ** (chi + 3.0) / ((chi + 2.0) * (chi + 3.0))
+    d_above = 4.0 * r_density * (x / (chi + 2.0) - 1.0 / (chi + 3.0)) + 4.0 * s_macro * (x - 1.0)
+    d = np.where(below, d_below, d_above)
+    nodes, weights = _gauss_legendre01(n_nodes)
+    safe_x = np.where(x > 0, x, 1.0)
+    t_nodes = m[..., None] * nodes ** (1.0 / cp1[..., None])
+    h = jenkins_inphase(t_nodes / safe_x[..., None])
+    slipped = r_density * m**cp1 / cp1 * np.sum(weights * h, axis=-1)
+    stuck_distributed = r_density * (1.0 - m**cp1) / cp1
+    macro = s_macro * np.where(below, 1.0, jenkins_inphase(1.0 / safe_x))
+    g = np.where(x > 0, slipped + stuck_distributed + macro, 1.0)
+    slope = x * (stuck_distributed + np.where(below, s_macro, 0.0))
+    return JointAverages(d, g, tip_energy_slope=slope)
+
+
+def lugre_averages(y: ArrayLike, velocity_ratio: ArrayLike, stiction_ratio: ArrayLike,
+                   micro_damping: ArrayLike, n_steps: int = 32) -> JointAverages:
+    """Cycle averages of the LuGre joint (paper eq. 5) on its steady periodic cycle.
+
+    Normalised with ``z~ = sigma0 z / alpha0`` and ``u~ = sigma0 u / alpha0 = y cos psi``,
+    the state equation is linear in ``z~``:
+    ``dz~/dpsi = du~/dpsi (1 + z~ / g~(psi))`` on the descending half cycle, with
+    ``g~ = 1 + stiction_ratio exp(-(velocity_ratio sin psi)^2)``. Freezing ``g~`` at each
+    step's mid-phase, ``z~ + g~`` decays exactly by ``exp(du~ / g~)``, so the half-cycle
+    map is affine, ``z~_N = P z~_0 + Q``; loop symmetry ``z~_N = -z~_0`` gives the
+    periodic state without transient cycles. The force is
+    ``F~ = z~ + micro_damping exp(-(velocity_ratio sin psi)^2) dz~/dpsi``
+    (``micro_damping = sigma1 omega / sigma0``; ``v_d = v_0``). Then
+    ``d = 2 int_0^pi F~ (-du~/dpsi) dpsi`` (positive for a dissipative loop),
+    ``g = (2 / (pi y)) int_0^pi F~ cos psi dpsi`` and ``e = z~_tip^2 / 2``.
+    The trapezoid rule over the phase is used: for these periodic integrands it
+    converges spectrally (Dahl limit: 1e-7 relative at 160 steps; ~1e-3 in the in-phase
+    part at 32 steps, far below the models' accuracy class).
+
+    Parameters
+    ----------
+    y : array_like
+        Slip amplitude over ``alpha0 / sigma0``.
+    velocity_ratio : array_like
+        Slip velocity amplitude over the Stribeck velocity ``v0`` (= measured velocity
+        amplitude over the Stribeck velocity in measured units).
+    stiction_ratio : array_like
+        ``alpha1 / alpha0`` (>= 0 for stiction above the Coulomb level).
+    micro_damping : array_like
+        ``sigma1 omega / sigma0`` (dimensionless; may be negative as in the paper's fit).
+    n_steps : int
+        Phase steps over the half cycle.
+
+    Returns
+    -------
+    JointAverages
+        ``tip_energy`` is given (``tip_energy_slope`` is None).
+    """
+    y, w, s, tw = np.broadcast_arrays(*(np.asarray(v, dtype=float)
+                                        for v in (y, velocity_ratio, stiction_ratio, micro_damping)))
+    y = np.maximum(np.abs(y), 1e-12)
+    psi = np.linspace(0.0, np.pi, n_steps + 1)
+    cos_p, sin_p = np.cos(psi), np.sin(psi)
+    sin_mid = np.sin(0.5 * (psi[1:] + psi[:-1]))
+    shape = (n_steps,) + (1,) * y.ndim
+    # all steps at once: mid-step Stribeck factor and exact decay of (z~ + g~)
+    g_mid = 1.0 + s * np.exp(-(w * sin_mid.reshape(shape)) ** 2)
+    decays = np.exp(-y * (cos_p[:-1] - cos_p[1:]).reshape(shape) / g_mid)
+    offsets = g_mid * (decays - 1.0)
+    p_map = np.prod(decays, axis=0)
+    q_map = np.zeros(y.shape)
+    for j in range(n_steps):  # affine half-cycle map z_N = P z_0 + Q
+        q_map = decays[j] * q_map + offsets[j]
+    z = np.empty((n_steps + 1,) + y.shape)
+    z[0] = -q_map / (1.0 + p_map)
+    for j in range(n_steps):
+        z[j + 1] = decays[j] * z[j] + offsets[j]
+    node_shape = (n_steps + 1,) + (1,) * y.ndim
+    stribeck = np.exp(-(w * sin_p.reshape(node_shape)) ** 2)
+    du = -y * sin_p.reshape(node_shape)
+    force = z + tw * stribeck * du * (1.0 + z / (1.0 + s * stribeck))
+    trap = np.full(n_steps + 1, np.pi / n_steps)
+    trap[[0, -1]] *= 0.5
+    trap = trap.reshape(node_shape)
+    diss = np.sum(trap * force * du, axis=0)
+    inph = np.sum(trap * force * cos_p.reshape(node_shape), axis=0)
+    z_tip = z[0]
+    return JointAverages(2.0 * diss, 2.0 * inph / (np.pi * y), tip_energy=0.5 * z_tip**2)
+
+
+def power_stiffness_harmonic_factor(p: ArrayLike) -> np.ndarray:
+    """``c_p = (1/pi) int_0^{2 pi} |cos psi|^(p+2) dpsi`` for a restoring force ``k_p |x|^p x``.
+
+    Its in-phase first harmonic at amplitude ``a`` is ``c_p k_p a^p`` (cubic, ``p = 2``:
+    3/4), its potential ``k_p a^(p+2) / (p + 2)``.
+    """
+    m = np.asarray(p, dtype=float) + 2.0
+    return 2.0 / np.sqrt(np.pi) * np.exp(special.gammaln((m + 1.0) / 2.0) - special.gammaln(m / 2.0 + 1.0))
+
+
+# ------------------------------------------------------------------- ring-down model
+def ring_down_observables(*, omega_lin: ArrayLike, y: ArrayLike, joint: JointAverages,
+                          beta: ArrayLike, zeta0: ArrayLike,
+                          slip_velocity: ArrayLike = 1.0, quadratic: ArrayLike = 0.0,
+                          extra_inphase: ArrayLike = 0.0, extra_energy_slope: ArrayLike = 0.0,
+                          ) -> dict[str, np.ndarray]:
+    """Displacement-envelope decay rate and frequency from the cycle averages.
+
+    All energies are divided by ``a_s^2`` (``a = a_s y``).
+
+    Parameters
+    ----------
+    omega_lin : array_like
+        Small-amplitude natural frequency, rad/s.
+    y : array_like
+        Normalised slip amplitude.
+    joint : JointAverages
+        Joint averages at ``y`` (``tip_energy_slope`` required).
+    beta : array_like
+        Joint stiffness fraction.
+    zeta0 : array_like
+        Linear viscous damping ratio (w.r.t. ``omega_lin``).
+    slip_velocity : array_like
+        ``V_s``, in/s (enters only the quadratic-damping term ``2 pi q V_s omega^2 y^3``).
+    quadratic : array_like
+        ``q`` in s/in: quadratic damping adds ``~ q V`` to the damping ratio.
+    extra_inphase : array_like
+        Additional in-phase stiffness (rad/s)^2 from a non-dissipative term.
+    extra_energy_slope : array_like
+        ``dU/da / a_s`` of that term, (rad/s)^2.
+
+    Returns
+    -------
+    dict
+        ``omega2`` (undamped oscillation frequency squared), ``decay_rate`` (``s_a``,
+        1/s, displacement envelope).
+    """
+    omega_lin = np.asarray(omega_lin, dtype=float)
+    beta = np.asarray(beta, dtype=float)
+    kappa = beta * omega_lin**2
+    k_nj = omega_lin**2 - kappa
+    omega2 = np.maximum(k_nj + kappa * joint.inphase + extra_inphase, 1e-6 * omega_lin**2)
+    omega = np.sqrt(omega2)
+    y = np.asarray(y, dtype=float)
+    dissipation = (np.pi * 2.0 * np.asarray(zeta0) * omega_lin * omega * y**2
+                   + kappa * joint.dissipation
+                   + 2.0 * np.pi * np.asarray(quadratic) * np.asarray(slip_velocity) * omega2 * y**3)
+    energy_slope = k_nj * y + kappa * joint.tip_energy_slope + extra_energy_slope
+    energy_slope = np.maximum(energy_slope, 1e-9 * omega_lin**2 * y)
+    decay_rate = dissipation * omega / (2.0 * np.pi * y * energy_slope)
+    return {"omega2": omega2, "decay_rate": decay_rate}
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One model parameter: name, unit, scale of its fit coordinate, meaning."""
+
+    name: str
+    unit: str
+    scale: str  # "log" (fitted as ln value) or "linear"
+    description: str
+
+
+_BASE = (
+    ParamSpec("f_lin_hz", "Hz", "log", "small-amplitude natural frequency (stuck joint)"),
+    ParamSpec("zeta0", "1", "log", "linear viscous modal damping ratio"),
+    ParamSpec("joint_stiffness_fraction", "1", "log",
+              "joint share of the small-amplitude modal stiffness (frequency^2 lost at full slip)"),
+    ParamSpec("slip_velocity_in_s", "in/s", "log",
+              "measured velocity amplitude at which the joint slip reaches its slip scale"),
+)
+
+
+@dataclass(frozen=True)
+class AveragedModel:
+    """An averaged ring-down model: parameters and a joint law with extensions.
+
+    Attributes
+    ----------
+    name : str
+        Model id (``dahl``, ``lugre``, ``iwan``, ``dahl_quadratic``,
+        ``dahl_stiffness``, ``dahl_drift``).
+    joint : str
+        ``dahl``, ``lugre`` or ``iwan``.
+    params : tuple of ParamSpec
+        Fitted parameters, in order.
+    fixed : tuple of str
+        Names of parameters that are supplied, not fitted (``reference_velocity_in_s``).
+    description : str
+        One line for reports.
+    """
+
+    name: str
+    joint: str
+    params: tuple[ParamSpec, ...]
+    description: str
+    fixed: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.params)
+
+    @property
+    def uses_runs(self) -> bool:
+        return any(p.name == "drift" for p in self.params)
+
+
+MODELS: dict[str, AveragedModel] = {
+    "dahl": AveragedModel("dahl", "dahl", _BASE,
+                          "Dahl joint (paper eq. 4) + linear viscous modal damping"),
+    "lugre": AveragedModel("lugre", "lugre", _BASE + (
+        ParamSpec("stiction_ratio", "1", "linear", "alpha1 / alpha0 (stiction over Coulomb level)"),
+        ParamSpec("stribeck_velocity_in_s", "in/s", "log",
+                  "Stribeck velocity v0 = vd in measured velocity units"),
+        ParamSpec("micro_damping_ratio", "1", "linear",
+                  "sigma1 term as a damping ratio at small amplitude, over zeta0"),
+    ), "LuGre joint (paper eq. 5; alpha2 folded into zeta0, vd = v0) + linear viscous damping"),
+    "iwan": AveragedModel("iwan", "iwan", _BASE[:3] + (
+        ParamSpec("slip_velocity_in_s", "in/s", "log",
+                  "measured velocity amplitude at which the largest slip threshold is reached "
+                  "(macro-slip)"),
+        ParamSpec("chi", "1", "linear", "power-law exponent of the slip-threshold density"),
+        ParamSpec("macro_ratio", "1", "log",
+                  "stiffness of the macro-slip element over the distributed elements"),
+    ), "Segalman four-parameter Iwan joint (micro-slip) + linear viscous damping"),
+    "dahl_quadratic": AveragedModel("dahl_quadratic", "dahl", _BASE + (
+        ParamSpec("quadratic_zeta_per_in_s", "s/in", "log",
+                  "quadratic damping c2 v|v| as damping ratio per unit velocity amplitude"),
+    ), "Dahl joint + linear viscous + quadratic (velocity-squared) damping"),
+    "dahl_stiffness": AveragedModel("dahl_stiffness", "dahl", _BASE + (
+        ParamSpec("stiffness_shift", "1", "linear",
+                  "relative change of omega^2 from a non-dissipative stiffness at the "
+                  "reference velocity amplitude (negative: softening)"),
+        ParamSpec("stiffness_exponent", "1", "log",
+                  "power of amplitude of that stiffness change (2: cubic spring)"),
+    ), "Dahl joint + linear viscous damping + non-dissipative power-law stiffness",
+        fixed=("reference_velocity_in_s",)),
+    "dahl_drift": AveragedModel("dahl_drift", "dahl", _BASE + (
+        ParamSpec("drift", "1", "linear",
+                  "relative change of the friction limit Fc (slip scale) over the run "
+                  "sequence: Fc_r = Fc (1 + drift (r - r_mean) / n_runs)"),
+    ), "Dahl joint with a friction limit drifting linearly with run order + viscous damping"),
+}
+"""The averaged models, by id."""
+
+
+def _joint_averages(model: AveragedModel, y, velocity, params) -> JointAverages:
+    if model.joint == "dahl":
+        return dahl_averages(y)
+    if model.joint == "iwan":
+        return iwan_averages(y, params["chi"], params["macro_ratio"])
+    if model.joint == "lugre":
+        beta = np.asarray(params["joint_stiffness_fraction"], dtype=float)
+        tau_omega = 2.0 * np.asarray(params["micro_damping_ratio"]) * np.asarray(params["zeta0"]) / beta
+        return lugre_averages(y, velocity / np.asarray(params["stribeck_velocity_in_s"]),
+                              params["stiction_ratio"], tau_omega)
+    raise ValueError(f"unknown joint law {model.joint!r}")
+
+
+def drift_factor(drift: ArrayLike, run_position: ArrayLike) -> np.ndarray:
+    """Slip-scale factor ``1 + drift * run_position``, kept >= 0.05.
+
+    ``run_position = (r - r_mean) / n_runs`` for run ``r`` of ``n_runs`` (0-based, in
+    run order).
+    """
+    return np.maximum(1.0 + np.asarray(drift, dtype=float) * np.asarray(run_position, dtype=float), 0.05)
+
+
+def model_curves_on_grid(model: AveragedModel, params: Mapping[str, ArrayLike],
+                         velocity_grid: ArrayLike, *, run_position: ArrayLike | None = None,
+                         response_order: int = 2, n_iter: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """Damping ratio and damped frequency on a velocity-amplitude grid.
+
+    Parameters
+    ----------
+    model : AveragedModel
+    params : mapping of array_like
+        Physical parameter values (names of ``model.params`` plus fixed ones), each
+        broadcastable to a batch shape ``B`` (use shape ``(P, 1)`` for ``P`` sets).
+    velocity_grid : array_like, shape (G,)
+        Measured velocity amplitudes, in/s, increasing and log-spaced (derivatives
+        along the grid are taken in ``ln V``).
+    run_position : array_like, shape (R,), optional
+        For ``dahl_drift``: ``(r - r_mean) / n_runs`` of the runs; the result then has
+        shape ``B + (R, G)`` with batch parameters broadcast against ``(R, 1)``.
+    response_order : int
+        0, 1, 2 for a displacement, velocity or acceleration record.
+    n_iter : int
+        Fixed-point iterations for ``y = (V / V_s)(omega_lin / omega)``.
+
+    Returns
+    -------
+    zeta, frequency_hz : ndarray
+        Shape ``broadcast(B, (G,))`` (or with the run axis).
+    """
+    v = np.asarray(velocity_grid, dtype=float)
+    p = {k: np.asarray(val, dtype=float) for k, val in params.items()}
+    if model.uses_runs:
+        if run_position is None:
+            raise ValueError(f"model {model.name} needs run_position")
+        pos = np.asarray(run_position, dtype=float)[:, None]
+        p = {k: val[..., None, :] if val.ndim >= 1 else val for k, val in p.items()}
+        v_s = p["slip_velocity_in_s"] * drift_factor(p["drift"], pos)
+    else:
+        v_s = p["slip_velocity_in_s"]
+    omega_lin = 2.0 * np.pi * p["f_lin_hz"]
+    beta = p["joint_stiffness_fraction"]
+    ratio = np.ones(np.broadcast_shapes(np.shape(v_s), np.shape(omega_lin), v.shape))
+    quadratic = p.get("quadratic_zeta_per_in_s", 0.0)
+    for _ in range(n_iter):
+        y = v / (v_s * ratio)
+        joint = _joint_averages(model, y, v, p)
+        extra_k, extra_e = _extra_stiffness(model, p, v, ratio, omega_lin, v_s)
+        omega2 = (1.0 - beta + beta * joint.inphase) * omega_lin**2 + extra_k
+        ratio = np.sqrt(np.maximum(omega2, 1e-6 * omega_lin**2)) / omega_lin
+    y = v / (v_s * ratio)
+    log_v = np.log(v)
+    if joint.tip_energy_slope is None:
+        # de/dy = (de/dlnV) / (dln y/dlnV) / y, along the grid
+        dlny = np.gradient(np.log(y), log_v, axis=-1)
+        slope = np.gradient(joint.tip_energy, log_v, axis=-1) / (dlny * y)
+        joint = JointAverages(joint.dissipation, joint.inphase, tip_energy_slope=slope)
+    out = ring_down_observables(omega_lin=omega_lin, y=y, joint=joint, beta=beta,
+                                zeta0=p["zeta0"], slip_velocity=v_s,
+                                quadratic=quadratic, extra_inphase=extra_k,
+                                extra_energy_slope=extra_e)
+    omega2 = out["omega2"]
+    s_a = out["decay_rate"]
+    if response_order:
+        # d ln(omega) / d ln(a), with ln a = ln V - ln omega + const
+        m = np.gradient(0.5 * np.log(omega2), log_v, axis=-1)
+        s_meas = s_a * (1.0 + response_order * m / (1.0 - m))
+    else:
+        s_meas = s_a
+    omega_d2 = np.maximum(omega2 - s_a**2, 1e-6 * omega2)
+    zeta = s_meas / np.sqrt(s_meas**2 + omega_d2)
+    return zeta, np.sqrt(omega_d2) / (2.0 * np.pi)
+
+
+def _extra_stiffness(model, p, v, ratio, omega_lin, v_s):
+    """In-phase stiffness and energy slope (per a_s) of the non-dissipative term."""
+    if "stiffness_shift" not in p:
+        return 0.0, 0.0
+    delta = p["stiffness_shift"]
+    expo = p["stiffness_exponent"]
+    x_ref = v / (p["reference_velocity_in_s"] * ratio)
+    k1 = delta * omega_lin**2 * x_ref**expo
+    y = v / (v_s * ratio)
+    return k1, k1 * y / power_stiffness_harmonic_factor(expo)
+
+
+@dataclass
+class CurveGrid:
+    """Fast evaluation of model curves at fixed measured amplitudes.
+
+    The curves are computed on a log-spaced grid covering the amplitudes and
+    interpolated linearly in ``ln V`` (weights computed once).
+
+    Parameters
+    ----------
+    velocity_in_s : array_like, shape (n,)
+        Measured velocity amplitudes of the segments, in/s.
+    run_index : array_like of int, shape (n,), optional
+        Run of each segment, 0-based in run order (needed by ``dahl_drift``).
+    n_runs : int, optional
+        Number of runs of the configuration (defaults to ``max(run_index) + 1``).
+    response_order : int
+        0, 1, 2: displacement, velocity, acceleration record.
+    grid_range : (float, float), optional
+        Velocity range of the grid (defaults to the data's, padded by 5 %).
+    n_grid : int
+        Grid points.
+    """
+
+    velocity_in_s: np.ndarray
+    run_index: np.ndarray | None = None
+    n_runs: int | None = None
+    response_order: int = 2
+    grid_range: tuple[float, float] | None = None
+    n_grid: int = 48
+    grid: np.ndarray = field(init=False)
+    _lo: np.ndarray = field(init=False)
+    _w: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.velocity_in_s, dtype=float)
+        if np.any(~np.isfinite(v)) or np.any(v <= 0):
+            raise ValueError("velocity amplitudes must be finite and > 0")
+        self.velocity_in_s = v
+        lo, hi = self.grid_range or (float(v.min()), float(v.max()))
+        lo, hi = lo / 1.05, hi * 1.05
+        self.grid = np.geomspace(lo, hi, self.n_grid)
+        pos = (np.log(v) - np.log(lo)) / (np.log(hi) - np.log(lo)) * (self.n_grid - 1)
+        pos = np.clip(pos, 0.0, self.n_grid - 1 - 1e-9)
+        self._lo = np.floor(pos).astype(int)
+        self._w = pos - self._lo
+        if self.run_index is None:
+            self.run_index = np.zeros(v.size, dtype=int)
+        self.run_index = np.asarray(self.run_index, dtype=int)
+        if self.n_runs is None:
+            self.n_runs = int(self.run_index.max()) + 1 if self.run_index.size else 1
+
+    @property
+    def run_positions(self) -> np.ndarray:
+        """``(r - r_mean) / n_runs`` for r = 0 .. n_runs - 1."""
+        r = np.arange(self.n_runs, dtype=float)
+        return (r - r.mean()) / self.n_runs
+
+    def __call__(self, model: AveragedModel | str, params: Mapping[str, ArrayLike]
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Model ``zeta`` and ``frequency_hz`` at the segments, shape ``B + (n,)``."""
+        model = MODELS[model] if isinstance(model, str) else model
+        zeta_g, f_g = model_curves_on_grid(
+            model, params, self.grid,
+            run_position=self.run_positions if model.uses_runs else None,
+            response_order=self.response_order)
+        return self._interp(zeta_g, model.uses_runs), self._interp(f_g, model.uses_runs)
+
+    def _interp(self, values: np.ndarray, per_run: bool) -> np.ndarray:
+        if per_run:
+            a = values[..., self.run_index, self._lo]
+            b = values[..., self.run_index, self._lo + 1]
+        else:
+            a = values[..., self._lo]
+            b = values[..., self._lo + 1]
+        return a + (b - a) * self._w
+
+
+def model_curves(model: AveragedModel | str, params: Mapping[str, ArrayLike],
+                 velocity_in_s: ArrayLike, *, run_index: ArrayLike | None = None,
+                 n_runs: int | None = None, response_order: int = 2
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Model damping ratio and damped frequency (Hz) at measured velocity amplitudes.
+
+    Convenience wrapper around :class:`CurveGrid`; see there for the arguments.
+    """
+    grid = CurveGrid(np.atleast_1d(np.asarray(velocity_in_s, dtype=float)), run_index=run_index,
+                     n_runs=n_runs, response_order=response_order, n_grid=64)
+    return grid(model, params)
+
+
+#: Callable type of a curve evaluator (for type hints elsewhere).
+CurveFunction = Callable[[AveragedModel, Mapping[str, ArrayLike]], tuple[np.ndarray, np.ndarray]]

@@ -1,0 +1,235 @@
+"""Figures of the model discovery (results/diagnosis.json and the residual table).
+
+* :func:`residuals_figure`: normalised residuals vs amplitude of the baseline and the
+  extended model, damping and frequency, with the +-2 scatter band and binned means.
+* :func:`candidates_figure`: held-out error of every candidate per configuration.
+* :func:`heldout_figure`: the across-configurations prediction of a left-out area.
+
+All take what :func:`workflow.discovery.diagnose_campaign` and
+:func:`workflow.discovery.residual_table` return; nothing is refitted here.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import ticker  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from workflow.figures import (  # noqa: E402,F401  (save, run_colours: one import for callers)
+    DAMPING_LABEL,
+    FREQUENCY_LABEL,
+    STYLE,
+    VELOCITY_LABEL,
+    run_colours,
+    save,
+)
+
+__all__ = ["residuals_figure", "candidates_figure", "heldout_figure", "save"]
+
+ROLE_COLOURS = {"baseline": "tab:red", "extended": "tab:blue"}
+CURVE_LABELS = {
+    "zeta": f"damping residual\n(ln ζ_measured/ζ_model) / scatter (1)",
+    "frequency_hz": f"frequency residual\n(f_measured/f_model − 1) / scatter (1)",
+}
+ERROR_LABEL = "held-out error (RMS residual / scatter, 1)"
+
+
+def _configuration_document(document: Mapping, configuration: str | None = None) -> Mapping:
+    """The per-configuration entry of a campaign document (or the entry itself)."""
+    if "configurations" in document:
+        return document["configurations"][configuration]
+    return document
+
+
+def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Mean residual in bins of ``1 / per_decade`` decade of amplitude (>= 3 segments)."""
+    if v.size == 0:
+        return np.array([]), np.array([])
+    code = np.floor(per_decade * np.log10(v)).astype(int)
+    centres, means = [], []
+    for c in np.unique(code):
+        m = code == c
+        if m.sum() >= 3:
+            centres.append(10 ** ((c + 0.5) / per_decade))
+            means.append(float(np.mean(r[m])))
+    return np.array(centres), np.array(means)
+
+
+def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapping
+                     ) -> plt.Figure:
+    """Residuals vs amplitude of the baseline and the extended model of one configuration.
+
+    Parameters
+    ----------
+    residuals : DataFrame
+        :func:`workflow.discovery.residual_table` (all configurations or this one).
+    configuration : str
+    document : mapping
+        The campaign's diagnosis document (or this configuration's entry): names the
+        cause and the models in the title and legends.
+
+    Returns
+    -------
+    Figure
+        Two panels sharing the log amplitude axis: damping and frequency residuals,
+        each segment divided by the measured scatter, the +-2 band (95 % of the
+        segments of a model that fits) and each model's mean per quarter decade; the
+        residual axis is linear within +-4 and logarithmic beyond (misfits span decades).
+    """
+    entry = _configuration_document(document, configuration)
+    rows = residuals[residuals["configuration"] == configuration]
+    cause = entry.get("cause", "?")
+    models = {"baseline": entry["baseline"]["model"],
+              "extended": entry["extended_model"]["model"]}
+    gain = entry.get("gain", {}).get("ratio")
+    with plt.rc_context(STYLE):
+        fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7.0, 6.4))
+        roles = ["baseline"] if models["extended"] == models["baseline"] else ["baseline",
+                                                                               "extended"]
+        for ax, curve in zip(axes, ("zeta", "frequency_hz")):
+            ax.axhspan(-2, 2, color="0.85", alpha=0.6, lw=0, label="±2 scatter")
+            ax.axhline(0.0, color="0.4", lw=0.8)
+            for role in roles:
+                sub = rows[(rows["role"] == role) & (rows["curve"] == curve)]
+                v = sub["velocity_amplitude_in_s"].to_numpy(float)
+                r = sub["residual"].to_numpy(float)
+                colour = ROLE_COLOURS[role]
+                ax.scatter(v, r, s=5, alpha=0.25, color=colour, lw=0)
+                centres, means = _binned_means(v, r)
+                ax.plot(centres, means, "o-", color=colour, ms=4, lw=1.5,
+                        label=f"{role}: {models[role]} (binned mean)")
+            ax.set_xscale("log")
+            ax.set_ylabel(CURVE_LABELS[curve])
+            finite = rows.loc[rows["curve"] == curve, "residual"].to_numpy(float)
+            finite = finite[np.isfinite(finite)]
+            lim = max(4.0, float(np.max(np.abs(finite))) * 1.2) if finite.size else 4.0
+            # linear within +-4 (the scatter band stays readable), logarithmic beyond
+            ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
+            ax.set_ylim(-lim, lim)
+        axes[0].legend(loc="best")
+        axes[-1].set_xlabel(VELOCITY_LABEL)
+        ratio = f", gain ratio {gain:.2f}" if gain is not None else ""
+        fig.suptitle(f"{configuration}: cause {cause}{ratio}")
+        fig.tight_layout()
+    return fig
+
+
+def candidates_figure(document: Mapping) -> plt.Figure:
+    """Held-out error of every candidate cause, per configuration, baseline marked.
+
+    Parameters
+    ----------
+    document : mapping
+        The campaign's diagnosis document (``configurations`` -> ``ranking``).
+
+    Returns
+    -------
+    Figure
+        One horizontal bar chart per configuration (log error axis): the ranking's
+        scores, ``none`` being the baseline model (hatched), the verdict outlined.
+    """
+    entries = document.get("configurations", {})
+    names = list(entries)
+    with plt.rc_context(STYLE):
+        n = max(len(names), 1)
+        fig, axes = plt.subplots(1, n, figsize=(max(4.2 * n, 5.0), 3.8), squeeze=False)
+        axes = axes[0]
+        if not names:
+            axes[0].text(0.5, 0.5, "no configuration diagnosed", ha="center", va="center",
+                         transform=axes[0].transAxes)
+            axes[0].set_axis_off()
+        for ax, name in zip(axes, names):
+            entry = entries[name]
+            ranking = entry.get("ranking", [])
+            causes = [r["cause"] for r in ranking][::-1]
+            scores = np.array([r["score"] if r["score"] is not None else np.nan
+                               for r in ranking][::-1], dtype=float)
+            candidates = entry.get("evidence", {}).get("candidates", {})
+            base_model = entry["baseline"]["model"]
+            labels = [f"none ({base_model}, baseline)" if c == "none"
+                      else f"{c} ({candidates.get(c, {}).get('model', '?')})" for c in causes]
+            colours = ["0.6" if c == "none" else "tab:blue" for c in causes]
+            bars = ax.barh(np.arange(len(causes)), scores, color=colours)
+            for bar, c in zip(bars, causes):
+                if c == "none":
+                    bar.set_hatch("//")
+                if c == entry.get("cause"):
+                    bar.set_edgecolor("black")
+                    bar.set_linewidth(2.0)
+            if np.isfinite(scores).any():
+                base = scores[causes.index("none")] if "none" in causes else np.nan
+                if np.isfinite(base):
+                    ax.axvline(base, color="tab:red", ls="--", lw=1,
+                               label=f"baseline {base_model}: {base:.2f}")
+                ax.set_xscale("log")
+                ax.legend(loc="lower right")
+            ax.set_yticks(np.arange(len(causes)), labels)
+            ax.set_xlabel(ERROR_LABEL)
+            ax.set_title(f"{name}: verdict {entry.get('cause', '?')}")
+        fig.suptitle("Candidate causes: held-out error (outlined: verdict)")
+        fig.tight_layout()
+    return fig
+
+
+def heldout_figure(document: Mapping) -> plt.Figure:
+    """Across configurations: error predicting a left-out bearing area, per configuration.
+
+    Parameters
+    ----------
+    document : mapping
+        The campaign's diagnosis document (``across_configurations``).
+
+    Returns
+    -------
+    Figure
+        Bars of the baseline's and the extended model's error for each left-out
+        configuration (parameters linear in ln(area), fitted to the others), labelled
+        with the area; a "not applicable" panel with the reason otherwise.
+    """
+    across = document.get("across_configurations") or {}
+    with plt.rc_context(STYLE):
+        fig, ax = plt.subplots(figsize=(7.0, 4.2))
+        if not across.get("applicable"):
+            reason = across.get("reason", "no across-configuration prediction in the document")
+            ax.text(0.5, 0.5, f"Across-configuration prediction not applicable:\n{reason}",
+                    ha="center", va="center", wrap=True, transform=ax.transAxes)
+            ax.set_axis_off()
+            ax.set_title("Prediction of a left-out bearing area")
+            return fig
+        models = across.get("models", {})
+        configs = across.get("configurations", {})
+        names = sorted(configs, key=lambda n: configs[n].get("bearing_area_in2") or 0.0)
+        x = np.arange(len(names))
+        roles = [r for r in ("baseline", "extended") if r in models]
+        width = 0.8 / max(len(roles), 1)
+        for k, role in enumerate(roles):
+            errors = [configs[n].get(f"{role}_error") for n in names]
+            errors = np.array([e if e is not None else np.nan for e in errors], dtype=float)
+            mean = across.get(f"{role}_mean_error")
+            label = f"{role}: {models[role]}" + (f" (mean {mean:.2f})" if mean is not None else "")
+            ax.bar(x + (k - (len(roles) - 1) / 2) * width, errors, width,
+                   color=ROLE_COLOURS[role], label=label)
+        ax.set_xticks(x, [f"{n}\n{configs[n].get('bearing_area_in2', float('nan')):.2f} in²"
+                          for n in names])
+        ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
+        ax.yaxis.set_minor_formatter(ticker.FormatStrFormatter("%g"))
+        ax.set_xlabel("left-out configuration (bearing area, in²)")
+        ax.set_ylabel("prediction error of the left-out configuration\n"
+                      "(RMS residual / scatter, 1)")
+        ratio = across.get("ratio")
+        title = "Prediction of a left-out bearing area from the others' ln(area) law"
+        if ratio is not None:
+            title += f"\nextended / baseline mean error = {ratio:.2f}"
+        ax.set_title(title)
+        ax.legend(loc="best")
+        fig.tight_layout()
+    return fig
