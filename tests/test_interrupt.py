@@ -10,7 +10,8 @@ results/, and leave the raw files untouched.
 
 from __future__ import annotations
 
-import hashlib
+import functools
+
 import json
 import os
 import signal
@@ -25,6 +26,7 @@ import pytest
 
 from workflow import locks
 from workflow.virtual_lab import generate_campaign
+from helpers import checksums, run_snakemake
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIGURATIONS = {"no_washer": 1.36, "small_washer": 0.17}
@@ -38,19 +40,9 @@ TARGETS = [
 ]
 
 
-def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    return subprocess.run(
-        [sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile"), "-d", str(workdir), *args],
-        capture_output=True, text=True, env=env, timeout=600,
-    )
+snakemake = functools.partial(run_snakemake, timeout=600)
 
 
-def checksums(folder: Path) -> dict[str, str]:
-    return {
-        str(path.relative_to(folder)): hashlib.sha256(path.read_bytes()).hexdigest()
-        for path in sorted(folder.rglob("*")) if path.is_file()
-    }
 
 
 def start_snakemake(workdir: Path, campaign: Path, output: Path) -> subprocess.Popen:

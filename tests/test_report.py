@@ -8,13 +8,13 @@ The end-to-end test builds everything except the time-domain Dahl/LuGre fits (fi
 
 from __future__ import annotations
 
+import functools
+
 import base64
 import html
 import json
 import os
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pandas as pd
@@ -22,6 +22,7 @@ import pytest
 
 from workflow import report
 from workflow.virtual_lab import generate_campaign
+from helpers import run_snakemake
 
 REPO = Path(__file__).resolve().parents[1]
 FULL = os.environ.get("LAPJOINT_FULL_REPORT_TEST") == "1"
@@ -186,12 +187,7 @@ def test_tables_render(hypotheses, runs):
 
 
 # ------------------------------------------------------------------ the real report
-def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    return subprocess.run(
-        [sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile"), "-d", str(workdir), *args],
-        capture_output=True, text=True, env=env, timeout=1800,
-    )
+snakemake = functools.partial(run_snakemake, timeout=1800)
 
 
 CHEAP = [

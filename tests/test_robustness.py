@@ -12,12 +12,11 @@ short runs check ``strict: true`` and an unknown key in campaign.yaml.
 
 from __future__ import annotations
 
-import hashlib
+import functools
+
 import os
 import re
 import stat
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -26,8 +25,8 @@ import pytest
 
 from workflow import virtual_lab
 from workflow.virtual_lab import generate_campaign
+from helpers import checksums, run_snakemake
 
-REPO = Path(__file__).resolve().parents[1]
 FS_HZ = virtual_lab.SAMPLE_RATE_HZ
 PRETRIGGER = virtual_lab.PRETRIGGER_SAMPLES
 HEADER_LINES = 4  # title, sample rate, pre-trigger, column names: data start on line 5
@@ -35,12 +34,7 @@ GOOD_CONFIGURATIONS = {"no_washer": 1.36, "small_washer": 0.17}
 OFF_MODE = "large_washer"  # readable runs whose mode lies far outside the search range
 
 
-def snakemake(workdir: Path, *args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    return subprocess.run(
-        [sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile"), "-d", str(workdir), *args],
-        capture_output=True, text=True, env=env, timeout=timeout,
-    )
+snakemake = functools.partial(run_snakemake, timeout=600)
 
 
 def measured_targets(configurations: list[str]) -> list[str]:
@@ -56,11 +50,6 @@ def measured_targets(configurations: list[str]) -> list[str]:
     ]
 
 
-def checksums(folder: Path) -> dict[str, str]:
-    return {
-        str(path.relative_to(folder)): hashlib.sha256(path.read_bytes()).hexdigest()
-        for path in sorted(folder.rglob("*")) if path.is_file()
-    }
 
 
 def data_line(sample: int) -> int:

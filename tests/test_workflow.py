@@ -1,10 +1,7 @@
 """The real ``snakemake`` on small campaigns: contract outputs, bad runs, re-runs."""
 
-import hashlib
-import os
+import functools
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pandas as pd
@@ -12,17 +9,9 @@ import pytest
 
 from workflow.tables import column_units
 from workflow.virtual_lab import generate_campaign
+from helpers import checksums, run_snakemake
 
-REPO = Path(__file__).resolve().parents[1]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
-
-
-def snakemake(workdir: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(REPO)}
-    return subprocess.run(
-        [*SNAKEMAKE, "-s", str(REPO / "Snakefile"), "-d", str(workdir), *args],
-        capture_output=True, text=True, env=env, timeout=900,
-    )
+snakemake = functools.partial(run_snakemake, timeout=900)
 
 
 def job_counts(dry_run_output: str) -> dict[str, int]:
@@ -37,11 +26,6 @@ def job_counts(dry_run_output: str) -> dict[str, int]:
     return counts
 
 
-def checksums(folder: Path) -> dict[str, str]:
-    return {
-        str(path.relative_to(folder)): hashlib.sha256(path.read_bytes()).hexdigest()
-        for path in sorted(folder.rglob("*")) if path.is_file()
-    }
 
 
 @pytest.fixture(scope="module")
