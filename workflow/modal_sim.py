@@ -2,7 +2,7 @@
 
 Equation of motion (modal coordinate ``xi``, mass-normalised mode)::
 
-    xi'' + 2 zeta0 omega xi' + omega^2 xi + f_extra(xi, xi', params) = -phi_s F_joint(u, v)
+    xi'' + 2 zeta0 omega xi' + omega^2 xi = -phi_s F_joint(u, v)
     u = phi_s xi  (joint slip, in),  v = phi_s xi'  (slip velocity, in/s)
 
 ``phi_s`` (``slip_per_modal``) is the joint slip per unit modal coordinate. With
@@ -15,37 +15,40 @@ Integrator (why it is fast and what it does about stiffness)
   (stiffness ``k_lin``, damping ``c_lin``; Dahl: ``sigma``; LuGre: ``sigma0`` and
   ``sigma1 + alpha2``) is added to the linear oscillator, whose flow over a step is
   applied *exactly* (2x2 matrix exponential per parameter set, computed once). RK4 only
-  integrates the remainder ``-phi_s (F - k_lin u - c_lin v) - f_extra``, which is small
-  for a lightly damped joint. The error constant therefore scales with the size of the
+  integrates the remainder ``-phi_s (F - k_lin u - c_lin v)``, which is small for a
+  lightly damped joint. The error constant therefore scales with the size of the
   nonlinearity rather than with ``(omega h)^4`` alone, so ~20 steps per period give
   envelope errors far below 1e-3 (``bench/bench_integrator.py``).
 * **Dahl without stiffness.** Dahl is rate independent; between velocity reversals its
   state is an exact function of slip (:func:`workflow.friction.dahl_branch_z`). The
-  integrator keeps the last reversal ``(u_r, z_r)`` and the direction as per-set memory,
-  and evaluates the joint force algebraically at every stage. The stiff rate
-  ``sigma |v| / Fc`` (which may exceed omega by orders of magnitude in deep sliding)
-  never enters a stability limit, and the kink of ``|v|`` at reversals is removed: a
-  reversal inside a step is located by cubic Hermite interpolation of the slip, so only
-  an O(h^4) local error remains per reversal (4th-order convergence is kept).
-* **ODE internal states (LuGre).** ``z`` is integrated by the same Lawson RK4 with the
+  integrator keeps the last reversal and the direction as per-set memory, and evaluates
+  the joint force algebraically at every stage. The stiff rate ``sigma |v| / Fc`` (which
+  may exceed omega by orders of magnitude in deep sliding) never enters a stability
+  limit, and the kink of ``|v|`` at reversals is removed: a reversal inside a step is
+  located by cubic Hermite interpolation of the slip, so only an O(h^4) local error
+  remains per reversal (4th-order convergence is kept).
+* **LuGre's internal state.** ``z`` is integrated by the same Lawson RK4 with the
   relaxation rate ``a = sigma0 |v| / g(v)`` frozen at the start of the step and applied
   exactly (``exp(-a h)``). What is left explicit is the change of ``a`` within a step,
-  ``~ a_max * omega * h``; the step is refined automatically so that
-  ``a_max * omega * h^2 <= 0.05`` (``a_max`` from the largest slip velocity), which keeps it
-  well inside RK4's stability region.
-* **Output grid.** The step is ``1 / (fs_out * m)`` with an integer ``m`` chosen so that
-  there are at least ``steps_per_period`` steps per period of the fastest (stuck-joint)
-  frequency in the batch, so output samples fall on steps and need no interpolation.
-
-Extending: subclass :class:`JointForce` (state count, force, memory update) and pass an
-instance as ``model``; or pass ``extra_force`` for an additive modal force.
+  ``~ a_max * omega * h``; each set's step is refined so that
+  ``a_max * omega * h^2 <= 0.05`` (``a_max`` from its starting slip velocity), which
+  keeps it well inside RK4's stability region.
+* **Output grid.** Each set's step is ``1 / (fs_out * m)`` with an integer ``m`` chosen
+  so that there are at least ``steps_per_period`` steps per period of its stuck-joint
+  frequency, so output samples fall on steps and need no interpolation.
+* **Compiled.** The step loop runs per parameter set in scalar code compiled by Numba
+  (``cache=True``: compiled once per checkout, a few seconds). The NumPy formulation of the same scheme,
+  vectorised across the batch, was bound by per-operation overhead: 1.8 s for 1000 Dahl
+  ring-downs, and 130 s for one configuration's LuGre fit, whose deep-sliding sets need
+  many substeps (``bench/bench_integrator.py`` prints the figures).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Callable, Mapping
+from typing import Mapping
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
@@ -54,221 +57,60 @@ from scipy.signal import hilbert
 from workflow import friction
 
 __all__ = [
-    "JointForce",
-    "NoJoint",
-    "DahlJoint",
-    "LuGreJoint",
-    "make_joint",
+    "JOINT_PARAMETERS",
     "simulate_ringdown",
     "reference_ringdown",
     "oscillator_propagator",
     "envelope_relative_error",
 ]
 
-ExtraForce = Callable[[np.ndarray, np.ndarray, Mapping[str, np.ndarray]], np.ndarray]
+#: Parameters of each joint model, in the order the compiled kernel takes them.
+JOINT_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "none": (),
+    "dahl": ("sigma", "fc"),
+    "lugre": ("sigma0", "sigma1", "alpha0", "alpha1", "alpha2", "v0", "vd"),
+}
+_KIND = {"none": 0, "dahl": 1, "lugre": 2}
+# LuGre: keep (rate variation within a step) * h = a_max * omega * h^2 below this
+# (1 is stable; 0.05 keeps deep-sliding LuGre within ~1e-3 of Dahl, measured).
+_LUGRE_RATE_STEP = 0.05
+# A Runge-Kutta stage can look slightly past a reversal; keep exp() finite.
+_EXP_CAP = 50.0
+# error_model="numpy": IEEE results instead of Python's ZeroDivisionError checks, which
+# halve the kernel's speed (measured).
+_jit = numba.njit(cache=True, error_model="numpy")
 
 
-# ----------------------------------------------------------------------------- joints
-class JointForce:
-    """Joint force model on a 1-D batch of parameter sets (base class: no joint).
-
-    Subclasses set ``n_states`` (ODE states integrated by the simulator), the linear
-    parts ``stiffness_lbf_in`` / ``damping_lbf_s_in`` (absorbed into the exact
-    propagator; any values are correct, good ones make the remainder small), and
-    override :meth:`force` (and :meth:`end_step` for hysteretic memory).
-
-    Parameters
-    ----------
-    params : mapping of array_like
-        Model parameters, each broadcastable to ``(batch,)``.
-    slip_per_modal : array_like
-        ``phi_s``, joint slip per unit modal coordinate (in per unit xi).
-    batch : int
-        Number of parameter sets.
-    """
-
-    n_states = 0
-
-    def __init__(self, params: Mapping[str, ArrayLike], slip_per_modal: ArrayLike, batch: int):
-        self.params = {k: np.broadcast_to(np.asarray(v, float), (batch,)).copy()
-                       for k, v in params.items()}
-        self.phi = np.broadcast_to(np.asarray(slip_per_modal, float), (batch,)).copy()
-        self.batch = batch
-        self.stiffness_lbf_in = np.zeros(batch)
-        self.damping_lbf_s_in = np.zeros(batch)
-
-    def initial_states(self, u0_in: np.ndarray, v0_in_s: np.ndarray) -> np.ndarray:
-        """ODE states at t = 0, shape ``(n_states, batch)``; also resets memory."""
-        return np.zeros((self.n_states, self.batch))
-
-    def force(self, u_in: np.ndarray, v_in_s: np.ndarray, w: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray]:
-        """Joint force (lbf) and ODE-state rates ``dw/dt`` at slip ``u``, velocity ``v``."""
-        return np.zeros_like(u_in), np.zeros_like(w)
-
-    def relaxation_rate(self, u_in: np.ndarray, v_in_s: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """Linear decay rate (1/s) of each ODE state, applied exactly over a step."""
-        return np.zeros_like(w)
-
-    def max_relaxation_rate(self, v_max_in_s: np.ndarray) -> np.ndarray:
-        """Upper bound of :meth:`relaxation_rate` for ``|v| <= v_max``, per set, 1/s."""
-        return np.zeros(self.batch)
-
-    def end_step(self, xi0: np.ndarray, eta0: np.ndarray, xi1: np.ndarray, eta1: np.ndarray,
-                 h_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """Update hysteretic memory after a step from (xi0, eta0) to (xi1, eta1) (modal units).
-
-        Returns None, or ``(idx, d_xi, d_xi_dot)``: corrections of the modal state of the
-        sets ``idx`` for an event inside the step (e.g. a reversal the stages missed).
-        """
-        return None
-
-    def modal_remainder(self, xi: np.ndarray, eta: np.ndarray, w: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
-        """Nonlinear modal force ``-phi (F - k_lin u - c_lin v)`` and ``dw/dt``."""
-        u = self.phi * xi
-        v = self.phi * eta
-        f, dw = self.force(u, v, w)
-        rem = -self.phi * (f - self.stiffness_lbf_in * u - self.damping_lbf_s_in * v)
-        return rem, dw
+# --------------------------------------------------------------------------- propagator
+@_jit
+def _propagator(k: float, c: float, t: float) -> tuple[float, float, float, float]:
+    """Exact flow exp(L t) of x'' + c x' + k x = 0 (one set, any regime)."""
+    mu = 0.5 * c
+    disc = k - mu * mu
+    if disc > 0.0:
+        om = math.sqrt(disc)
+        cos = math.cos(om * t)
+        sinc = math.sin(om * t) / om if om * t > 1e-8 else t
+    elif disc < 0.0:
+        om = math.sqrt(-disc)
+        cos = math.cosh(om * t)
+        sinc = math.sinh(om * t) / om if om * t > 1e-8 else t
+    else:
+        cos, sinc = 1.0, t
+    decay = math.exp(-mu * t)
+    return (decay * (cos + mu * sinc), decay * sinc, -k * decay * sinc,
+            decay * (cos - mu * sinc))
 
 
-class NoJoint(JointForce):
-    """No joint force: the linear damped oscillator."""
-
-    def modal_remainder(self, xi, eta, w):
-        return np.zeros_like(xi), w
-
-
-class DahlJoint(JointForce):
-    """Dahl friction (paper eq. 4) evaluated exactly along slip branches.
-
-    On a branch of direction ``s`` from the reversal ``(xi_r, z_r)`` the state is
-    ``z(xi) = A0 + A1 exp(B xi + B0)`` with ``A0 = s Fc/sigma``, ``A1 = z_r - A0``,
-    ``B = -sigma s phi / Fc``, ``B0 = -B xi_r`` (:func:`workflow.friction.dahl_branch_z`
-    in modal units). These four numbers per set are the memory.
-    Parameters: ``sigma`` (lbf/in), ``fc`` (lbf).
-    """
-
-    def __init__(self, params, slip_per_modal, batch):
-        super().__init__(params, slip_per_modal, batch)
-        self.sigma = self.params["sigma"]
-        self.fc = self.params["fc"]
-        if np.any(self.sigma <= 0) or np.any(self.fc <= 0):
-            raise ValueError("Dahl parameters sigma and fc must be positive")
-        self.stiffness_lbf_in = self.sigma.copy()
-        # Remainder in modal units: K xi - Q z.
-        self._q = self.phi * self.sigma
-        self._k = self.phi * self.phi * self.sigma
-
-    def initial_states(self, u0_in, v0_in_s):
-        s = np.where(np.asarray(v0_in_s) < 0, -1.0, 1.0)
-        z_sat = self.fc / self.sigma
-        xi0 = np.asarray(u0_in, float) / self.phi
-        b = -self.sigma / self.fc * s * self.phi
-        # rows: A0, A1, B, B0 (virgin start: z = 0 at xi0)
-        self.mem = np.stack([s * z_sat, -s * z_sat, b, -b * xi0])
-        return np.zeros((0, self.batch))
-
-    def z_of(self, xi: np.ndarray) -> np.ndarray:
-        """Dahl state (inch) at modal displacement ``xi`` on the current branches."""
-        a0, a1, b, b0 = self.mem
-        # min(): a Runge-Kutta stage can look slightly past a reversal; keep exp finite.
-        return a0 + a1 * np.exp(np.minimum(b * xi + b0, 50.0))
-
-    def force(self, u_in, v_in_s, w):
-        return self.sigma * self.z_of(np.asarray(u_in) / self.phi), w
-
-    def modal_remainder(self, xi, eta, w):
-        # Hot loop: 6 array operations and one exp.
-        return self._k * xi - self._q * self.z_of(xi), w
-
-    def end_step(self, xi0, eta0, xi1, eta1, h_s):
-        # Velocity sign s is that of -B / phi: a reversal makes eta1 * B positive.
-        flipped = eta1 * self.mem[2] > 0.0
-        if not flipped.any():
-            return None
-        idx = np.flatnonzero(flipped)
-        a0, a1, b, b0 = self.mem[:, idx]
-        x0, v0, x1, v1 = xi0[idx], eta0[idx], xi1[idx], eta1[idx]
-        # Reversal time from linear velocity; the Hermite displacement there is O(h^4)
-        # accurate because xi is stationary at the reversal (error ~ theta error squared).
-        theta = v0 / (v0 - v1)
-        d = x1 - x0
-        hv0, hv1 = h_s * v0, h_s * v1
-        c2 = 3.0 * d - 2.0 * hv0 - hv1
-        c3 = hv0 + hv1 - 2.0 * d
-        x_r = x0 + theta * (hv0 + theta * (c2 + theta * c3))
-        z_r = a0 + a1 * np.exp(b * x_r + b0)
-        # The stages after the reversal used the old branch; add the missing impulse of
-        # the (new - old) branch force over the rest of the step, else a one-signed O(h^3)
-        # error per reversal accumulates. With xi - xi_r = alpha tau^2 / 2 the difference
-        # grows as tau^2; one node at tau_e / sqrt(3) integrates tau^2 exactly, and
-        # int (tau_e - tau) tau^2 = (tau_e / 4) int tau^2.
-        alpha = (v1 - v0) / h_s
-        tau_e = (1.0 - theta) * h_s
-        e = np.exp(np.minimum(-b * alpha * tau_e * tau_e / 6.0, 50.0))
-        dz = (z_r + a0) * e - (z_r - a0) / e - 2.0 * a0
-        d_eta = -self._q[idx] * tau_e * dz
-        self.mem[:, idx] = (-a0, z_r + a0, -b, b * x_r)
-        return idx, 0.25 * tau_e * d_eta, d_eta
+@_jit
+def _propagator_batch(k, c, t):
+    n = k.size
+    out = np.empty((4, n))
+    for i in range(n):
+        out[0, i], out[1, i], out[2, i], out[3, i] = _propagator(k[i], c[i], t)
+    return out
 
 
-class LuGreJoint(JointForce):
-    """LuGre friction (paper eq. 5, ``g`` in force units; see :mod:`workflow.friction`).
-
-    One ODE state ``z`` (inch). Parameters: ``sigma0`` (lbf/in), ``sigma1`` (lbf s/in),
-    ``alpha0``, ``alpha1`` (lbf), ``alpha2`` (lbf s/in), ``v0``, ``vd`` (in/s).
-    """
-
-    n_states = 1
-
-    def __init__(self, params, slip_per_modal, batch):
-        super().__init__(params, slip_per_modal, batch)
-        p = self.params
-        g_min = np.minimum(p["alpha0"], p["alpha0"] + p["alpha1"])
-        if np.any(g_min <= 0) or np.any(p["sigma0"] <= 0):
-            raise ValueError("LuGre needs sigma0 > 0 and g(v) = alpha0 + alpha1 exp(.) > 0")
-        if np.any(p["v0"] <= 0) or np.any(p["vd"] <= 0):
-            raise ValueError("LuGre velocities v0 and vd must be positive")
-        self._g_min = g_min
-        self.stiffness_lbf_in = p["sigma0"].copy()
-        self.damping_lbf_s_in = p["sigma1"] + p["alpha2"]
-
-    def _rate_coeff(self, v):
-        p = self.params
-        g = p["alpha0"] + p["alpha1"] * np.exp(-(v / p["v0"]) ** 2)
-        return p["sigma0"] / g
-
-    def force(self, u_in, v_in_s, w):
-        p = self.params
-        z = w[0]
-        z_dot = v_in_s - self._rate_coeff(v_in_s) * np.abs(v_in_s) * z
-        s1 = p["sigma1"] * np.exp(-(v_in_s / p["vd"]) ** 2)
-        f = p["sigma0"] * z + s1 * z_dot + p["alpha2"] * v_in_s
-        return f, z_dot[None, :]
-
-    def relaxation_rate(self, u_in, v_in_s, w):
-        return (self._rate_coeff(v_in_s) * np.abs(v_in_s))[None, :]
-
-    def max_relaxation_rate(self, v_max_in_s):
-        return self.params["sigma0"] / self._g_min * np.abs(v_max_in_s)
-
-
-_JOINTS: dict[str, type[JointForce]] = {"none": NoJoint, "linear": NoJoint,
-                                        "dahl": DahlJoint, "lugre": LuGreJoint}
-
-
-def make_joint(model: str | type[JointForce], params: Mapping[str, ArrayLike],
-               slip_per_modal: ArrayLike, batch: int) -> JointForce:
-    """Build a :class:`JointForce` from a name (``none``, ``dahl``, ``lugre``) or class."""
-    cls = _JOINTS.get(model) if isinstance(model, str) else model
-    if cls is None:
-        raise ValueError(f"unknown joint model {model!r}; expected one of {sorted(_JOINTS)}")
-    return cls(params, slip_per_modal, batch)
-
-
-# --------------------------------------------------------------------------- integrator
 def oscillator_propagator(stiffness_per_s2: ArrayLike, damping_per_s: ArrayLike, t_s: float
                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Exact flow ``exp(L t)`` of ``x'' + C x' + K x = 0`` for state ``(x, x')``.
@@ -287,15 +129,113 @@ def oscillator_propagator(stiffness_per_s2: ArrayLike, damping_per_s: ArrayLike,
     e00, e01, e10, e11 : numpy.ndarray
         Matrix entries; ``e01`` in s, ``e10`` in 1/s.
     """
-    k = np.asarray(stiffness_per_s2, float)
-    c = np.asarray(damping_per_s, float)
-    mu = 0.5 * c
-    om = np.sqrt((k - mu * mu).astype(complex))  # imaginary when overdamped
-    cos = np.cos(om * t_s).real
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sinc = np.where(np.abs(om) * t_s > 1e-8, (np.sin(om * t_s) / om).real, t_s)
-    decay = np.exp(-mu * t_s)
-    return (decay * (cos + mu * sinc), decay * sinc, -k * decay * sinc, decay * (cos - mu * sinc))
+    k, c = np.broadcast_arrays(np.asarray(stiffness_per_s2, float),
+                               np.asarray(damping_per_s, float))
+    out = _propagator_batch(np.ascontiguousarray(k).ravel(), np.ascontiguousarray(c).ravel(),
+                            float(t_s))
+    return tuple(row.reshape(k.shape) for row in out)
+
+
+# ------------------------------------------------------------------------------ kernel
+@_jit
+def _lugre_rate_coeff(v, sigma0, alpha0, alpha1, v0):
+    return sigma0 / (alpha0 + alpha1 * math.exp(-(v / v0) ** 2))
+
+
+@_jit
+def _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0, xi, eta, z):
+    """Nonlinear modal force ``-phi (F - k_joint u - c_joint v)`` and ``dz/dt``."""
+    if kind == 1:  # Dahl on the current branch: z = a0 + a1 exp(b xi + b0)
+        zb = a0 + a1 * math.exp(min(b * xi + b0, _EXP_CAP))
+        return phi * p[0] * (phi * xi - zb), 0.0
+    if kind == 2:
+        v = phi * eta
+        z_dot = v - _lugre_rate_coeff(v, p[0], p[2], p[3], p[5]) * abs(v) * z
+        f = p[0] * z + p[1] * math.exp(-(v / p[6]) ** 2) * z_dot + p[4] * v
+        return -phi * (f - k_joint * phi * xi - c_joint * v), z_dot
+    return 0.0, 0.0
+
+
+@_jit
+def _ringdown_kernel(kind, params, phi_all, k_lin_all, c_lin_all, k_joint_all, c_joint_all,
+                     v_init_all, substeps, dt_out, disp, vel, acc):
+    """Lawson RK4 ring-down of every set; writes rows of disp, vel, acc (modal units)."""
+    n_out = disp.shape[1]
+    for i in range(disp.shape[0]):
+        p = params[i]
+        phi, k_lin, c_lin = phi_all[i], k_lin_all[i], c_lin_all[i]
+        k_joint, c_joint = k_joint_all[i], c_joint_all[i]
+        m = substeps[i]
+        h = dt_out / m
+        hh = 0.5 * h
+        e00, e01, e10, e11 = _propagator(k_lin, c_lin, hh)
+        p00, p01, p10, p11 = _propagator(k_lin, c_lin, h)
+        xi, eta, z = 0.0, v_init_all[i], 0.0
+        # Dahl branch memory (virgin start at xi = 0): z = a0 + a1 exp(b xi + b0).
+        a0 = a1 = b = b0 = 0.0
+        if kind == 1:
+            s = -1.0 if eta < 0.0 else 1.0
+            z_sat = p[1] / p[0]
+            a0, a1, b = s * z_sat, -s * z_sat, -p[0] / p[1] * s * phi
+        for j in range(n_out):
+            for sub in range(m):
+                n1, d1 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0, xi, eta, z)
+                if sub == 0:  # the output sample is the start of this step
+                    disp[i, j], vel[i, j] = xi, eta
+                    acc[i, j] = n1 - k_lin * xi - c_lin * eta
+                exi = e00 * xi + e01 * eta
+                eeta = e10 * xi + e11 * eta
+                pxi = p00 * xi + p01 * eta
+                peta = p10 * xi + p11 * eta
+                a = ez = 0.0
+                if kind == 2:
+                    v = phi * eta
+                    a = _lugre_rate_coeff(v, p[0], p[2], p[3], p[5]) * abs(v)
+                    ez = math.exp(-a * hh)
+                    d1 += a * z
+                w2 = ez * (z + hh * d1)
+                n2, d2 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0,
+                                    exi + hh * e01 * n1, eeta + hh * e11 * n1, w2)
+                d2 += a * w2
+                w3 = ez * z + hh * d2
+                n3, d3 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0,
+                                    exi, eeta + hh * n2, w3)
+                d3 += a * w3
+                w4 = ez * ez * z + h * ez * d3
+                n4, d4 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0,
+                                    pxi + h * e01 * n3, peta + h * e11 * n3, w4)
+                d4 += a * w4
+                n23 = n2 + n3
+                xi_new = pxi + h / 6.0 * p01 * n1 + h / 3.0 * e01 * n23
+                eta_new = peta + h / 6.0 * p11 * n1 + h / 3.0 * e11 * n23 + h / 6.0 * n4
+                if kind == 2:
+                    z = ez * ez * z + h / 6.0 * (ez * ez * d1 + 2.0 * ez * (d2 + d3) + d4)
+                elif kind == 1 and eta_new * b > 0.0:
+                    # Velocity reversal inside the step. Its time from linear velocity;
+                    # the Hermite displacement there is O(h^4) accurate because xi is
+                    # stationary at the reversal (error ~ theta error squared).
+                    theta = eta / (eta - eta_new)
+                    d = xi_new - xi
+                    hv0, hv1 = h * eta, h * eta_new
+                    c2 = 3.0 * d - 2.0 * hv0 - hv1
+                    c3 = hv0 + hv1 - 2.0 * d
+                    x_r = xi + theta * (hv0 + theta * (c2 + theta * c3))
+                    z_r = a0 + a1 * math.exp(b * x_r + b0)
+                    # The stages after the reversal used the old branch; add the missing
+                    # impulse of the (new - old) branch force over the rest of the step,
+                    # else a one-signed O(h^3) error per reversal accumulates. With
+                    # xi - xi_r = alpha tau^2 / 2 the difference grows as tau^2; one node
+                    # at tau_e / sqrt(3) integrates tau^2 exactly, and
+                    # int (tau_e - tau) tau^2 = (tau_e / 4) int tau^2.
+                    alpha = (eta_new - eta) / h
+                    tau_e = (1.0 - theta) * h
+                    e = math.exp(min(-b * alpha * tau_e * tau_e / 6.0, _EXP_CAP))
+                    dz = (z_r + a0) * e - (z_r - a0) / e - 2.0 * a0
+                    d_eta = -phi * p[0] * tau_e * dz
+                    xi_new += 0.25 * tau_e * d_eta
+                    eta_new += d_eta
+                    a0, a1, b, b0 = -a0, z_r + a0, -b, b * x_r
+                xi, eta = xi_new, eta_new
 
 
 def _broadcast_batch(*arrays) -> int:
@@ -305,19 +245,38 @@ def _broadcast_batch(*arrays) -> int:
     return shape[0] if shape else 1
 
 
-def simulate_ringdown(model: str | type[JointForce], params: Mapping[str, ArrayLike], *,
+def _joint_linearisation(model: str, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Small-amplitude stiffness (lbf/in), damping (lbf s/in) and max relaxation per in/s."""
+    zero = np.zeros(p.shape[0])
+    if model == "dahl":
+        sigma, fc = p.T
+        if np.any(sigma <= 0) or np.any(fc <= 0):
+            raise ValueError("Dahl parameters sigma and fc must be positive")
+        return sigma, zero, zero
+    if model == "lugre":
+        sigma0, sigma1, alpha0, alpha1, alpha2, v0, vd = p.T
+        g_min = np.minimum(alpha0, alpha0 + alpha1)
+        if np.any(g_min <= 0) or np.any(sigma0 <= 0):
+            raise ValueError("LuGre needs sigma0 > 0 and g(v) = alpha0 + alpha1 exp(.) > 0")
+        if np.any(v0 <= 0) or np.any(vd <= 0):
+            raise ValueError("LuGre velocities v0 and vd must be positive")
+        return sigma0, sigma1 + alpha2, sigma0 / g_min
+    return zero, zero, zero
+
+
+def simulate_ringdown(model: str, params: Mapping[str, ArrayLike], *,
                       omega_rad_s: ArrayLike, zeta0: ArrayLike, slip_per_modal: ArrayLike = 1.0,
                       initial_velocity: ArrayLike, fs_out_hz: float, duration_s: float,
-                      steps_per_period: int = 64, extra_force: ExtraForce | None = None,
-                      ) -> dict[str, np.ndarray | int | float]:
-    """Batched ring-down of eq. 9 by exponential (Lawson) RK4 with a fixed step.
+                      steps_per_period: int = 64) -> dict[str, np.ndarray | float]:
+    """Batched ring-down of eq. 9 by exponential (Lawson) RK4 with a fixed step per set.
 
     Parameters
     ----------
-    model : {"dahl", "lugre", "none"} or JointForce subclass
-        Joint force model.
+    model : {"dahl", "lugre", "none"}
+        Joint force model (``none``: the linear damped oscillator).
     params : mapping of array_like
-        Joint parameters (see :mod:`workflow.friction`), each broadcastable to the batch.
+        Joint parameters (:data:`JOINT_PARAMETERS`; units in :mod:`workflow.friction`),
+        each broadcastable to the batch.
     omega_rad_s : array_like
         Natural frequency of the linear mode without the joint, rad/s.
     zeta0 : array_like
@@ -331,115 +290,50 @@ def simulate_ringdown(model: str | type[JointForce], params: Mapping[str, ArrayL
     duration_s : float
         Output duration, s (``round(duration * fs)`` samples).
     steps_per_period : int
-        Minimum number of steps per period of the stiffest (stuck-joint) frequency.
-    extra_force : callable, optional
-        ``f(xi, xi_dot, params) -> modal force`` added on the left-hand side (so it
-        opposes motion when it has the sign of ``xi_dot`` or ``xi``), for extended models.
-        ``params`` is the broadcast parameter dict, each entry of shape ``(batch,)``.
+        Minimum number of steps per period of each set's stuck-joint frequency.
 
     Returns
     -------
     dict
         ``t_s`` (n,), ``displacement``, ``velocity``, ``acceleration`` (batch, n) in modal
-        units, ``substeps`` (steps per output sample), ``steps_per_period`` (actual, for
-        the stiffest set) and ``h_s`` (step).
+        units, ``substeps`` (batch,) (steps per output sample) and ``steps_per_period``
+        (the fewest actual steps per stuck-joint period in the batch).
     """
+    if model not in JOINT_PARAMETERS:
+        raise ValueError(f"unknown joint model {model!r}; expected one of {sorted(JOINT_PARAMETERS)}")
+    names = JOINT_PARAMETERS[model]
+    missing = set(names) - set(params)
+    if missing:
+        raise ValueError(f"{model} needs parameters {sorted(missing)}")
     batch = _broadcast_batch(omega_rad_s, zeta0, slip_per_modal, initial_velocity,
-                             *params.values())
-    joint = make_joint(model, params, slip_per_modal, batch)
-    omega = np.broadcast_to(np.asarray(omega_rad_s, float), (batch,))
-    zeta = np.broadcast_to(np.asarray(zeta0, float), (batch,))
-    v_init = np.broadcast_to(np.asarray(initial_velocity, float), (batch,)).copy()
-    phi = joint.phi
+                             *[params[k] for k in names])
+    col = lambda a: np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (batch,)))  # noqa: E731
+    p = np.stack([col(params[k]) for k in names], axis=1) if names else np.zeros((batch, 0))
+    omega, zeta, phi, v_init = col(omega_rad_s), col(zeta0), col(slip_per_modal), col(initial_velocity)
+    k_joint, c_joint, relax_per_velocity = _joint_linearisation(model, p)
 
-    k_lin = omega**2 + phi**2 * joint.stiffness_lbf_in
-    c_lin = 2.0 * zeta * omega + phi**2 * joint.damping_lbf_s_in
-    omega_max = float(np.sqrt(np.max(np.abs(k_lin))))
+    k_lin = omega**2 + phi**2 * k_joint
+    c_lin = 2.0 * zeta * omega + phi**2 * c_joint
+    omega_stuck = np.sqrt(np.abs(k_lin))
     n_out = int(round(duration_s * fs_out_hz))
     dt_out = 1.0 / fs_out_hz
-    m = max(1, math.ceil(steps_per_period * omega_max / (2.0 * math.pi) * dt_out))
-    # ODE states: keep (rate variation within a step) * h = a_max * omega * h^2 <= 0.05
-    # (1 is stable; 0.05 keeps deep-sliding LuGre within ~1e-3 of Dahl, measured).
-    a_max = float(np.max(joint.max_relaxation_rate(np.abs(phi * v_init)))) if joint.n_states else 0.0
-    if a_max > 0:
-        m = max(m, math.ceil(dt_out * math.sqrt(a_max * omega_max / 0.05)))
-    h = dt_out / m
-    hh = 0.5 * h
+    m = np.maximum(1, np.ceil(steps_per_period * omega_stuck / (2.0 * np.pi) * dt_out))
+    a_max = relax_per_velocity * np.abs(phi * v_init)
+    m = np.maximum(m, np.ceil(dt_out * np.sqrt(a_max * omega_stuck / _LUGRE_RATE_STEP)))
+    m = m.astype(np.int64)
 
-    e00, e01, e10, e11 = oscillator_propagator(k_lin, c_lin, hh)
-    p00, p01, p10, p11 = oscillator_propagator(k_lin, c_lin, h)
-    he01, he11 = hh * e01, hh * e11
-    h6p01, h6p11, h3e01, h3e11 = h / 6 * p01, h / 6 * p11, h / 3 * e01, h / 3 * e11
-    he01_full, he11_full = h * e01, h * e11
-
-    p_b = joint.params
-    xi = np.zeros(batch)
-    eta = v_init.copy()
-    w = joint.initial_states(phi * xi, phi * eta)
-    has_w = joint.n_states > 0
-
-    if extra_force is None:
-        remainder = joint.modal_remainder
-    else:
-        def remainder(x, y, ws):
-            r, dw = joint.modal_remainder(x, y, ws)
-            return r - extra_force(x, y, p_b), dw
-
-    # Rows are time: writing a row is contiguous, a column of (batch, n) is not (10x slower).
-    disp = np.empty((n_out, batch))
-    vel = np.empty((n_out, batch))
-    acc = np.empty((n_out, batch))
-    for j in range(n_out):
-        for sub in range(m):
-            n1, d1 = remainder(xi, eta, w)
-            if sub == 0:  # the output sample is the start of this step
-                disp[j], vel[j] = xi, eta
-                acc[j] = n1 - k_lin * xi - c_lin * eta
-            exi = e00 * xi + e01 * eta
-            eeta = e10 * xi + e11 * eta
-            pxi = p00 * xi + p01 * eta
-            peta = p10 * xi + p11 * eta
-            if has_w:
-                a = joint.relaxation_rate(phi * xi, phi * eta, w)
-                ez = np.exp(-a * hh)
-                ez2 = ez * ez
-                d1 = d1 + a * w
-                w2 = ez * (w + hh * d1)
-            else:
-                w2 = w
-            n2, d2 = remainder(exi + he01 * n1, eeta + he11 * n1, w2)
-            if has_w:
-                d2 = d2 + a * w2
-                w3 = ez * w + hh * d2
-            else:
-                w3 = w
-            n3, d3 = remainder(exi, eeta + hh * n2, w3)
-            if has_w:
-                d3 = d3 + a * w3
-                w4 = ez2 * w + h * ez * d3
-            else:
-                w4 = w
-            n4, d4 = remainder(pxi + he01_full * n3, peta + he11_full * n3, w4)
-            n23 = n2 + n3
-            xi_new = pxi + h6p01 * n1 + h3e01 * n23
-            eta_new = peta + h6p11 * n1 + h3e11 * n23 + (h / 6) * n4
-            if has_w:
-                d4 = d4 + a * w4
-                w = ez2 * w + (h / 6) * (ez2 * d1 + 2.0 * ez * (d2 + d3) + d4)
-            fix = joint.end_step(xi, eta, xi_new, eta_new, h)
-            if fix is not None:
-                idx, dxi, deta = fix
-                xi_new[idx] += dxi
-                eta_new[idx] += deta
-            xi, eta = xi_new, eta_new
+    disp = np.empty((batch, n_out))
+    vel = np.empty((batch, n_out))
+    acc = np.empty((batch, n_out))
+    _ringdown_kernel(_KIND[model], p, phi, k_lin, c_lin, k_joint, c_joint, v_init, m, dt_out,
+                     disp, vel, acc)
     return {
         "t_s": np.arange(n_out) * dt_out,
-        "displacement": np.ascontiguousarray(disp.T),
-        "velocity": np.ascontiguousarray(vel.T),
-        "acceleration": np.ascontiguousarray(acc.T),
+        "displacement": disp,
+        "velocity": vel,
+        "acceleration": acc,
         "substeps": m,
-        "steps_per_period": 2.0 * math.pi / (omega_max * h),
-        "h_s": h,
+        "steps_per_period": float(np.min(2.0 * np.pi * m / (omega_stuck * dt_out))),
     }
 
 
@@ -447,8 +341,7 @@ def simulate_ringdown(model: str | type[JointForce], params: Mapping[str, ArrayL
 def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: float,
                        zeta0: float, slip_per_modal: float = 1.0, initial_velocity: float,
                        fs_out_hz: float, duration_s: float, method: str = "LSODA",
-                       rtol: float = 1e-10, extra_force: ExtraForce | None = None,
-                       ) -> dict[str, np.ndarray]:
+                       rtol: float = 1e-10) -> dict[str, np.ndarray]:
     """One ring-down by ``scipy.integrate.solve_ivp`` on the paper's ODE form.
 
     The state is ``(xi, xi', z)`` with ``z`` obeying eq. 4a (Dahl) or 5a (LuGre)
@@ -466,8 +359,6 @@ def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: 
         ``solve_ivp`` method (``LSODA``, ``Radau``, ``DOP853`` ...).
     rtol : float
         Relative tolerance; the absolute tolerances are ``rtol`` times the state scales.
-    extra_force : callable, optional
-        As in :func:`simulate_ringdown` (called with scalars).
 
     Returns
     -------
@@ -487,7 +378,7 @@ def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: 
             z, v, p["sigma0"], p["sigma1"], p["alpha0"], p["alpha1"], p["alpha2"],
             p["v0"], p["vd"])
         z_scale = min(p["alpha0"], p["alpha0"] + p["alpha1"]) / p["sigma0"]
-    elif model in ("none", "linear"):
+    elif model == "none":
         rate = lambda z, v: 0.0 * z  # noqa: E731
         force = lambda z, v: 0.0 * z  # noqa: E731
         z_scale = 1.0
@@ -495,10 +386,7 @@ def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: 
         raise ValueError(f"reference_ringdown supports dahl, lugre, none; got {model!r}")
 
     def accel(xi, eta, z):
-        a = -2.0 * zeta0 * omega_rad_s * eta - omega_rad_s**2 * xi - phi * force(z, phi * eta)
-        if extra_force is not None:
-            a = a - extra_force(xi, eta, p)
-        return a
+        return -2.0 * zeta0 * omega_rad_s * eta - omega_rad_s**2 * xi - phi * force(z, phi * eta)
 
     def rhs(_t, y):
         xi, eta, z = y
