@@ -5,8 +5,9 @@
 For each repeat, in a fresh working directory: the demo campaign is generated
 first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run with
 nothing to do, and a run after changing ``analysis.segment_cycles``. ``--scale``
-adds a 300-run campaign (10 configurations x 30 runs) for the growth with runs.
-Peak memory per rule comes from Snakemake's ``benchmark:`` files.
+adds a 300-run campaign (10 configurations x 30 runs) for the growth with runs, and
+the demo's 30 runs with records 4 times as long (32768 samples) for the growth with
+record length. Peak memory per rule comes from Snakemake's ``benchmark:`` files.
 """
 
 import argparse
@@ -76,6 +77,15 @@ def main() -> None:
         seconds = snakemake(workdir, args.target, "--config", f"campaign={campaign}")
         ratio = seconds / statistics.median(timings[f"cold {args.target}"])
         print(f"\n300 runs (10 x 30), cold {args.target}: {seconds:.1f} s = {ratio:.1f} x the 30-run time")
+        print(rule_table(workdir).to_string())
+
+        campaign = Path(tempfile.mkdtemp(prefix="lapjoint-long-")) / "campaign"
+        generate_campaign(campaign, seed=3, samples_per_run=4 * 8192)
+        workdir = Path(tempfile.mkdtemp(prefix="lapjoint-bench-long-"))
+        seconds = snakemake(workdir, args.target, "--config", f"campaign={campaign}")
+        ratio = seconds / statistics.median(timings[f"cold {args.target}"])
+        print(f"\n30 runs of 32768 samples (4 x longer), cold {args.target}: {seconds:.1f} s "
+              f"= {ratio:.1f} x the 8192-sample time")
         print(rule_table(workdir).to_string())
 
 

@@ -71,7 +71,7 @@ def configuration_run_files(wildcards):
 
 def run_segment_tables(wildcards=None):
     return [
-        f"results/interim/segments/{run.configuration}/{run.run}.parquet" for run in RUN_FILES
+        f"results/interim/segments/{run.configuration}/{run.run}.npz" for run in RUN_FILES
     ]
 
 

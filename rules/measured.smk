@@ -32,8 +32,8 @@ rule analyse_run:
         run=run_file,
         mode="results/interim/mode/{configuration}.json",
     output:
-        segments="results/interim/segments/{configuration}/{run}.parquet",
-        quality="results/interim/quality/{configuration}/{run}.parquet",
+        segments="results/interim/segments/{configuration}/{run}.npz",
+        quality="results/interim/quality/{configuration}/{run}.npz",
         status="results/interim/status/{configuration}/{run}.json",
     params:
         campaign=str(CAMPAIGN),
@@ -55,7 +55,7 @@ rule analyse_run:
 rule collect_tables:
     input:
         segments=run_segment_tables(),
-        quality=[f"results/interim/quality/{run.configuration}/{run.run}.parquet" for run in RUN_FILES],
+        quality=[f"results/interim/quality/{run.configuration}/{run.run}.npz" for run in RUN_FILES],
         status=run_status_files(),
         modes=expand("results/interim/mode/{configuration}.json", configuration=CONFIGURATIONS),
         campaign_yaml=CAMPAIGN / "campaign.yaml",

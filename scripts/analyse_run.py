@@ -7,15 +7,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-import pandas as pd
-
 from workflow.campaign import load_campaign
 from workflow.config import QualitySettings
 from workflow.logs import setup_script_logging
 from workflow.pipeline import (ModeInfo, analyse_run_with_quality, analysis_window, empty_segments,
                                failed_checks, read_with_quality)
-from workflow.quality import QC_COLUMNS
-from workflow.tables import write_json, write_table
+from workflow.quality import quality_columns
+from workflow.tables import write_columns, write_json
 
 log = setup_script_logging(snakemake.log[0], "analyse_run")
 configuration, run = snakemake.wildcards.configuration, snakemake.wildcards.run
@@ -58,9 +56,6 @@ if problems:
         raise SystemExit(f"strict mode: run excluded: {status['reason']}")
 else:
     log.info("%s: %d segments kept of %d", run_path, int(segments["kept"].sum()), len(segments))
-quality_table = pd.DataFrame(rows, columns=QC_COLUMNS)
-quality_table.insert(0, "run", run)
-quality_table.insert(0, "configuration", configuration)
-write_table(segments, snakemake.output.segments)
-write_table(quality_table, snakemake.output.quality)
+write_columns(snakemake.output.segments, segments)
+write_columns(snakemake.output.quality, quality_columns(configuration, run, rows))
 write_json(snakemake.output.status, status)

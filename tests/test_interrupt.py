@@ -63,7 +63,7 @@ def kill_mid_way(process: subprocess.Popen, workdir: Path, timeout_s: float = 30
     deadline = time.monotonic() + timeout_s
     try:
         while time.monotonic() < deadline and process.poll() is None:
-            done = list(interim.rglob("*.parquet")) if interim.is_dir() else []
+            done = list(interim.rglob("*.npz")) if interim.is_dir() else []
             if len(done) >= 2 and not final.exists():
                 os.killpg(process.pid, signal.SIGKILL)
                 process.wait()

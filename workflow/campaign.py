@@ -37,7 +37,6 @@ are run against them):
 
 from __future__ import annotations
 
-import csv
 import io
 import math
 import re
@@ -47,7 +46,6 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-import pandas as pd
 import yaml
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -505,21 +503,15 @@ def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -
     """C-parser read of the numeric block; None whenever the careful pass must decide."""
     if _FOREIGN[delimiter].search(block):
         return None
+    if delimiter != _SPACES and block.count(delimiter + "\n") == n_rows - 1 and \
+            block.rstrip().endswith(delimiter):
+        block = block.replace(delimiter + "\n", "\n").rstrip()[:-1]  # one trailing delimiter per row
     try:
-        frame = pd.read_csv(
-            io.StringIO(block),
-            sep=r"\s+" if delimiter == _SPACES else delimiter,
-            header=None,
-            dtype=np.float64,
-            engine="c",
-            quoting=csv.QUOTE_NONE,
-            skip_blank_lines=False,
-        )
-    except (ValueError, pd.errors.ParserError):
+        # NumPy's C reader (not pandas): the per-run jobs then start without pandas.
+        values = np.loadtxt(io.StringIO(block), delimiter=None if delimiter == _SPACES else delimiter,
+                            comments=None, ndmin=2, dtype=np.float64)
+    except ValueError:
         return None
-    values = frame.to_numpy(dtype=np.float64)
-    if delimiter != _SPACES and values.shape[1] == n_columns + 1 and np.isnan(values[:, -1]).all():
-        values = values[:, :n_columns]  # one trailing delimiter on every row
     if values.shape != (n_rows, n_columns) or not np.isfinite(values).all():
         return None
     return np.ascontiguousarray(values)

@@ -2,18 +2,25 @@
 
 Each function takes already-read records and plain settings and returns tables or
 small documents; the scripts in ``scripts/`` only read inputs and write outputs.
+
+The per-run stages return columns as NumPy arrays and this module imports pandas
+only inside the campaign-level functions: a per-run job then starts without pandas
+(about half of its start-up; ``bench/bench_workflow.py``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from workflow import decay, quality, units
 from workflow.campaign import RunRecord
 from workflow.config import QualitySettings
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 
 @dataclass(frozen=True)
@@ -157,14 +164,12 @@ SEGMENT_COLUMNS = [
 ]
 
 
-def empty_segments() -> pd.DataFrame:
-    """A segments table with no rows and the right columns."""
-    frame = pd.DataFrame({name: pd.Series(dtype=float) for name in SEGMENT_COLUMNS})
-    frame["configuration"] = frame["configuration"].astype(str)
-    frame["run"] = frame["run"].astype(str)
-    frame["kept"] = frame["kept"].astype(bool)
-    frame["reject_reason"] = frame["reject_reason"].astype(str)
-    return frame
+_SEGMENT_DTYPES = {"configuration": str, "run": str, "kept": bool, "reject_reason": str}
+
+
+def empty_segments() -> dict[str, np.ndarray]:
+    """The columns of a segments table with no rows."""
+    return {name: np.array([], dtype=_SEGMENT_DTYPES.get(name, float)) for name in SEGMENT_COLUMNS}
 
 
 def analyse_run_with_quality(
@@ -181,13 +186,13 @@ def analyse_run_with_quality(
     edge_time_constants: float,
     min_snr_db: float,
     min_segments: int,
-) -> tuple[pd.DataFrame, list[dict]]:
+) -> tuple[dict[str, np.ndarray], list[dict]]:
     """Band-pass, envelope and segmented log decrement of one run, with its checks.
 
     Returns
     -------
-    segments : DataFrame
-        Every segment with ``kept`` and ``reject_reason``; times are seconds from
+    segments : dict of ndarray
+        The columns of :data:`SEGMENT_COLUMNS`: every segment with ``kept`` and ``reject_reason``; times are seconds from
         the start of the file; ``velocity_amplitude_in_s`` uses each segment's
         local frequency.
     quality_rows : list of dict
@@ -209,39 +214,40 @@ def analyse_run_with_quality(
         stop_index=stop,
     )
     segments = result.segments
-    frame = pd.DataFrame(
-        {
-            "configuration": configuration,
-            "run": run,
-            "t_s": np.asarray(segments["t_s"], dtype=float),
-            "response_amplitude": np.asarray(segments["amplitude"], dtype=float),
-            "velocity_amplitude_in_s": units.velocity_amplitude_in_s(
-                np.asarray(segments["amplitude"], dtype=float),
-                record.response_quantity,
-                record.response_unit,
-                np.asarray(segments["frequency_hz"], dtype=float),
-            ),
-            "frequency_hz": np.asarray(segments["frequency_hz"], dtype=float),
-            "zeta": np.asarray(segments["zeta"], dtype=float),
-            "fit_rms": np.asarray(segments["fit_rms"], dtype=float),
-            "kept": np.asarray(segments["kept"], dtype=bool),
-            "reject_reason": np.asarray(segments["reject_reason"], dtype=str),
-        },
-        columns=SEGMENT_COLUMNS,
-    )
+    n_segments = len(segments["t_s"])
+    columns = {
+        "configuration": np.full(n_segments, configuration),
+        "run": np.full(n_segments, run),
+        "t_s": np.asarray(segments["t_s"], dtype=float),
+        "response_amplitude": np.asarray(segments["amplitude"], dtype=float),
+        "velocity_amplitude_in_s": units.velocity_amplitude_in_s(
+            np.asarray(segments["amplitude"], dtype=float),
+            record.response_quantity,
+            record.response_unit,
+            np.asarray(segments["frequency_hz"], dtype=float),
+        ),
+        "frequency_hz": np.asarray(segments["frequency_hz"], dtype=float),
+        "zeta": np.asarray(segments["zeta"], dtype=float),
+        "fit_rms": np.asarray(segments["fit_rms"], dtype=float),
+        "kept": np.asarray(segments["kept"], dtype=bool),
+        "reject_reason": np.asarray(segments["reject_reason"], dtype=str),
+    }
     peak_envelope = float(np.max(result.envelope[result.start_index : stop]))
     thresholds = QualitySettings(min_snr_db=min_snr_db, min_segments=min_segments)
-    rows = quality.analysis_rows(peak_envelope, result.noise_floor, int(frame["kept"].sum()), thresholds)
-    return frame, rows
+    rows = quality.analysis_rows(peak_envelope, result.noise_floor, int(columns["kept"].sum()), thresholds)
+    return columns, rows
 
 
 def analyse_run(record: RunRecord, **arguments) -> tuple[pd.DataFrame, list[str]]:
-    """:func:`analyse_run_with_quality`, with the failed checks as messages.
+    """:func:`analyse_run_with_quality`, with the segments as a DataFrame and the failed
+    checks as messages.
 
     Returns the segments and the list of problems (empty when the run is usable).
     """
-    frame, rows = analyse_run_with_quality(record, **arguments)
-    return frame, [row["reason"] for row in rows if not row["passed"]]
+    import pandas as pd
+
+    columns, rows = analyse_run_with_quality(record, **arguments)
+    return pd.DataFrame(columns), [row["reason"] for row in rows if not row["passed"]]
 
 
 def read_with_quality(campaign_dir, path: str, campaign, quality_settings) -> tuple[RunRecord | None, list[dict]]:
@@ -291,13 +297,15 @@ def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, ca
     import json
     from pathlib import Path
 
-    from workflow.tables import read_table
+    import pandas as pd
+
+    from workflow.tables import read_columns
 
     statuses = pd.DataFrame([json.loads(Path(path).read_text()) for path in status_paths])
     runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
-    frames = [read_table(path) for path in segment_paths]
+    frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
     frames = [frame for frame in frames if len(frame)]
-    all_segments = pd.concat(frames, ignore_index=True) if frames else empty_segments()
+    all_segments = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(empty_segments())
     used = set(zip(runs.loc[runs["status"] == "used", "configuration"], runs.loc[runs["status"] == "used", "run"]))
     run_used = np.array([(c, r) in used for c, r in zip(all_segments["configuration"], all_segments["run"])], dtype=bool)
     keep = run_used & all_segments["kept"].to_numpy(dtype=bool)
@@ -333,7 +341,8 @@ def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, ca
         "segments": segments.reset_index(drop=True),
         "rejected": rejected.reset_index(drop=True),
         "runs": runs,
-        "quality": pd.concat([read_table(path) for path in quality_paths], ignore_index=True),
+        "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths],
+                             ignore_index=True),
         "modes": pd.DataFrame(mode_rows),
     }
 
@@ -357,6 +366,8 @@ def fit_damping_curves(
     grid over each configuration's amplitude range), ``hypotheses`` and ``area``
     (fitted damping of each configuration at amplitudes common to all).
     """
+    import pandas as pd
+
     from workflow import curves
 
     fit_rows, curve_frames, by_configuration, fits = [], [], {}, {}

@@ -303,6 +303,25 @@ QC_COLUMNS: list[str] = ["check", "applied", "passed", "value", "threshold", "un
 """Columns of a per-run quality table (one row per check; see :func:`quality_rows`)."""
 
 
+def quality_columns(configuration: str, run: str, rows: list[dict]) -> dict[str, np.ndarray]:
+    """One run's quality rows as typed columns, led by ``configuration`` and ``run``.
+
+    A passed check's ``reason`` (None in the rows) is the empty string.
+    """
+    n = len(rows)
+    return {
+        "configuration": np.full(n, configuration),
+        "run": np.full(n, run),
+        "check": np.array([row["check"] for row in rows], dtype=str),
+        "applied": np.array([row["applied"] for row in rows], dtype=bool),
+        "passed": np.array([row["passed"] for row in rows], dtype=bool),
+        "value": np.array([row["value"] for row in rows], dtype=float),
+        "threshold": np.array([row["threshold"] for row in rows], dtype=float),
+        "unit": np.array([row["unit"] for row in rows], dtype=str),
+        "reason": np.array([row["reason"] or "" for row in rows], dtype=str),
+    }
+
+
 def _clip_count(response: ArrayLike, clip_fraction_of_peak: float) -> float:
     magnitude = np.abs(np.asarray(response, dtype=np.float64))
     if magnitude.size == 0 or magnitude.max() == 0.0:

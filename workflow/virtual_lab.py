@@ -69,6 +69,8 @@ class LabSettings:
     acceleration_noise_g: float = 0.002
     force_noise_lbf: float = 0.005
     amplitude_points: int = 1500
+    samples_per_run: int = N_SAMPLES
+    """Record length (the paper's analyser: 8192); longer only to benchmark scaling."""
     joint: contact.JointParameters = field(default_factory=contact.JointParameters)
 
 
@@ -386,7 +388,7 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
     peak = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
     duration = float(rng.uniform(*settings.pulse_duration_s))
     extra = 16
-    n = N_SAMPLES + extra
+    n = settings.samples_per_run + extra
     t = np.arange(n) * dt
     t0 = (PRETRIGGER_SAMPLES + float(rng.uniform(0.0, 1.0))) * dt
     force = boxcar_half_sine(t, dt, t0, peak, duration)
@@ -418,11 +420,11 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
                                      gain * peak, duration)
         acc += q
     acc_g = acc / specimen.G_IN_S2 + settings.acceleration_noise_g * rng.standard_normal(n)
-    sl = slice(trigger - PRETRIGGER_SAMPLES, trigger - PRETRIGGER_SAMPLES + N_SAMPLES)
+    sl = slice(trigger - PRETRIGGER_SAMPLES, trigger - PRETRIGGER_SAMPLES + settings.samples_per_run)
     force_q = quantise(force[sl], FORCE_RANGE_LBF)
     acc_q = quantise(acc_g[sl], ACCELERATION_RANGE_G)
     facts = {"peak_force_lbf": peak, "pulse_duration_s": duration}
-    return np.arange(N_SAMPLES) * dt, force_q, acc_q, facts
+    return np.arange(settings.samples_per_run) * dt, force_q, acc_q, facts
 
 
 def format_run(time_s, force_lbf, acceleration_g) -> str:
@@ -476,7 +478,8 @@ def truth_path(out_dir) -> Path:
 
 
 def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="patches",
-                      effect=None, effect_size=None, configurations=None) -> dict:
+                      effect=None, effect_size=None, configurations=None,
+                      samples_per_run=N_SAMPLES) -> dict:
     """Write a simulated campaign folder and its truth; return the truth dict.
 
     Parameters
@@ -497,6 +500,8 @@ def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="p
     configurations : dict, optional
         Name -> bearing area in^2 (or None for a campaign without areas);
         default the paper's three.
+    samples_per_run : int
+        Samples per record (default 8192, as the paper's analyser).
     """
     if joint not in ("patches", "dahl"):
         raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")
@@ -510,7 +515,7 @@ def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="p
     if runs_per_configuration < 1:
         raise ValueError("runs_per_configuration must be at least 1")
     configurations = dict(PAPER_CONFIGURATIONS if configurations is None else configurations)
-    settings = LabSettings()
+    settings = LabSettings(samples_per_run=samples_per_run)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     root_seq = np.random.SeedSequence(seed)
