@@ -27,11 +27,11 @@ from workflow.pipeline import analyse_run, analysis_window, identify_mode, read_
 CASES = {
     # cause: (joint, effect, effect-size range or None)
     # bench/hit_rate.py --seeds 40 (2026-11-22, this code): hit rate, gain ratio median/max
-    "none": ("dahl", None, None),  # 0.82 (0.07 quadratic, 0.10 stiffness false alarms)
-    "microslip_power_law": ("patches", None, None),  # 0.93 (0.07 unknown); 0.31 / 0.63
-    "quadratic_damping": ("dahl", "quadratic_damping", (0.002, 0.006)),  # 1.00; 0.49 / 0.74
-    "stiffness_nonlinearity": ("dahl", "stiffness_nonlinearity", (0.005, 0.02)),  # 0.97; 0.15 / 0.42
-    "run_drift": ("dahl", "run_drift", (0.3, 0.6)),  # 0.88 (0.12 unknown); 0.60 / 0.92
+    "none": ("dahl", None, None),  # 0.95 (0.03 quadratic, 0.03 stiffness false alarms)
+    "microslip_power_law": ("patches", None, None),  # 0.93 (0.07 unknown); 0.32 / 0.62
+    "quadratic_damping": ("dahl", "quadratic_damping", (0.002, 0.006)),  # 0.97; 0.47 / 0.67
+    "stiffness_nonlinearity": ("dahl", "stiffness_nonlinearity", (0.005, 0.02)),  # 0.97; 0.14 / 0.44
+    "run_drift": ("dahl", "run_drift", (0.3, 0.6)),  # 1.00; 0.35 / 0.95
     "unknown": ("dahl", "second_mode", (0.03, 0.08)),  # 1.00
 }
 """Expected cause -> how the virtual lab hides it. Ranges: quadratic damping adds
