@@ -10,12 +10,20 @@ which knows the in-band envelope and noise floor.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workflow.campaign import RunRecord
 from workflow.config import QualitySettings
+
+
+class CheckResult(NamedTuple):
+    """What a check measured (in the unit its quality row states) and its verdict."""
+
+    value: float
+    reason: str | None  # None: passed
 
 
 def _oriented_force(force_lbf: ArrayLike) -> NDArray[np.float64]:
@@ -47,19 +55,24 @@ def check_clipping(
     str or None
         None when the run passes, else the reason.
     """
+    return _clipping(response, clip_fraction_of_peak, clip_max_samples, unit).reason
+
+
+def _clipping(response, clip_fraction_of_peak, clip_max_samples, unit="") -> CheckResult:
+    """:func:`check_clipping` with the number of samples at the peak."""
     magnitude = np.abs(np.asarray(response, dtype=np.float64))
     if magnitude.size == 0:
-        return "response is empty"
+        return CheckResult(math.nan, "response is empty")
     peak = float(magnitude.max())
     if peak == 0.0:
-        return "response is zero throughout"
+        return CheckResult(math.nan, "response is zero throughout")
     at_peak = int(np.count_nonzero(magnitude >= clip_fraction_of_peak * peak))
     if at_peak <= clip_max_samples:
-        return None
-    return (
+        return CheckResult(at_peak, None)
+    return CheckResult(at_peak, (
         f"response clipped: {at_peak} samples within {100 * (1 - clip_fraction_of_peak):.3g} % "
         f"of the peak {peak:.4g}{' ' + unit if unit else ''} (limit {clip_max_samples})"
-    )
+    ))
 
 
 def check_double_hit(
@@ -87,13 +100,18 @@ def check_double_hit(
     str or None
         None when the run passes, else the reason.
     """
+    return _double_hit(force_lbf, fs_hz, ratio, gap_s).reason
+
+
+def _double_hit(force_lbf, fs_hz, ratio, gap_s) -> CheckResult:
+    """:func:`check_double_hit` with the second pulse's peak over the main one's (0: none)."""
     force = _oriented_force(force_lbf)
     if force.size == 0:
-        return None
+        return CheckResult(math.nan, None)
     main_index = int(np.argmax(force))
     main_peak_lbf = float(force[main_index])
     if main_peak_lbf <= 0.0:
-        return None  # no pulse at all: check_excitation reports it
+        return CheckResult(math.nan, None)  # no pulse at all: check_excitation reports it
     above = force > ratio * main_peak_lbf
     # Boundaries of the stretches above the level.
     edges = np.flatnonzero(np.diff(above.astype(np.int8)))
@@ -106,14 +124,14 @@ def check_double_hit(
         if abs(index - main_index) >= gap_samples and force[index] > second_peak_lbf:
             second_index, second_peak_lbf = index, float(force[index])
     if second_index < 0:
-        return None
+        return CheckResult(0.0, None)
     separation_ms = 1e3 * (second_index - main_index) / fs_hz
     when = f"{abs(separation_ms):.3g} ms {'after' if separation_ms > 0 else 'before'}"
-    return (
+    return CheckResult(second_peak_lbf / main_peak_lbf, (
         f"double hit: a second force pulse of {second_peak_lbf:.3g} lbf "
         f"({second_peak_lbf / main_peak_lbf:.2f} of the main {main_peak_lbf:.3g} lbf pulse) "
         f"{when} it (limit {ratio:.2f})"
-    )
+    ))
 
 
 def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> str | None:
@@ -131,11 +149,18 @@ def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> str | N
     str or None
         None when the run passes, else the reason.
     """
+    return _excitation(force_lbf, min_peak_force_lbf).reason
+
+
+def _excitation(force_lbf, min_peak_force_lbf) -> CheckResult:
+    """:func:`check_excitation` with the peak force (lbf; NaN for an empty record)."""
     force = _oriented_force(force_lbf)
     peak_lbf = float(force.max()) if force.size else 0.0
+    value = peak_lbf if force.size else math.nan
     if peak_lbf >= min_peak_force_lbf and peak_lbf > 0.0:
-        return None
-    return f"no real hit: peak force {peak_lbf:.3g} lbf is below {min_peak_force_lbf:.3g} lbf"
+        return CheckResult(value, None)
+    return CheckResult(value, f"no real hit: peak force {peak_lbf:.3g} lbf is below "
+                              f"{min_peak_force_lbf:.3g} lbf")
 
 
 def check_trigger(
@@ -167,19 +192,25 @@ def check_trigger(
     str or None
         None when the run passes, else the reason.
     """
+    return _trigger(force_lbf, pretrigger_samples, trigger_lbf, tolerance_samples).reason
+
+
+def _trigger(force_lbf, pretrigger_samples, trigger_lbf=1.0, tolerance_samples=5) -> CheckResult:
+    """:func:`check_trigger` with the distance of the first crossing, samples (inf: none)."""
     force = _oriented_force(force_lbf)
     crossings = np.flatnonzero(force >= trigger_lbf)
     if crossings.size == 0:
-        return f"trigger: the force never reaches the trigger level {trigger_lbf:.3g} lbf"
+        return CheckResult(math.inf, f"trigger: the force never reaches the trigger level "
+                                     f"{trigger_lbf:.3g} lbf")
     first = int(crossings[0])
     offset = first - pretrigger_samples
     if abs(offset) <= tolerance_samples:
-        return None
-    return (
+        return CheckResult(abs(offset), None)
+    return CheckResult(abs(offset), (
         f"trigger: the force first reaches {trigger_lbf:.3g} lbf at sample {first}, "
         f"{abs(offset)} samples {'after' if offset > 0 else 'before'} the pre-trigger "
         f"length {pretrigger_samples} (tolerance {tolerance_samples})"
-    )
+    ))
 
 
 def check_record_length(
@@ -203,14 +234,19 @@ def check_record_length(
     str or None
         None when the run passes, else the reason.
     """
+    return _record_length(n_samples, fs_hz, mode_hz, min_cycles).reason
+
+
+def _record_length(n_samples, fs_hz, mode_hz, min_cycles) -> CheckResult:
+    """:func:`check_record_length` with the cycles of the mode in the record."""
     duration_s = n_samples / fs_hz
     cycles = duration_s * mode_hz
     if cycles >= min_cycles:
-        return None
-    return (
+        return CheckResult(cycles, None)
+    return CheckResult(cycles, (
         f"record too short: {duration_s:.3g} s holds {cycles:.3g} cycles of the "
         f"{mode_hz:.4g} Hz mode (need {min_cycles:.3g})"
-    )
+    ))
 
 
 def check_mode_found(
@@ -277,17 +313,23 @@ def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> st
     str or None
         None when the run passes, else the reason.
     """
+    return _snr(peak_envelope, noise_floor, min_snr_db).reason
+
+
+def _snr(peak_envelope, noise_floor, min_snr_db) -> CheckResult:
+    """:func:`check_snr` with the signal-to-noise ratio, dB."""
     if not peak_envelope > 0.0:
-        return f"signal-to-noise: no signal (peak envelope {peak_envelope:.3g})"
+        return CheckResult(-math.inf, f"signal-to-noise: no signal (peak envelope "
+                                      f"{peak_envelope:.3g})")
     if not noise_floor > 0.0:
-        return None  # a noiseless record has unlimited signal-to-noise
+        return CheckResult(math.inf, None)  # a noiseless record: unlimited signal-to-noise
     snr_db = 20.0 * math.log10(peak_envelope / noise_floor)
     if snr_db >= min_snr_db:
-        return None
-    return (
+        return CheckResult(snr_db, None)
+    return CheckResult(snr_db, (
         f"signal-to-noise {snr_db:.3g} dB is below {min_snr_db:.3g} dB "
         f"(peak envelope {peak_envelope:.3g}, noise floor {noise_floor:.3g})"
-    )
+    ))
 
 
 def run_quality_checks(record: RunRecord, settings: QualitySettings, *, mode_hz: float | None = None) -> list[str]:
@@ -322,33 +364,6 @@ def quality_columns(configuration: str, run: str, rows: list[dict]) -> dict[str,
     }
 
 
-def _clip_count(response: ArrayLike, clip_fraction_of_peak: float) -> float:
-    magnitude = np.abs(np.asarray(response, dtype=np.float64))
-    if magnitude.size == 0 or magnitude.max() == 0.0:
-        return math.nan
-    return float(np.count_nonzero(magnitude >= clip_fraction_of_peak * magnitude.max()))
-
-
-def _second_pulse_ratio(force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float) -> float:
-    """Largest pulse at least ``gap_s`` from the main one (above ``ratio`` of it) over
-    the main peak; 0 when there is none (as decided by :func:`check_double_hit`)."""
-    force = _oriented_force(force_lbf)
-    if force.size == 0 or force.max() <= 0.0:
-        return math.nan
-    main_index = int(np.argmax(force))
-    main_peak = float(force[main_index])
-    above = force > ratio * main_peak
-    edges = np.flatnonzero(np.diff(above.astype(np.int8)))
-    starts = np.concatenate(([0] if above[0] else [], edges[~above[edges]] + 1)).astype(int)
-    stops = np.concatenate((edges[above[edges]] + 1, [force.size] if above[-1] else [])).astype(int)
-    best = 0.0
-    for start, stop in zip(starts, stops):
-        index = start + int(np.argmax(force[start:stop]))
-        if abs(index - main_index) >= gap_s * fs_hz:
-            best = max(best, float(force[index]) / main_peak)
-    return best
-
-
 def quality_rows(
     record: RunRecord,
     settings: QualitySettings,
@@ -360,8 +375,8 @@ def quality_rows(
     Each row holds ``check`` (name), ``applied`` (False when the check does not apply:
     no force column, pre-trigger not stated, mode unknown, or no hit to trigger on),
     ``passed``, the measured ``value`` and its ``threshold`` and ``unit``, and the
-    ``reason`` (empty when passed). ``passed`` and ``reason`` come from the same
-    check functions :func:`run_quality_checks` uses, so the table and runs.parquet
+    ``reason`` (empty when passed). Value and verdict come from one measurement per
+    check (the ``check_*`` functions return its verdict), so the table and runs.parquet
     never disagree. The decay-level checks (signal-to-noise, segment count) are
     rows made by :func:`analysis_rows`.
 
@@ -371,64 +386,46 @@ def quality_rows(
         Rows with the keys of :data:`QC_COLUMNS`, in a fixed order of checks.
     """
 
-    def row(check, reason, value, threshold, unit, applied=True):
+    def row(check, result, threshold, unit, applied=True):
         return {
-            "check": check, "applied": applied, "passed": applied and reason is None,
-            "value": float(value) if applied else math.nan,
-            "threshold": float(threshold), "unit": unit, "reason": reason or "",
+            "check": check, "applied": applied, "passed": applied and result.reason is None,
+            "value": float(result.value) if applied else math.nan,
+            "threshold": float(threshold), "unit": unit, "reason": result.reason or "",
         }
 
-    rows = [row(
-        "clipping",
-        check_clipping(record.response, settings.clip_fraction_of_peak,
-                       settings.clip_max_samples, record.response_unit),
-        _clip_count(record.response, settings.clip_fraction_of_peak),
-        settings.clip_max_samples, "samples at the peak (at most)",
-    )]
+    not_applied = CheckResult(math.nan, None)
     force = record.force_lbf
     has_force = force is not None
-    excitation = check_excitation(force, settings.min_peak_force_lbf) if has_force else None
-    rows.append(row(
-        "excitation", excitation,
-        float(_oriented_force(force).max()) if has_force and force.size else math.nan,
-        settings.min_peak_force_lbf, "lbf peak force (at least)", applied=has_force,
-    ))
-    rows.append(row(
-        "double_hit",
-        check_double_hit(force, record.sample_rate_hz, settings.double_hit_ratio,
-                         settings.double_hit_gap_s) if has_force else None,
-        _second_pulse_ratio(force, record.sample_rate_hz, settings.double_hit_ratio,
-                            settings.double_hit_gap_s) if has_force else math.nan,
-        settings.double_hit_ratio, "second pulse / main pulse (at most)", applied=has_force,
-    ))
-    trigger_applies = has_force and excitation is None and record.pretrigger_source != "default"
-    crossings = np.flatnonzero(_oriented_force(force) >= 1.0) if trigger_applies else np.array([])
-    rows.append(row(
-        "trigger",
-        check_trigger(force, record.pretrigger_samples, tolerance_samples=settings.trigger_tolerance_samples)
-        if trigger_applies else None,
-        abs(int(crossings[0]) - record.pretrigger_samples) if crossings.size else math.inf,
-        settings.trigger_tolerance_samples, "samples from the pre-trigger length (at most)",
-        applied=trigger_applies,
-    ))
-    rows.append(row(
-        "record_length",
-        check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, settings.min_record_cycles)
-        if mode_hz is not None else None,
-        record.n_samples / record.sample_rate_hz * mode_hz if mode_hz is not None else math.nan,
-        settings.min_record_cycles, "cycles of the mode (at least)", applied=mode_hz is not None,
-    ))
-    return rows
+    excitation = _excitation(force, settings.min_peak_force_lbf) if has_force else not_applied
+    trigger_applies = (has_force and excitation.reason is None
+                       and record.pretrigger_source != "default")
+    return [
+        row("clipping", _clipping(record.response, settings.clip_fraction_of_peak,
+                                  settings.clip_max_samples, record.response_unit),
+            settings.clip_max_samples, "samples at the peak (at most)"),
+        row("excitation", excitation, settings.min_peak_force_lbf,
+            "lbf peak force (at least)", applied=has_force),
+        row("double_hit", _double_hit(force, record.sample_rate_hz, settings.double_hit_ratio,
+                                      settings.double_hit_gap_s) if has_force else not_applied,
+            settings.double_hit_ratio, "second pulse / main pulse (at most)", applied=has_force),
+        row("trigger", _trigger(force, record.pretrigger_samples,
+                                tolerance_samples=settings.trigger_tolerance_samples)
+            if trigger_applies else not_applied,
+            settings.trigger_tolerance_samples, "samples from the pre-trigger length (at most)",
+            applied=trigger_applies),
+        row("record_length", _record_length(record.n_samples, record.sample_rate_hz, mode_hz,
+                                            settings.min_record_cycles)
+            if mode_hz is not None else not_applied,
+            settings.min_record_cycles, "cycles of the mode (at least)",
+            applied=mode_hz is not None),
+    ]
 
 
 def analysis_rows(
     peak_envelope: float, noise_floor: float, n_segments: int, settings: QualitySettings
 ) -> list[dict]:
     """The decay-level checks as rows of a quality table (see :func:`quality_rows`)."""
-    snr_reason = check_snr(peak_envelope, noise_floor, settings.min_snr_db)
-    snr_db = (20.0 * math.log10(peak_envelope / noise_floor)
-              if peak_envelope > 0.0 and noise_floor > 0.0 else
-              (math.inf if peak_envelope > 0.0 else -math.inf))
+    snr_db, snr_reason = _snr(peak_envelope, noise_floor, settings.min_snr_db)
     segments_reason = None
     if n_segments < settings.min_segments:
         segments_reason = (f"only {n_segments} usable log-decrement segments "
