@@ -55,7 +55,7 @@ if problems:
     if snakemake.params.strict:
         raise SystemExit(f"strict mode: run excluded: {status['reason']}")
 else:
-    log.info("%s: %d segments kept of %d", run_path, int(segments["kept"].sum()), len(segments))
+    log.info("%s: %d segments kept of %d", run_path, int(segments["kept"].sum()), len(segments["kept"]))
 write_columns(snakemake.output.segments, segments)
 write_columns(snakemake.output.quality, quality_columns(configuration, run, rows))
 write_json(snakemake.output.status, status)

@@ -4,7 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.tables import column_units, read_table, write_json, write_table
+from workflow.tables import (column_units, read_columns, read_table, write_columns, write_json,
+                             write_table)
 
 
 def test_units_round_trip_as_field_metadata(tmp_path):
@@ -29,3 +30,17 @@ def test_json_rejects_nan(tmp_path):
         write_json(tmp_path / "x.json", {"value": float("nan")})
     write_json(tmp_path / "y.json", {"value": np.float64(1.5), "array": np.arange(2)})
     assert (tmp_path / "y.json").read_text().count("1.5") == 1
+
+
+def test_columns_round_trip_in_order_with_their_types(tmp_path):
+    columns = {"run": np.array(["run01", "run10"]), "zeta": np.array([0.01, np.nan]),
+               "kept": np.array([True, False]), "reason": np.array(["", "noise_floor"]),
+               "empty": np.array([], dtype=float)}
+    path = tmp_path / "c.npz"
+    write_columns(path, columns)
+    back = read_columns(path)
+    assert list(back) == list(columns)
+    for name, column in columns.items():
+        assert back[name].dtype == column.dtype
+        np.testing.assert_array_equal(back[name], column)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.npz"]  # no temporary left

@@ -192,9 +192,9 @@ def analyse_run_with_quality(
     Returns
     -------
     segments : dict of ndarray
-        The columns of :data:`SEGMENT_COLUMNS`: every segment with ``kept`` and ``reject_reason``; times are seconds from
-        the start of the file; ``velocity_amplitude_in_s`` uses each segment's
-        local frequency.
+        The columns of :data:`SEGMENT_COLUMNS`: every segment with ``kept`` and
+        ``reject_reason``; times are seconds from the start of the file;
+        ``velocity_amplitude_in_s`` uses each segment's local frequency.
     quality_rows : list of dict
         The decay-level quality checks (signal-to-noise, usable segments) as rows
         of the quality table (:func:`workflow.quality.analysis_rows`).

@@ -8,11 +8,11 @@ read as valid.
 from __future__ import annotations
 
 import glob
+import io
 import json
 import os
 import tempfile
 from pathlib import Path
-import io
 from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
