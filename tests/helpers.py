@@ -1,4 +1,5 @@
-"""Shared by the tests that run the real workflow: the snakemake call and file checksums."""
+"""Shared by the tests that run the real workflow: the snakemake call, file checksums and a
+run file with one bad cell."""
 
 import hashlib
 import os
@@ -24,3 +25,16 @@ def checksums(folder: Path) -> dict[str, str]:
         str(path.relative_to(folder)): hashlib.sha256(path.read_bytes()).hexdigest()
         for path in sorted(folder.rglob("*")) if path.is_file()
     }
+
+
+BAD_CELL = "1.2.3"
+"""What :func:`write_run_with_bad_cell` puts in the file: a cell that is not a number."""
+
+
+def write_run_with_bad_cell(source: Path, target: Path, line: int = 40) -> None:
+    """Copy the run file ``source`` to ``target`` with the first data cell of ``line``
+    (1-based, tab-separated) replaced by :data:`BAD_CELL`."""
+    lines = Path(source).read_text().splitlines()
+    cells = lines[line - 1].split("\t")
+    lines[line - 1] = lines[line - 1].replace(cells[1], BAD_CELL, 1)
+    Path(target).write_text("\n".join(lines) + "\n")

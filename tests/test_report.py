@@ -22,7 +22,7 @@ import pytest
 
 from workflow import report
 from workflow.virtual_lab import generate_campaign
-from helpers import run_snakemake
+from helpers import run_snakemake, write_run_with_bad_cell
 
 REPO = Path(__file__).resolve().parents[1]
 FULL = os.environ.get("LAPJOINT_FULL_REPORT_TEST") == "1"
@@ -217,9 +217,8 @@ def built_report(tmp_path_factory):
     campaign = root / "campaign"
     generate_campaign(campaign, seed=11, runs_per_configuration=3,
                       configurations={"no_washer": 1.36, "small_washer": 0.17})
-    lines = (campaign / "small_washer" / "run03.txt").read_text().splitlines()
-    lines[39] = lines[39].replace(lines[39].split("\t")[1], "1.2.3", 1)
-    (campaign / "small_washer" / "run03.txt").write_text("\n".join(lines) + "\n")
+    write_run_with_bad_cell(campaign / "small_washer" / "run03.txt",
+                            campaign / "small_washer" / "run03.txt")
     workdir = root / "work"
     workdir.mkdir()
     config = ["--config", f"campaign={campaign}", *CHEAP]

@@ -9,7 +9,7 @@ import pytest
 
 from workflow.tables import column_units
 from workflow.virtual_lab import generate_campaign
-from helpers import checksums, run_snakemake
+from helpers import checksums, run_snakemake, write_run_with_bad_cell
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 
@@ -35,10 +35,8 @@ def finished_run(tmp_path_factory):
     campaign = root / "campaign"
     generate_campaign(campaign, seed=7, runs_per_configuration=3,
                       configurations={"no_washer": 1.36, "small_washer": 0.17})
-    good = (campaign / "no_washer" / "run03.txt").read_text().splitlines()
     # line 40 of the file: a cell that is not a number
-    good[39] = good[39].replace(good[39].split("\t")[1], "1.2.3", 1)
-    (campaign / "no_washer" / "run04.txt").write_text("\n".join(good) + "\n")
+    write_run_with_bad_cell(campaign / "no_washer" / "run03.txt", campaign / "no_washer" / "run04.txt")
     before = checksums(campaign)
     workdir = root / "work"
     workdir.mkdir()
