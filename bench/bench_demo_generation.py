@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from workflow import virtual_lab
+from workflow.paper_layout import PAPER_CONFIGURATIONS
 
 
 def main(repeats: int = 5) -> None:
@@ -23,7 +24,7 @@ def main(repeats: int = 5) -> None:
             # cold: the per-configuration physics cache is emptied first
             virtual_lab._configuration_physics.cache_clear()
             start = time.perf_counter()
-            for name, area in virtual_lab.PAPER_CONFIGURATIONS.items():
+            for name, area in PAPER_CONFIGURATIONS.items():
                 virtual_lab.setup_configuration(name, area, settings)
             setups.append(time.perf_counter() - start)
             virtual_lab._configuration_physics.cache_clear()

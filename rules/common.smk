@@ -34,7 +34,7 @@ def campaign_inventory():
     from workflow.campaign import CampaignFormatError, list_runs, load_campaign
 
     if USES_DEMO:
-        from workflow.virtual_lab import planned_run_files
+        from workflow.paper_layout import planned_run_files
 
         return planned_run_files(SETTINGS.demo.runs_per_configuration)
     try:

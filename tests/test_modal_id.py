@@ -110,3 +110,33 @@ def test_band_around_gives_the_papers_band():
 def test_runs_must_pair_up():
     with pytest.raises(ValueError, match="pair"):
         h1_frf([np.ones(100)], [np.ones(100), np.ones(100)], FS_HZ)
+
+
+@pytest.mark.parametrize("segment", [1000, 999])  # even and odd: the Nyquist bin differs
+def test_spectra_equal_scipys_welch_and_csd(segment):
+    # The NumPy spectra replace scipy.signal's (boxcar window, no overlap, constant
+    # detrend, density scaling); each run is averaged over its own whole segments and
+    # runs are averaged equally. Agreement to rounding (1e-12 of the peak).
+    from scipy import signal
+
+    forces, responses = hammer_runs(3, [2500, 3100])
+    options = dict(fs=FS_HZ, window="boxcar", nperseg=segment, noverlap=0, detrend="constant")
+    cross = sum(signal.csd(f, x, **options)[1] for f, x in zip(forces, responses))
+    auto_force = sum(signal.welch(f, **options)[1] for f in forces)
+    auto_response = sum(signal.welch(x, **options)[1] for x in responses)
+    f_hz, h1, coherence = h1_frf(forces, responses, FS_HZ, nperseg=segment)
+    np.testing.assert_allclose(f_hz, signal.welch(forces[0], **options)[0], rtol=1e-15)
+    # The DC bin of mean-removed segments is rounding noise in both: left out.
+    np.testing.assert_allclose(h1[1:], (cross / auto_force)[1:], rtol=1e-9)
+    np.testing.assert_allclose(coherence[1:], (np.abs(cross) ** 2 / (auto_force * auto_response))[1:],
+                               rtol=1e-9)
+    _, psd = response_spectrum(responses, FS_HZ, nperseg=segment)
+    np.testing.assert_allclose(psd, auto_response / 3, rtol=0, atol=1e-12 * auto_response.max())
+
+
+def test_psd_integrates_to_the_variance():
+    # Parseval: the one-sided density summed over the grid (step fs/n) is the mean-removed
+    # signal's variance, exactly for a single rectangular segment.
+    x = np.random.default_rng(4).standard_normal(4096) + 3.0
+    f_hz, psd = response_spectrum([x], FS_HZ)
+    assert psd.sum() * (f_hz[1] - f_hz[0]) == pytest.approx(x.var(), rel=1e-12)
