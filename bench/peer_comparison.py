@@ -35,7 +35,7 @@ def main() -> None:
     mode = identify_mode([record], windows=[window], campaign_mode_hz=campaign.mode_hz,
                          campaign_band_hz=campaign.band_hz, band_half_width=0.2,
                          mode_search_hz=None, mode_search_fraction=0.3)
-    analysis = AnalysisSettings().model_dump(exclude={"band_half_width", "mode_search_hz", "mode_search_fraction"})
+    analysis = AnalysisSettings().run_parameters()
     segments, _ = analyse_run(record, configuration="decay", run=run_file.run, mode=mode, window=window,
                               min_snr_db=20.0, min_segments=3, **analysis)
     kept = segments[segments["kept"]]

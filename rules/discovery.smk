@@ -5,7 +5,7 @@
 rule diagnose:
     input:
         segments="results/tables/segments.parquet",
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(
             "results/diagnosis.json",
@@ -18,7 +18,7 @@ rule diagnose:
     params:
         campaign=str(CAMPAIGN),
         segment_cycles=SETTINGS.analysis.segment_cycles,
-        discovery=SETTINGS.discovery.model_dump(),
+        discovery=asdict(SETTINGS.discovery),
     log:
         "results/logs/diagnose.log",
     benchmark:

@@ -18,7 +18,7 @@ rule figure_time_history:
         campaign=str(CAMPAIGN),
         configuration=CONFIGURATIONS[0],
         filter_order=SETTINGS.analysis.filter_order,
-        analysis=SETTINGS.analysis.model_dump(exclude={"band_half_width", "mode_search_hz", "mode_search_fraction"}),
+        analysis=SETTINGS.analysis.run_parameters(),
     log:
         "results/logs/figure_time_history.log",
     threads: 1

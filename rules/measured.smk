@@ -2,9 +2,28 @@
 # segmented log decrement -> Parquet tables -> damping fits and hypotheses.
 
 
-rule identify_mode:
+rule campaign_settings:
     input:
         campaign_yaml=CAMPAIGN / "campaign.yaml",
+    output:
+        "results/interim/campaign.json",
+    params:
+        campaign=str(CAMPAIGN),
+    log:
+        "results/logs/campaign_settings.log",
+    benchmark:
+        "results/benchmarks/campaign_settings.tsv"
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=5,
+    script:
+        "../scripts/campaign_settings.py"
+
+
+rule identify_mode:
+    input:
+        campaign_settings="results/interim/campaign.json",
         runs=configuration_run_files,
     output:
         "results/interim/mode/{configuration}.json",
@@ -13,7 +32,7 @@ rule identify_mode:
         band_half_width=SETTINGS.analysis.band_half_width,
         mode_search_hz=SETTINGS.analysis.mode_search_hz,
         mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
-        quality=SETTINGS.quality.model_dump(),
+        quality=asdict(SETTINGS.quality),
     log:
         "results/logs/identify_mode/{configuration}.log",
     benchmark:
@@ -28,7 +47,7 @@ rule identify_mode:
 
 rule analyse_run:
     input:
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_settings="results/interim/campaign.json",
         run=run_file,
         mode="results/interim/mode/{configuration}.json",
     output:
@@ -38,8 +57,8 @@ rule analyse_run:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        analysis=SETTINGS.analysis.model_dump(exclude={"band_half_width", "mode_search_hz", "mode_search_fraction"}),
-        quality=SETTINGS.quality.model_dump(),
+        analysis=SETTINGS.analysis.run_parameters(),
+        quality=asdict(SETTINGS.quality),
     log:
         "results/logs/analyse_run/{configuration}/{run}.log",
     benchmark:
@@ -58,7 +77,7 @@ rule collect_tables:
         quality=[f"results/interim/quality/{run.configuration}/{run.run}.npz" for run in RUN_FILES],
         status=run_status_files(),
         modes=expand("results/interim/mode/{configuration}.json", configuration=CONFIGURATIONS),
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_settings="results/interim/campaign.json",
     output:
         segments="results/tables/segments.parquet",
         rejected="results/tables/segments_rejected.parquet",
@@ -82,7 +101,7 @@ rule collect_tables:
 rule fit_curves:
     input:
         segments="results/tables/segments.parquet",
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_settings="results/interim/campaign.json",
     output:
         fits="results/tables/damping_fits.parquet",
         curves="results/tables/damping_curves.parquet",
@@ -90,7 +109,7 @@ rule fit_curves:
         area="results/tables/area_fits.parquet",
     params:
         campaign=str(CAMPAIGN),
-        fits=SETTINGS.fits.model_dump(),
+        fits=asdict(SETTINGS.fits),
     log:
         "results/logs/fit_curves.log",
     benchmark:

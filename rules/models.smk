@@ -32,13 +32,13 @@ rule fit_friction_models:
     input:
         segments="results/tables/segments.parquet",
         modes="results/tables/modes.parquet",
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_settings="results/interim/campaign.json",
     output:
         "results/models/{configuration}.json",
     params:
         campaign=str(CAMPAIGN),
-        analysis=SETTINGS.analysis.model_dump(include={"filter_order", "segment_cycles", "segment_overlap", "edge_time_constants"}),
-        models=SETTINGS.models.model_dump(),
+        analysis={key: getattr(SETTINGS.analysis, key) for key in ("filter_order", "segment_cycles", "segment_overlap", "edge_time_constants")},
+        models=asdict(SETTINGS.models),
     log:
         "results/logs/fit_friction_models/{configuration}.log",
     benchmark:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-from workflow.campaign import load_campaign
+from workflow.campaign import read_validated_campaign
 from workflow.config import QualitySettings
 from workflow.logs import setup_script_logging
 from workflow.pipeline import (ModeInfo, analyse_run_with_quality, analysis_window, empty_segments,
@@ -18,7 +18,7 @@ from workflow.tables import write_columns, write_json
 log = setup_script_logging(snakemake.log[0], "analyse_run")
 configuration, run = snakemake.wildcards.configuration, snakemake.wildcards.run
 campaign_dir = Path(snakemake.params.campaign)
-campaign = load_campaign(campaign_dir)
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 run_path = Path(snakemake.input.run).relative_to(campaign_dir).as_posix()
 quality_settings = QualitySettings(**snakemake.params.quality)
 mode_document = json.loads(Path(snakemake.input.mode).read_text())

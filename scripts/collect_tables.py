@@ -5,13 +5,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-from workflow.campaign import load_campaign
+from workflow.campaign import read_validated_campaign
 from workflow.logs import setup_script_logging
 from workflow.pipeline import collect_tables
 from workflow.tables import write_table
 
 log = setup_script_logging(snakemake.log[0], "collect_tables")
-campaign = load_campaign(Path(snakemake.params.campaign))
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 tables = collect_tables(
     segment_paths=snakemake.input.segments,
     quality_paths=snakemake.input.quality,

@@ -5,13 +5,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-from workflow.campaign import load_campaign
+from workflow.campaign import read_validated_campaign
 from workflow.discovery import FitSettings, diagnose_campaign, residual_table
 from workflow.logs import setup_script_logging
 from workflow.tables import read_table, write_json, write_table
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
-campaign = load_campaign(Path(snakemake.params.campaign))
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 segments = read_table(snakemake.input.segments)
 document, details = diagnose_campaign(
     segments,

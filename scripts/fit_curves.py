@@ -5,13 +5,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-from workflow.campaign import load_campaign
+from workflow.campaign import read_validated_campaign
 from workflow.logs import setup_script_logging
 from workflow.pipeline import fit_damping_curves
 from workflow.tables import read_table, write_table
 
 log = setup_script_logging(snakemake.log[0], "fit_curves")
-campaign = load_campaign(Path(snakemake.params.campaign))
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
 segments = read_table(snakemake.input.segments)
 tables = fit_damping_curves(segments, areas, **snakemake.params.fits)

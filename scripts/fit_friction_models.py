@@ -6,14 +6,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-from workflow.campaign import load_campaign
+from workflow.campaign import read_validated_campaign
 from workflow.logs import setup_script_logging
 from workflow.modelling import MIN_SEGMENTS_TO_FIT, choose_modal_coordinate, fit_configuration
 from workflow.tables import read_table, write_json
 
 log = setup_script_logging(snakemake.log[0], "fit_friction_models")
 configuration = snakemake.wildcards.configuration
-campaign = load_campaign(Path(snakemake.params.campaign))
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 modes = read_table(snakemake.input.modes).set_index("configuration")
 segments = read_table(snakemake.input.segments)
 mine = segments[segments["configuration"] == configuration]

@@ -5,7 +5,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
-from workflow.campaign import list_runs, load_campaign
+from workflow.campaign import list_runs, read_validated_campaign
 from workflow.config import QualitySettings
 from workflow.logs import setup_script_logging
 from workflow.pipeline import analysis_window, identify_mode, read_and_check
@@ -14,7 +14,7 @@ from workflow.tables import write_json
 log = setup_script_logging(snakemake.log[0], "identify_mode")
 configuration = snakemake.wildcards.configuration
 campaign_dir = Path(snakemake.params.campaign)
-campaign = load_campaign(campaign_dir)
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 spec = campaign.configurations[configuration]
 quality_settings = QualitySettings(**snakemake.params.quality)
 

@@ -1,6 +1,7 @@
 """Reading campaigns: campaign.yaml validation, run discovery, every run-file dialect
 and every malformed case of campaign-format.md."""
 
+import json
 import os
 import time
 from pathlib import Path
@@ -12,9 +13,11 @@ from workflow.campaign import (
     MIN_SAMPLES,
     CampaignFormatError,
     RunFile,
+    campaign_to_dict,
     list_runs,
     load_campaign,
     read_run,
+    read_validated_campaign,
 )
 
 FS_HZ = 2560.0
@@ -107,6 +110,26 @@ configurations:
     assert campaign.configurations["small_washer"].files == "small_washer/*.txt"
     assert campaign.configurations["small_washer"].window_s == (0.5, 3.0)
     assert campaign.force.unit == "lbf"
+
+
+@pytest.mark.parametrize("text", [YAML_FORCE, YAML_NO_FORCE, """\
+name: 2004
+pretrigger_samples: 25
+band_hz: [100, 150]
+response: {quantity: velocity, unit: "IN/S"}
+force: {unit: newton}
+configurations:
+  a: {bearing_area_in2: 0.17, window_s: [0.5, 3.0]}
+"""])
+def test_validated_campaign_survives_its_json_copy(tmp_path, text):
+    # Later jobs read campaign.yaml's validated JSON copy: it must give back the very
+    # same campaign, including what is not a key (pretrigger_given) and the tuples.
+    campaign = write_campaign(tmp_path, text, {})
+    path = tmp_path / "campaign.json"
+    path.write_text(json.dumps(campaign_to_dict(campaign)))
+    copy = read_validated_campaign(path)
+    assert copy == campaign
+    assert copy.pretrigger_given == campaign.pretrigger_given
 
 
 def test_name_defaults_to_folder_and_bare_configuration(tmp_path):

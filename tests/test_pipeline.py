@@ -17,7 +17,7 @@ def analysed(tmp_path_factory):
     truth = generate_campaign(folder, seed=11, runs_per_configuration=4,
                               configurations={"no_washer": 1.36, "small_washer": 0.17})
     campaign = load_campaign(folder)
-    analysis = AnalysisSettings().model_dump(exclude={"band_half_width", "mode_search_hz", "mode_search_fraction"})
+    analysis = AnalysisSettings().run_parameters()
     quality = QualitySettings()
     results = {}
     for name in campaign.configurations:

@@ -41,16 +41,20 @@ import io
 import math
 import re
 from collections import Counter
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from dataclasses import fields as dataclass_fields
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
-import yaml
+from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from workflow import units
+from workflow.validation import FORBID_UNKNOWN_KEYS, MISSING_KEY_ERRORS, UNKNOWN_KEY_ERRORS, After, validate
+
+if TYPE_CHECKING:
+    import yaml
 
 MIN_SAMPLES: int = 256
 """Fewest samples a run file must hold. Below this a record cannot hold even a few
@@ -112,19 +116,50 @@ class CampaignFormatError(ValueError):
 # campaign.yaml
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, coerce_numbers_to_str=True)
+def _canonical_force_unit(unit: str) -> str:
+    canonical = units.normalize_unit(unit)
+    if canonical not in units.known_units("force"):
+        raise ValueError(f"unit {unit!r} is not a force unit; expected lbf or N")
+    return canonical
 
 
-class ResponseSpec(_Strict):
+def _relative_glob(files: str) -> str:
+    if not files.strip():
+        raise ValueError("files must be a non-empty glob")
+    if Path(files).is_absolute() or files.startswith(("/", "\\")):
+        raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
+    return files
+
+
+def _ordered_window(window: tuple[float, float] | None) -> tuple[float, float] | None:
+    if window is not None and not (0.0 <= window[0] < window[1]):
+        raise ValueError(f"window_s must be [start, end] with 0 <= start < end, got {list(window)}")
+    return window
+
+
+def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | None:
+    if band is not None and not (0.0 < band[0] < band[1]):
+        raise ValueError(f"band_hz must be [low, high] with 0 < low < high, got {list(band)}")
+    return band
+
+
+# Settings dataclasses (workflow/validation.py): load_campaign validates campaign.yaml
+# into them; jobs that read the validated copy (campaign_to_dict / campaign_from_dict)
+# never import pydantic or PyYAML.
+_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True}
+
+
+@dataclass(frozen=True)
+class ResponseSpec:
     """The recorded response channel."""
+
+    __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
 
     quantity: Literal["acceleration", "velocity", "displacement"]
     unit: str
     """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in)."""
 
-    @model_validator(mode="after")
-    def _unit_fits_quantity(self) -> "ResponseSpec":
+    def __post_init__(self) -> None:
         canonical = units.normalize_unit(self.unit)
         allowed = units.known_units(self.quantity)
         if canonical not in allowed:
@@ -133,94 +168,93 @@ class ResponseSpec(_Strict):
                 f"expected one of {', '.join(allowed)}"
             )
         object.__setattr__(self, "unit", canonical)
-        return self
 
 
-class ForceSpec(_Strict):
+@dataclass(frozen=True)
+class ForceSpec:
     """The recorded hammer-force channel."""
 
-    unit: str
+    __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
+
+    unit: Annotated[str, After(_canonical_force_unit)]
     """Canonical unit name (lbf or N)."""
 
-    @field_validator("unit")
-    @classmethod
-    def _force_unit(cls, unit: str) -> str:
-        canonical = units.normalize_unit(unit)
-        if canonical not in units.known_units("force"):
-            raise ValueError(f"unit {unit!r} is not a force unit; expected lbf or N")
-        return canonical
 
-
-class ConfigurationSpec(_Strict):
+@dataclass(frozen=True, kw_only=True)
+class ConfigurationSpec:
     """One joint configuration."""
 
-    bearing_area_in2: float | None = Field(None, gt=0.0)
-    files: str
+    __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
+
+    bearing_area_in2: Annotated[float, Gt(0.0)] | None = None
+    files: Annotated[str, After(_relative_glob)]
     """Glob relative to the campaign folder (default ``<name>/*.txt``)."""
-    window_s: tuple[float, float] | None = None
+    window_s: Annotated[tuple[float, float] | None, After(_ordered_window)] = None
     """Part of every run to analyse, [start, end] in s from the start of the file."""
 
-    @field_validator("files")
-    @classmethod
-    def _relative_glob(cls, files: str) -> str:
-        if not files.strip():
-            raise ValueError("files must be a non-empty glob")
-        if Path(files).is_absolute() or files.startswith(("/", "\\")):
-            raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
-        return files
 
-    @field_validator("window_s")
-    @classmethod
-    def _ordered_window(cls, window: tuple[float, float] | None) -> tuple[float, float] | None:
-        if window is not None and not (0.0 <= window[0] < window[1]):
-            raise ValueError(f"window_s must be [start, end] with 0 <= start < end, got {list(window)}")
-        return window
-
-
-class Campaign(_Strict):
+@dataclass(frozen=True, kw_only=True)
+class Campaign:
     """Validated content of campaign.yaml (see campaign-format.md)."""
 
+    __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
+
     name: str
-    sample_rate_hz: float | None = Field(None, gt=0.0)
-    pretrigger_samples: int = Field(0, ge=0)
-    mode_hz: float | None = Field(None, gt=0.0)
-    band_hz: tuple[float, float] | None = None
+    sample_rate_hz: Annotated[float, Gt(0.0)] | None = None
+    pretrigger_samples: Annotated[int, Ge(0)] = 0
+    mode_hz: Annotated[float, Gt(0.0)] | None = None
+    band_hz: Annotated[tuple[float, float] | None, After(_ordered_band)] = None
     response: ResponseSpec
     force: ForceSpec | None = None
-    configurations: dict[str, ConfigurationSpec] = Field(min_length=1)
+    configurations: Annotated[dict[str, ConfigurationSpec], MinLen(1)]
+    pretrigger_given: bool = field(default=False, init=False)
+    """Whether campaign.yaml states ``pretrigger_samples`` (rather than the default 0);
+    set by :func:`load_campaign`, not a key of campaign.yaml."""
 
-    @model_validator(mode="before")
-    @classmethod
-    def _default_files(cls, raw: Any) -> Any:
-        # The files default depends on the configuration's name, so fill it in here.
-        if not isinstance(raw, dict) or not isinstance(raw.get("configurations"), dict):
-            return raw
-        filled = {}
-        for name, spec in raw["configurations"].items():
-            spec = {} if spec is None else spec
-            if isinstance(spec, dict) and "files" not in spec:
-                spec = {**spec, "files": f"{name}/*.txt"}
-            filled[name] = spec
-        return {**raw, "configurations": filled}
 
-    @field_validator("band_hz")
-    @classmethod
-    def _ordered_band(cls, band: tuple[float, float] | None) -> tuple[float, float] | None:
-        if band is not None and not (0.0 < band[0] < band[1]):
-            raise ValueError(f"band_hz must be [low, high] with 0 < low < high, got {list(band)}")
-        return band
+def campaign_to_dict(campaign: Campaign) -> dict[str, Any]:
+    """The validated campaign as plain JSON-ready data (inverse of :func:`campaign_from_dict`)."""
+    return asdict(campaign)
 
-    @property
-    def pretrigger_given(self) -> bool:
-        """Whether campaign.yaml states ``pretrigger_samples`` (rather than the default 0)."""
-        return "pretrigger_samples" in self.model_fields_set
+
+def campaign_from_dict(data: dict[str, Any]) -> Campaign:
+    """The campaign of :func:`campaign_to_dict`'s data, which was validated when written."""
+
+    def pair(values: list[float] | None) -> tuple[float, float] | None:
+        return None if values is None else (float(values[0]), float(values[1]))
+
+    campaign = Campaign(
+        name=data["name"],
+        response=ResponseSpec(**data["response"]),
+        configurations={
+            name: ConfigurationSpec(files=spec["files"], bearing_area_in2=spec["bearing_area_in2"],
+                                    window_s=pair(spec["window_s"]))
+            for name, spec in data["configurations"].items()
+        },
+        sample_rate_hz=data["sample_rate_hz"],
+        pretrigger_samples=data["pretrigger_samples"],
+        mode_hz=data["mode_hz"],
+        band_hz=pair(data["band_hz"]),
+        force=None if data["force"] is None else ForceSpec(**data["force"]),
+    )
+    object.__setattr__(campaign, "pretrigger_given", bool(data["pretrigger_given"]))
+    return campaign
+
+
+def read_validated_campaign(path: str | Path) -> Campaign:
+    """The campaign of a JSON file holding :func:`campaign_to_dict`'s data (written by the
+    workflow's ``campaign_settings`` rule after :func:`load_campaign` validated
+    campaign.yaml)."""
+    import json
+
+    return campaign_from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
 
 
 _ALLOWED_KEYS: dict[str, tuple[str, ...]] = {
-    "": tuple(Campaign.model_fields),
-    "response": tuple(ResponseSpec.model_fields),
-    "force": tuple(ForceSpec.model_fields),
-    "configuration": tuple(ConfigurationSpec.model_fields),
+    "": tuple(item.name for item in dataclass_fields(Campaign) if item.init),
+    "response": tuple(item.name for item in dataclass_fields(ResponseSpec)),
+    "force": tuple(item.name for item in dataclass_fields(ForceSpec)),
+    "configuration": tuple(item.name for item in dataclass_fields(ConfigurationSpec)),
 }
 
 
@@ -236,6 +270,8 @@ def _allowed_keys(loc: tuple[Any, ...]) -> tuple[str, ...]:
 
 def _node_line(root: yaml.Node | None, loc: tuple[Any, ...]) -> int | None:
     """1-based line of the YAML node at ``loc`` (or of its deepest existing parent)."""
+    import yaml
+
     node, line = root, None
     for part in loc:
         if isinstance(node, yaml.MappingNode):
@@ -256,6 +292,8 @@ def _node_line(root: yaml.Node | None, loc: tuple[Any, ...]) -> int | None:
 
 def _duplicate_key(node: yaml.Node | None) -> tuple[str, int] | None:
     """First key that appears twice in one mapping (PyYAML keeps the last silently)."""
+    import yaml
+
     if isinstance(node, yaml.MappingNode):
         seen: set[str] = set()
         for key, value in node.value:
@@ -293,6 +331,9 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         Missing or unreadable file, YAML syntax error, unknown key, duplicate key or bad
         value; the message names campaign.yaml, the line and the key.
     """
+    import yaml
+    from pydantic import ValidationError
+
     path = Path(campaign_dir) / CAMPAIGN_FILE
     if not path.is_file():
         raise CampaignFormatError(
@@ -316,15 +357,15 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
     if "name" not in raw:
         raw = {**raw, "name": Path(campaign_dir).resolve().name}
     try:
-        return Campaign.model_validate(raw)
+        campaign = validate(Campaign, _with_default_globs(raw))
     except ValidationError as error:
         problems, first_line = [], None
         for item in error.errors():
             loc = tuple(item["loc"])
             key = ".".join(str(part) for part in loc) or "(top level)"
-            if item["type"] == "extra_forbidden":
+            if item["type"] in UNKNOWN_KEY_ERRORS:
                 message = f"unknown key (allowed here: {', '.join(_allowed_keys(loc))})"
-            elif item["type"] == "missing":
+            elif item["type"] in MISSING_KEY_ERRORS:
                 message = "required key is missing"
             else:
                 message = item["msg"]
@@ -332,6 +373,22 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
             if first_line is None:
                 first_line = _node_line(root, loc)
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
+    object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
+    return campaign
+
+
+def _with_default_globs(raw: dict[str, Any]) -> dict[str, Any]:
+    """campaign.yaml's mapping with each configuration's ``files`` default filled in
+    (it depends on the configuration's name)."""
+    if not isinstance(raw.get("configurations"), dict):
+        return raw
+    filled = {}
+    for name, spec in raw["configurations"].items():
+        spec = {} if spec is None else spec
+        if isinstance(spec, dict) and "files" not in spec:
+            spec = {**spec, "files": f"{name}/*.txt"}
+        filled[name] = spec
+    return {**raw, "configurations": filled}
 
 
 # --------------------------------------------------------------------------------------

@@ -7,24 +7,35 @@ silently ignored.
 
 from __future__ import annotations
 
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from annotated_types import Ge, Gt, Le, Lt
+
+from workflow.validation import FORBID_UNKNOWN_KEYS, UNKNOWN_KEY_ERRORS, After, validate
+
+if TYPE_CHECKING:
+    from pydantic import ValidationError
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+def _even(order: int) -> int:
+    if order % 2:
+        raise ValueError(f"must be even (a band-pass has an even order), got {order}")
+    return order
 
 
-class AnalysisSettings(_Strict):
+@dataclass(frozen=True)
+class AnalysisSettings:
     """How each ring-down is turned into damping and frequency vs amplitude."""
 
-    filter_order: int = Field(10, ge=2, le=20)
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
+
+    filter_order: Annotated[int, Ge(2), Le(20), After(_even)] = 10
     """Order of the Butterworth band-pass (even; the paper used 10). Applied
     forward and backward (zero phase), which squares its magnitude response."""
 
-    band_half_width: float = Field(0.2, gt=0.0, lt=0.9)
+    band_half_width: Annotated[float, Gt(0.0), Lt(0.9)] = 0.2
     """When campaign.yaml gives no ``band_hz``: band = mode * (1 -/+ this).
     0.2 around 125 Hz gives the paper's [100, 150] Hz."""
 
@@ -32,134 +43,159 @@ class AnalysisSettings(_Strict):
     """Frequency range searched for the first mode when campaign.yaml gives no
     ``mode_hz``; None searches from 5 Hz to 0.4 * sample rate."""
 
-    mode_search_fraction: float = Field(0.3, gt=0.0, lt=0.9)
+    mode_search_fraction: Annotated[float, Gt(0.0), Lt(0.9)] = 0.3
     """With ``mode_hz`` given, the mode is searched in mode_hz * (1 -/+ this)."""
 
-    segment_cycles: float = Field(10.0, ge=2.0, le=200.0)
+    segment_cycles: Annotated[float, Ge(2.0), Le(200.0)] = 10.0
     """Length of one log-decrement segment, in cycles of the mode (paper: about 10)."""
 
-    segment_overlap: float = Field(0.5, ge=0.0, lt=0.95)
+    segment_overlap: Annotated[float, Ge(0.0), Lt(0.95)] = 0.5
     """Fraction by which consecutive segments overlap."""
 
-    noise_floor_factor: float = Field(10.0, ge=1.0)
+    noise_floor_factor: Annotated[float, Ge(1.0)] = 10.0
     """A segment is kept only while its smallest envelope value exceeds this
     factor times the in-band noise floor (estimated from the record's quietest
     stretch). 10 keeps segments 20 dB above the floor."""
 
-    edge_time_constants: float = Field(3.0, ge=0.0)
+    edge_time_constants: Annotated[float, Ge(0.0)] = 3.0
     """Segments closer than this many filter time constants (the band-pass
     envelope settling time, 1 / (pi * bandwidth)) to the excitation peak or to
     the end of the record are dropped as filter end effects."""
 
+    def run_parameters(self) -> dict[str, Any]:
+        """The settings of one run's decay analysis, as keyword arguments of
+        :func:`workflow.pipeline.analyse_run_with_quality` (the mode search and the
+        band are settled per configuration, before)."""
+        per_configuration = {"band_half_width", "mode_search_hz", "mode_search_fraction"}
+        return {key: value for key, value in asdict(self).items() if key not in per_configuration}
 
-class QualitySettings(_Strict):
+
+@dataclass(frozen=True)
+class QualitySettings:
     """Per-run quality checks; a run failing one is excluded with its reason."""
 
-    clip_fraction_of_peak: float = Field(0.9999, gt=0.5, le=1.0)
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
+
+    clip_fraction_of_peak: Annotated[float, Gt(0.5), Le(1.0)] = 0.9999
     """Samples within this fraction of the record's absolute peak count as
     'at the peak'. 0.9999 keeps a clean sine peak below 2 such samples up to
     about 300 samples per cycle, while a clipped flat top has many."""
 
-    clip_max_samples: int = Field(3, ge=1)
+    clip_max_samples: Annotated[int, Ge(1)] = 3
     """More samples than this at the peak (a flat top) means the response clipped."""
 
-    double_hit_ratio: float = Field(0.3, gt=0.0, lt=1.0)
+    double_hit_ratio: Annotated[float, Gt(0.0), Lt(1.0)] = 0.3
     """A second force pulse, separated from the first by at least
     ``double_hit_gap_s``, larger than this fraction of the first is a double hit."""
 
-    double_hit_gap_s: float = Field(0.005, gt=0.0)
+    double_hit_gap_s: Annotated[float, Gt(0.0)] = 0.005
 
-    min_peak_force_lbf: float = Field(1.0, ge=0.0)
+    min_peak_force_lbf: Annotated[float, Ge(0.0)] = 1.0
     """Peak hammer force below this (the original trigger level) means no real hit."""
 
-    min_snr_db: float = Field(20.0)
+    min_snr_db: float = 20.0
     """Peak in-band envelope over the noise floor, in dB, below which a run is
     too noisy for a decrement."""
 
-    min_segments: int = Field(3, ge=1)
+    min_segments: Annotated[int, Ge(1)] = 3
     """A run that yields fewer usable segments than this is excluded."""
 
-    trigger_tolerance_samples: int = Field(5, ge=0)
+    trigger_tolerance_samples: Annotated[int, Ge(0)] = 5
     """How far the force's first crossing of the 1 lbf trigger level may sit from
     the stated pre-trigger length: the recorder triggers on its own copy of the
     signal, and the hammer pulse rises over a few samples."""
 
-    min_record_cycles: float = Field(20.0, gt=0.0)
+    min_record_cycles: Annotated[float, Gt(0.0)] = 20.0
     """Shortest record, in cycles of the mode: three 10-cycle segments overlapping
     by half, plus margin."""
 
-    min_mode_prominence: float = Field(2.0, ge=1.0)
+    min_mode_prominence: Annotated[float, Ge(1.0)] = 2.0
     """Least ratio of the spectral peak taken as the mode to the spectrum at either
     end of the search range: a resonance inside the range stands 40-170 x above
     both ends (virtual lab and real campaigns), the flank of a mode outside it about
     1 x the end it rises towards."""
 
 
-class FitSettings(_Strict):
+@dataclass(frozen=True)
+class FitSettings:
     """Polynomial fits of damping vs velocity amplitude and area."""
 
-    max_degree: int = Field(3, ge=0, le=6)
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
+
+    max_degree: Annotated[int, Ge(0), Le(6)] = 3
     """Highest polynomial degree tried; the degree is chosen by leave-one-run-out
     cross-validation."""
 
     log_amplitude: bool = True
     """Fit against log10(velocity amplitude) (amplitudes span decades)."""
 
-    bootstrap_samples: int = Field(400, ge=50)
+    bootstrap_samples: Annotated[int, Ge(50)] = 400
     """Bootstrap resamples over runs for confidence bands."""
 
-    confidence: float = Field(0.95, gt=0.5, lt=1.0)
+    confidence: Annotated[float, Gt(0.5), Lt(1.0)] = 0.95
 
     seed: int = 20040614
 
 
-class ModelSettings(_Strict):
+@dataclass(frozen=True)
+class ModelSettings:
     """Fitting and simulating the friction models."""
 
-    global_samples: int = Field(16, ge=4)
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
+
+    global_samples: Annotated[int, Ge(4)] = 16
     """Parameter sets tried in the global (quasi-random) stage of each time-domain
     fit, beside the optimum of the averaged model (which has its own global search
     and is far cheaper); they guard against a poor averaged start."""
 
-    local_starts: int = Field(1, ge=1)
+    local_starts: Annotated[int, Ge(1)] = 1
     """Best candidates refined by the local optimiser."""
 
-    local_iterations: int = Field(4, ge=1)
+    local_iterations: Annotated[int, Ge(1)] = 4
     """Levenberg-Marquardt iterations of the time-domain refinement (each costs
     one batched simulation of every parameter perturbation)."""
 
-    steps_per_period: int = Field(16, ge=8)
+    steps_per_period: Annotated[int, Ge(8)] = 16
     """Fixed RK4 steps per period of the mode (16 keeps the envelope error below
     1e-3 against a tight-tolerance reference: bench/bench_integrator.py)."""
 
     seed: int = 1976
 
 
-class DiscoverySettings(_Strict):
+@dataclass(frozen=True)
+class DiscoverySettings:
     """Fitting the averaged candidate models and deciding the cause (docs/discovery.md)."""
 
-    global_samples: int = Field(256, ge=16)
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
+
+    global_samples: Annotated[int, Ge(16)] = 256
     """Quasi-random parameter sets in the global stage of each averaged-model fit."""
 
-    local_starts: int = Field(4, ge=1)
+    local_starts: Annotated[int, Ge(1)] = 4
     """Best global candidates refined locally."""
 
-    folds: int = Field(5, ge=2)
+    folds: Annotated[int, Ge(2)] = 5
     """Folds over runs for the held-out error (contiguous amplitude blocks with one run)."""
 
     seed: int = 1976
 
 
-class DemoSettings(_Strict):
+@dataclass(frozen=True)
+class DemoSettings:
     """The built-in virtual-lab campaign generated when ``campaign`` points at ``path``."""
+
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
 
     path: str = "results/demo_campaign"
     seed: int = 2004
-    runs_per_configuration: int = Field(10, ge=1, le=200)
+    runs_per_configuration: Annotated[int, Ge(1), Le(200)] = 10
 
 
-class WorkflowConfig(_Strict):
+@dataclass(frozen=True)
+class WorkflowConfig:
     """Top level of ``config.yaml``."""
+
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
 
     campaign: str = "results/demo_campaign"
     """Campaign folder (campaign-format.md); relative to the working directory."""
@@ -168,21 +204,12 @@ class WorkflowConfig(_Strict):
     """True: a run that cannot be read or fails a quality check stops the workflow.
     False: it is excluded from fits and listed with its reason in runs.parquet."""
 
-    analysis: AnalysisSettings = AnalysisSettings()
-    quality: QualitySettings = QualitySettings()
-    fits: FitSettings = FitSettings()
-    models: ModelSettings = ModelSettings()
-    discovery: DiscoverySettings = DiscoverySettings()
-    demo: DemoSettings = DemoSettings()
-
-    @model_validator(mode="after")
-    def _even_filter_order(self) -> "WorkflowConfig":
-        if self.analysis.filter_order % 2:
-            raise ValueError(
-                "analysis.filter_order must be even (a band-pass has an even order), "
-                f"got {self.analysis.filter_order}"
-            )
-        return self
+    analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
+    quality: QualitySettings = field(default_factory=QualitySettings)
+    fits: FitSettings = field(default_factory=FitSettings)
+    models: ModelSettings = field(default_factory=ModelSettings)
+    discovery: DiscoverySettings = field(default_factory=DiscoverySettings)
+    demo: DemoSettings = field(default_factory=DemoSettings)
 
     def uses_demo_campaign(self, workdir: Path | str = ".") -> bool:
         """Whether ``campaign`` is the built-in demo (which a rule then generates)."""
@@ -200,7 +227,7 @@ def format_validation_error(error: ValidationError, source: str) -> str:
     for item in error.errors():
         key = ".".join(str(part) for part in item["loc"]) or "(top level)"
         message = item["msg"]
-        if item["type"] == "extra_forbidden":
+        if item["type"] in UNKNOWN_KEY_ERRORS:
             message = "unknown key (check its spelling against config.yaml's documented keys)"
         lines.append(f"{source}: {key}: {message}")
     return "\n".join(lines)
@@ -208,7 +235,9 @@ def format_validation_error(error: ValidationError, source: str) -> str:
 
 def validate_config(raw: dict[str, Any] | None, source: str = "config.yaml") -> WorkflowConfig:
     """Validate the merged Snakemake config; raise ConfigError naming every bad key."""
+    from pydantic import ValidationError
+
     try:
-        return WorkflowConfig.model_validate(raw or {})
+        return validate(WorkflowConfig, raw or {})
     except ValidationError as error:
         raise ConfigError(format_validation_error(error, source)) from None
