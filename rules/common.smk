@@ -93,6 +93,10 @@ def damping_figures():
     ]
 
 
+def backbone_figures():
+    return [f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS]
+
+
 def measured_outputs():
     """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
@@ -104,7 +108,7 @@ def measured_outputs():
         "results/figures/fig09_time_history.png",
         *damping_figures(),
         "results/figures/fig13_area_fits.png",
-        *[f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS],
+        *backbone_figures(),
     ]
 
 

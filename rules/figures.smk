@@ -21,6 +21,8 @@ rule figure_time_history:
         analysis=SETTINGS.analysis.run_parameters(),
     log:
         "results/logs/figure_time_history.log",
+    benchmark:
+        "results/benchmarks/figure_time_history.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -29,55 +31,36 @@ rule figure_time_history:
         "../scripts/figure_time_history.py"
 
 
-rule figure_damping:
+rule figures_measured:
+    # Figures 10-13 and the backbones of every configuration in one job: they all read
+    # the same campaign-wide tables, so one job per figure would only repeat start-up
+    # (Python, matplotlib, pandas), not run anything in parallel that a re-run could reuse.
     input:
         segments="results/tables/segments.parquet",
-        curves="results/tables/damping_curves.parquet",
-    output:
-        damping=report(
-            "results/figures/fig{number}_damping_{configuration}.png",
-            caption="../report/fig_damping.rst",
-            category="2 Measured data",
-            subcategory="2.2 Damping vs amplitude (figs. 10-12)",
-            labels={"figure": "fig. {number}: {configuration}"},
-        ),
-    log:
-        "results/logs/figure_damping/fig{number}_{configuration}.log",
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    script:
-        "../scripts/figure_damping.py"
-
-
-rule figure_backbone:
-    input:
-        segments="results/tables/segments.parquet",
-    output:
-        report(
-            "results/figures/backbone_{configuration}.png",
-            caption="../report/backbone.rst",
-            category="2 Measured data",
-            subcategory="2.3 Backbones (frequency vs amplitude)",
-            labels={"figure": "backbone: {configuration}"},
-        ),
-    log:
-        "results/logs/figure_backbone/{configuration}.log",
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    script:
-        "../scripts/figure_backbone.py"
-
-
-rule figure_area_fits:
-    input:
         curves="results/tables/damping_curves.parquet",
         area="results/tables/area_fits.parquet",
     output:
-        report(
+        damping=[
+            report(
+                path,
+                caption="../report/fig_damping.rst",
+                category="2 Measured data",
+                subcategory="2.2 Damping vs amplitude (figs. 10-12)",
+                labels={"figure": f"fig. {damping_figure_number(name)}: {name}"},
+            )
+            for name, path in zip(CONFIGURATIONS, damping_figures())
+        ],
+        backbones=[
+            report(
+                path,
+                caption="../report/backbone.rst",
+                category="2 Measured data",
+                subcategory="2.3 Backbones (frequency vs amplitude)",
+                labels={"figure": f"backbone: {name}"},
+            )
+            for name, path in zip(CONFIGURATIONS, backbone_figures())
+        ],
+        area=report(
             "results/figures/fig13_area_fits.png",
             caption="../report/fig13_area_fits.rst",
             category="3 Damping and area fits",
@@ -85,12 +68,15 @@ rule figure_area_fits:
             labels={"figure": "fig. 13: damping vs bearing area"},
         ),
     params:
+        configurations=CONFIGURATIONS,
         campaign=str(CAMPAIGN),
     log:
-        "results/logs/figure_area_fits.log",
+        "results/logs/figures_measured.log",
+    benchmark:
+        "results/benchmarks/figures_measured.tsv"
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=5,
+        runtime=10,
     script:
-        "../scripts/figure_area_fits.py"
+        "../scripts/figures_measured.py"

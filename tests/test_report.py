@@ -254,6 +254,9 @@ def test_report_holds_every_figure_with_a_caption(built_report):
         assert key in results, f"{name} is not in the report"
         assert results[key]["caption"].strip(), f"{name} has no caption"
         assert results[key]["data_uri"].startswith("data:image/png") and ";base64," in results[key]["data_uri"]
+    # one job draws figures 10-13 and every backbone; each figure keeps its own label
+    assert results["results/figures/fig11_damping_small_washer.png"]["labels"] == {"figure": "fig. 11: small_washer"}
+    assert results["results/figures/backbone_no_washer.png"]["labels"] == {"figure": "backbone: no_washer"}
     assert {"1 Verdict", "2 Measured data", "3 Damping and area fits", "4 Friction models",
             "5 Diagnosis", "6 Quality"} <= set(categories)
 
