@@ -7,11 +7,15 @@ first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run w
 nothing to do, and a run after changing ``analysis.segment_cycles``. ``--scale``
 adds a 300-run campaign (10 configurations x 30 runs) for the growth with runs, and
 the demo's 30 runs with records 4 times as long (32768 samples) for the growth with
-record length. Peak memory per rule comes from Snakemake's ``benchmark:`` files.
+record length, each repeated as often. Per rule: wall time from Snakemake's
+``benchmark:`` files, and each job's CPU split into start-up (interpreter, Snakemake's
+script preamble, imports) and work, with its peak memory, from the cost line that every
+script logs (workflow/logs.py).
 """
 
 import argparse
 import glob
+import re
 import statistics
 import subprocess
 import sys
@@ -32,15 +36,38 @@ def snakemake(workdir: Path, *args: str) -> float:
     return time.perf_counter() - start
 
 
+COST = re.compile(r" (\S+) INFO cost: start-up ([0-9.]+) s CPU, work ([0-9.]+) s CPU, peak memory ([0-9]+) MB")
+
+
 def rule_table(workdir: Path) -> pd.DataFrame:
-    rows = []
+    """Per rule: jobs, wall seconds (Snakemake's benchmark files), and the split of each
+    job's CPU time into start-up and work with its peak memory (the cost line every
+    script logs, workflow/logs.py)."""
+    walls, costs = [], []
     for path in glob.glob(str(workdir / "results/benchmarks/**/*.tsv"), recursive=True):
-        frame = pd.read_csv(path, sep="\t")
         rule = Path(path).relative_to(workdir / "results/benchmarks").parts[0].removesuffix(".tsv")
-        rows.append({"rule": rule, "s": frame["s"].iloc[0], "max_rss_mb": frame["max_rss"].iloc[0]})
-    table = pd.DataFrame(rows)
-    return table.groupby("rule").agg(jobs=("s", "size"), median_s=("s", "median"), total_s=("s", "sum"),
-                                     peak_rss_mb=("max_rss_mb", "max"))
+        walls.append({"rule": rule, "wall_s": pd.read_csv(path, sep="\t")["s"].iloc[0]})
+    for path in glob.glob(str(workdir / "results/logs/**/*.log"), recursive=True):
+        found = COST.search(Path(path).read_text())
+        if found:
+            rule, start_up, work, peak = found.groups()
+            costs.append({"rule": rule, "start_up_s": float(start_up), "work_s": float(work),
+                          "peak_mb": float(peak)})
+    wall = pd.DataFrame(walls).groupby("rule").agg(jobs=("wall_s", "size"), median_wall_s=("wall_s", "median"),
+                                                   total_wall_s=("wall_s", "sum"))
+    cost = pd.DataFrame(costs).groupby("rule").agg(median_start_up_s=("start_up_s", "median"),
+                                                   median_work_s=("work_s", "median"),
+                                                   peak_mb=("peak_mb", "max"))
+    return wall.join(cost, how="outer").round(2)
+
+
+def cold_runs(campaign: Path, target: str, repeats: int) -> tuple[list[float], Path]:
+    """Wall times of ``repeats`` cold runs of ``target`` on ``campaign``, and the last workdir."""
+    seconds = []
+    for _ in range(repeats):
+        workdir = Path(tempfile.mkdtemp(prefix="lapjoint-bench-scale-"))
+        seconds.append(snakemake(workdir, target, "--config", f"campaign={campaign}"))
+    return seconds, workdir
 
 
 def main() -> None:
@@ -49,13 +76,14 @@ def main() -> None:
     parser.add_argument("--target", default="measured")
     parser.add_argument("--scale", action="store_true")
     args = parser.parse_args()
-    timings: dict[str, list[float]] = {"demo generation": [], f"cold {args.target}": [],
-                                       "nothing to do": [], "segment_cycles changed": []}
+    cold = f"cold {args.target}"
+    timings: dict[str, list[float]] = {"demo generation": [], cold: [], "nothing to do": [],
+                                       "segment_cycles changed": []}
     last = None
     for _ in range(args.repeats):
         workdir = Path(tempfile.mkdtemp(prefix="lapjoint-bench-"))
         timings["demo generation"].append(snakemake(workdir, "demo_campaign"))
-        timings[f"cold {args.target}"].append(snakemake(workdir, args.target))
+        timings[cold].append(snakemake(workdir, args.target))
         timings["nothing to do"].append(snakemake(workdir, args.target))
         timings["segment_cycles changed"].append(
             snakemake(workdir, args.target, "--config", "analysis={segment_cycles: 8}"))
@@ -65,27 +93,23 @@ def main() -> None:
     for name, values in timings.items():
         print(f"| {name} | {statistics.median(values):.1f} |")
     print()
-    print("Per rule, cold run (Snakemake benchmark files, last repeat):")
+    print("Per rule, cold run (last repeat):")
     print(rule_table(last).to_string())
-    if args.scale:
-        from workflow.virtual_lab import generate_campaign
+    if not args.scale:
+        return
+    from workflow.virtual_lab import generate_campaign
 
-        campaign = Path(tempfile.mkdtemp(prefix="lapjoint-300-")) / "campaign"
-        generate_campaign(campaign, seed=3, runs_per_configuration=30,
-                          configurations={f"c{index:02d}": 0.17 + 0.12 * index for index in range(10)})
-        workdir = Path(tempfile.mkdtemp(prefix="lapjoint-bench-300-"))
-        seconds = snakemake(workdir, args.target, "--config", f"campaign={campaign}")
-        ratio = seconds / statistics.median(timings[f"cold {args.target}"])
-        print(f"\n300 runs (10 x 30), cold {args.target}: {seconds:.1f} s = {ratio:.1f} x the 30-run time")
-        print(rule_table(workdir).to_string())
-
-        campaign = Path(tempfile.mkdtemp(prefix="lapjoint-long-")) / "campaign"
-        generate_campaign(campaign, seed=3, samples_per_run=4 * 8192)
-        workdir = Path(tempfile.mkdtemp(prefix="lapjoint-bench-long-"))
-        seconds = snakemake(workdir, args.target, "--config", f"campaign={campaign}")
-        ratio = seconds / statistics.median(timings[f"cold {args.target}"])
-        print(f"\n30 runs of 32768 samples (4 x longer), cold {args.target}: {seconds:.1f} s "
-              f"= {ratio:.1f} x the 8192-sample time")
+    reference = statistics.median(timings[cold])
+    root = Path(tempfile.mkdtemp(prefix="lapjoint-scale-"))
+    generate_campaign(root / "runs300", seed=3, runs_per_configuration=30,
+                      configurations={f"c{index:02d}": 0.17 + 0.12 * index for index in range(10)})
+    generate_campaign(root / "long", seed=3, samples_per_run=4 * 8192)
+    for label, campaign in (("300 runs (10 x 30)", root / "runs300"),
+                            ("30 runs of 32768 samples (4 x longer records)", root / "long")):
+        seconds, workdir = cold_runs(campaign, args.target, args.repeats)
+        median = statistics.median(seconds)
+        print(f"\n{label}, cold {args.target}: {median:.1f} s (median of {args.repeats}) "
+              f"= {median / reference:.2f} x the 30-run demo time")
         print(rule_table(workdir).to_string())
 
 

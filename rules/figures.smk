@@ -5,7 +5,7 @@ rule figure_time_history:
     input:
         runs_table="results/tables/runs.parquet",
         modes="results/tables/modes.parquet",
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_settings="results/interim/campaign.json",
     output:
         report(
             "results/figures/fig09_time_history.png",
@@ -39,6 +39,7 @@ rule figures_measured:
         segments="results/tables/segments.parquet",
         curves="results/tables/damping_curves.parquet",
         area="results/tables/area_fits.parquet",
+        campaign_settings="results/interim/campaign.json",
     output:
         damping=[
             report(
@@ -69,7 +70,6 @@ rule figures_measured:
         ),
     params:
         configurations=CONFIGURATIONS,
-        campaign=str(CAMPAIGN),
     log:
         "results/logs/figures_measured.log",
     benchmark:

@@ -8,14 +8,14 @@ sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 import numpy as np
 
 from workflow import decay, figures
-from workflow.campaign import load_campaign, read_run
+from workflow.campaign import read_run, read_validated_campaign
 from workflow.logs import setup_script_logging
 from workflow.pipeline import analysis_window
 from workflow.tables import read_table
 
 log = setup_script_logging(snakemake.log[0], "figure_time_history")
 campaign_dir = Path(snakemake.params.campaign)
-campaign = load_campaign(campaign_dir)
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 configuration = snakemake.params.configuration
 runs = read_table(snakemake.input.runs_table)
 used = runs[(runs["configuration"] == configuration) & (runs["status"] == "used")]

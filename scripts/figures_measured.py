@@ -7,7 +7,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
 from workflow import figures
-from workflow.campaign import load_campaign
+from workflow.campaign import read_validated_campaign
 from workflow.logs import setup_script_logging
 from workflow.tables import read_table
 
@@ -29,7 +29,7 @@ for configuration, damping_path, backbone_path in outputs:
     )
     figures.save(figure, backbone_path)
     log.info("%s: %d segments plotted", configuration, len(mine))
-campaign = load_campaign(Path(snakemake.params.campaign))
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
 figure = figures.area_fits(
     curves,
     read_table(snakemake.input.area),

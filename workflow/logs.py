@@ -2,14 +2,44 @@
 
 from __future__ import annotations
 
+import atexit
 import logging
+import resource
 import sys
+import time
 from pathlib import Path
 from types import TracebackType
 
+COST_LINE = "cost: start-up {start_up:.3f} s CPU, work {work:.3f} s CPU, peak memory {peak_mb:.0f} MB"
+"""Last line of every script's log (bench/bench_workflow.py reads it): CPU seconds spent
+before logging was set up (interpreter, Snakemake's preamble, imports) and after it
+(the rule's work), and the process's peak resident memory."""
+
+
+def peak_resident_mb() -> float:
+    """Peak resident memory of this process, MB (MiB).
+
+    Linux: the high-water mark of the process's own memory (``VmHWM``). Not
+    ``getrusage``'s ``ru_maxrss``, which Linux carries over through ``exec`` from the
+    forking parent, so that a script started by Snakemake would report Snakemake's
+    size. Elsewhere ``ru_maxrss`` (bytes on macOS).
+    """
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 2**10  # kB
+    except OSError:
+        pass
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / 2**20 if sys.platform == "darwin" else peak / 2**10
+
 
 def setup_script_logging(log_path: str | Path | None, name: str) -> logging.Logger:
-    """Send log records (and any uncaught exception) to ``log_path`` and stderr.
+    """Send log records (and any uncaught exception) to ``log_path`` and stderr;
+    at exit, log the script's cost (:data:`COST_LINE`).
+
+    Call it right after the script's imports: the CPU time used until then counts as
+    start-up.
 
     Parameters
     ----------
@@ -34,4 +64,11 @@ def setup_script_logging(log_path: str | Path | None, name: str) -> logging.Logg
         logger.error("stopped: %s", value, exc_info=(kind, value, trace))
 
     sys.excepthook = log_uncaught
+    start_up_cpu_s = time.process_time()
+
+    def log_cost() -> None:
+        logger.info(COST_LINE.format(start_up=start_up_cpu_s, work=time.process_time() - start_up_cpu_s,
+                                     peak_mb=peak_resident_mb()))
+
+    atexit.register(log_cost)
     return logger

@@ -1,0 +1,63 @@
+"""Script logging: messages and uncaught errors reach the rule's log, and the log ends
+with the script's cost (start-up vs work CPU seconds, peak memory)."""
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+SCRIPT = """
+import sys
+sys.path.insert(0, {repo!r})
+from workflow.logs import setup_script_logging
+log = setup_script_logging({log!r}, "demo")
+log.info("hello")
+import numpy as np
+x = np.ones(40 * 2**20 // 8)  # 40 MiB held at once
+total = 0.0
+for _ in range(40):
+    total += float((x * 1.0001).sum())
+{tail}
+"""
+
+COST = re.compile(r"cost: start-up ([0-9.]+) s CPU, work ([0-9.]+) s CPU, peak memory ([0-9]+) MB")
+
+
+def run_script(tmp_path, tail=""):
+    log = tmp_path / "logs" / "demo.log"
+    source = SCRIPT.format(repo=str(REPO), log=str(log), tail=tail)
+    result = subprocess.run([sys.executable, "-c", source], capture_output=True, text=True)
+    return result, log.read_text()
+
+
+def test_log_ends_with_the_cost_of_start_up_and_work(tmp_path):
+    result, text = run_script(tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "demo INFO hello" in text
+    start_up, work, peak_mb = (float(value) for value in COST.search(text.splitlines()[-1]).groups())
+    # numpy is imported after logging is set up, so its import counts as work here:
+    # both parts are positive; 40 passes over 40 MiB take well over a millisecond.
+    assert start_up > 0 and work > 1e-3
+    # The 40 MiB array plus its temporary (another 40 MiB) were resident at once.
+    assert 80 <= peak_mb < 400
+
+
+def test_uncaught_error_is_logged_before_the_cost(tmp_path):
+    result, text = run_script(tmp_path, tail="raise ValueError('bad cell in run07')")
+    assert result.returncode != 0
+    assert "stopped: bad cell in run07" in text
+    assert COST.search(text.splitlines()[-1])
+
+
+def test_peak_memory_is_the_scripts_own_not_its_parents(tmp_path):
+    # A parent holding 300 MiB starts the script (fork + exec, as Snakemake does):
+    # the script's reported peak must not include the parent's memory.
+    log = tmp_path / "logs" / "demo.log"
+    child = SCRIPT.format(repo=str(REPO), log=str(log), tail="")
+    parent = (f"import subprocess, sys\nblock = b\"\\x01\" * (300 * 2**20)  # resident: every page written\n"
+              f"subprocess.run([sys.executable, '-c', {child!r}], check=True)")
+    subprocess.run([sys.executable, "-c", parent], check=True)
+    peak_mb = float(COST.search(log.read_text().splitlines()[-1]).group(3))
+    assert 80 <= peak_mb < 300
