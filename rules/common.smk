@@ -57,27 +57,38 @@ if not RUN_FILES:
 wildcard_constraints:
     configuration="|".join(re.escape(name) for name in CONFIGURATIONS),
     number=r"\d\d",
-
-
-def run_file(wildcards):
-    for run in RUNS[wildcards.configuration]:
-        if run.run == wildcards.run:
-            return CAMPAIGN / run.path
-    raise WorkflowError(f"no run {wildcards.run} in configuration {wildcards.configuration}")
+    group=r"runs\d+",
 
 
 def configuration_run_files(wildcards):
     return [CAMPAIGN / run.path for run in RUNS[wildcards.configuration]]
 
 
-def run_segment_tables(wildcards=None):
+def run_groups(configuration):
+    """The configuration's runs in groups of ``runs_per_job`` (campaign order), one
+    analyse_runs job each: name -> runs."""
+    runs = RUNS[configuration]
+    size = SETTINGS.runs_per_job
+    return {
+        f"runs{index // size + 1:02d}": runs[index : index + size]
+        for index in range(0, len(runs), size)
+    }
+
+
+def run_group_files(wildcards):
+    group = run_groups(wildcards.configuration).get(wildcards.group)
+    if group is None:
+        raise WorkflowError(f"no run group {wildcards.group} in configuration {wildcards.configuration}")
+    return [CAMPAIGN / run.path for run in group]
+
+
+def run_group_outputs(kind, extension):
+    """Every run group's interim ``kind`` file (segments, quality or status)."""
     return [
-        f"results/interim/segments/{run.configuration}/{run.run}.npz" for run in RUN_FILES
+        f"results/interim/{kind}/{name}/{group}.{extension}"
+        for name in CONFIGURATIONS
+        for group in run_groups(name)
     ]
-
-
-def run_status_files(wildcards=None):
-    return [f"results/interim/status/{run.configuration}/{run.run}.json" for run in RUN_FILES]
 
 
 def damping_figure_number(configuration):

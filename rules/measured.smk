@@ -45,37 +45,37 @@ rule identify_mode:
         "../scripts/identify_mode.py"
 
 
-rule analyse_run:
+rule analyse_runs:
     input:
         campaign_settings="results/interim/campaign.json",
-        run=run_file,
+        runs=run_group_files,
         mode="results/interim/mode/{configuration}.json",
     output:
-        segments="results/interim/segments/{configuration}/{run}.npz",
-        quality="results/interim/quality/{configuration}/{run}.npz",
-        status="results/interim/status/{configuration}/{run}.json",
+        segments="results/interim/segments/{configuration}/{group}.npz",
+        quality="results/interim/quality/{configuration}/{group}.npz",
+        status="results/interim/status/{configuration}/{group}.json",
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
         analysis=SETTINGS.analysis.run_parameters(),
         quality=asdict(SETTINGS.quality),
     log:
-        "results/logs/analyse_run/{configuration}/{run}.log",
+        "results/logs/analyse_runs/{configuration}/{group}.log",
     benchmark:
-        "results/benchmarks/analyse_run/{configuration}/{run}.tsv"
+        "results/benchmarks/analyse_runs/{configuration}/{group}.tsv"
     threads: 1
     resources:
         mem_mb=1000,
         runtime=10,
     script:
-        "../scripts/analyse_run.py"
+        "../scripts/analyse_runs.py"
 
 
 rule collect_tables:
     input:
-        segments=run_segment_tables(),
-        quality=[f"results/interim/quality/{run.configuration}/{run.run}.npz" for run in RUN_FILES],
-        status=run_status_files(),
+        segments=run_group_outputs("segments", "npz"),
+        quality=run_group_outputs("quality", "npz"),
+        status=run_group_outputs("status", "json"),
         modes=expand("results/interim/mode/{configuration}.json", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
     output:

@@ -75,7 +75,7 @@ RUNS = 8
 def campaign_segments(campaign_dir: Path) -> pd.DataFrame:
     """Kept segments of every usable run, as results/tables/segments.parquet holds them.
 
-    The same library calls as the workflow's rules identify_mode, analyse_run and
+    The same library calls as the workflow's rules identify_mode, analyse_runs and
     collect_tables (default settings of config.yaml).
     """
     campaign_dir = Path(campaign_dir)

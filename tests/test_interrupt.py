@@ -41,6 +41,8 @@ TARGETS = [
 
 
 snakemake = functools.partial(run_snakemake, timeout=600)
+# One analyse_runs job per run: the kill then lands between per-run results.
+ONE_RUN_PER_JOB = "runs_per_job=1"
 
 
 
@@ -49,7 +51,7 @@ def start_snakemake(workdir: Path, campaign: Path, output: Path) -> subprocess.P
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     return subprocess.Popen(
         [sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile"), "-d", str(workdir),
-         "-c2", *TARGETS, "--config", f"campaign={campaign}"],
+         "-c2", *TARGETS, "--config", f"campaign={campaign}", ONE_RUN_PER_JOB],
         stdout=output.open("w"), stderr=subprocess.STDOUT, env=env,
         start_new_session=True,  # its own process group: the kill takes every job with it
     )
@@ -109,11 +111,11 @@ def interrupted_and_reference(tmp_path_factory):
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(b"PAR1 truncated")
 
-    resumed = snakemake(killed, "-c2", *TARGETS, "--config", f"campaign={campaign}")
+    resumed = snakemake(killed, "-c2", *TARGETS, "--config", f"campaign={campaign}", ONE_RUN_PER_JOB)
 
     reference = root / "reference"
     reference.mkdir()
-    uninterrupted = snakemake(reference, "-c2", *TARGETS, "--config", f"campaign={campaign}")
+    uninterrupted = snakemake(reference, "-c2", *TARGETS, "--config", f"campaign={campaign}", ONE_RUN_PER_JOB)
     return {
         "campaign": campaign, "raw_before": raw_before, "killed": killed,
         "reference": reference, "left": left, "resumed": resumed,
@@ -146,7 +148,7 @@ def test_resumed_results_equal_an_uninterrupted_run(interrupted_and_reference):
     parquet = sorted(name for name in files if name.endswith(".parquet"))
     documents = sorted(name for name in files if name.endswith(".json"))
     assert "tables/segments.parquet" in parquet and "tables/runs.parquet" in parquet
-    assert len(documents) >= 6  # modes and run statuses
+    assert len(documents) >= 7  # the campaign, modes and run statuses
     for name in parquet:
         ours, theirs = killed / "results" / name, reference / "results" / name
         pd.testing.assert_frame_equal(pd.read_parquet(ours), pd.read_parquet(theirs), check_exact=True)
@@ -169,7 +171,7 @@ def test_no_temporary_or_truncated_file_remains(interrupted_and_reference):
 def test_nothing_left_to_do_after_the_resumed_run(interrupted_and_reference):
     killed = interrupted_and_reference["killed"]
     campaign = interrupted_and_reference["campaign"]
-    result = snakemake(killed, "-n", "-c2", *TARGETS, "--config", f"campaign={campaign}")
+    result = snakemake(killed, "-n", "-c2", *TARGETS, "--config", f"campaign={campaign}", ONE_RUN_PER_JOB)
     assert result.returncode == 0, result.stderr[-2000:]
     assert "Nothing to be done" in result.stdout + result.stderr
 

@@ -76,3 +76,39 @@ def test_damping_and_frequency_recover_the_truth(analysed, name):
     # the decay is followed over more than a decade of amplitude for the no-washer joint
     if name == "no_washer":
         assert velocity.max() / velocity.min() > 10
+
+
+def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
+    # The unit of an analyse_runs job: a usable run is used with its segments and
+    # every check; a corrupted copy is excluded with file, line and problem, and no
+    # segments; a configuration without a mode excludes its runs with that reason.
+    from helpers import BAD_CELL, write_run_with_bad_cell
+
+    from workflow.pipeline import analyse_run_file
+
+    folder = tmp_path / "campaign"
+    generate_campaign(folder, seed=11, runs_per_configuration=1, configurations={"no_washer": 1.36})
+    write_run_with_bad_cell(folder / "no_washer/run01.txt", folder / "no_washer/run02.txt")
+    campaign = load_campaign(folder)
+    (_, results) = analysed
+    mode, _ = results["no_washer"]
+    options = dict(configuration="no_washer", campaign=campaign, quality_settings=QualitySettings(),
+                   analysis=AnalysisSettings().run_parameters())
+    good = analyse_run_file(folder, "no_washer/run01.txt", mode_document=mode.to_dict(), **options)
+    assert good.status == {"configuration": "no_washer", "run": "run01", "path": "no_washer/run01.txt",
+                           "status": "used", "reason": ""}
+    assert good.segments["kept"].sum() >= 3 and set(good.segments["run"]) == {"run01"}
+    assert good.quality["passed"][good.quality["applied"]].all()
+    assert list(good.quality["check"]) == ["clipping", "excitation", "double_hit", "trigger",
+                                           "record_length", "snr", "segments"]
+
+    bad = analyse_run_file(folder, "no_washer/run02.txt", mode_document=mode.to_dict(), **options)
+    assert bad.status["status"] == "excluded"
+    assert "no_washer/run02.txt:40:" in bad.status["reason"] and BAD_CELL in bad.status["reason"]
+    assert len(bad.segments["t_s"]) == 0 and list(bad.quality["check"]) == ["read"]
+
+    no_mode = analyse_run_file(folder, "no_washer/run01.txt",
+                               mode_document={"error": "configuration no_washer: first mode not found"}, **options)
+    assert no_mode.status["status"] == "excluded"
+    assert no_mode.status["reason"] == "configuration no_washer: first mode not found"
+    assert len(no_mode.segments["t_s"]) == 0

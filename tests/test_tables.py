@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.tables import (column_units, read_columns, read_table, write_columns, write_json,
+from workflow.tables import (column_units, concatenate_columns, read_columns, read_table, write_columns, write_json,
                              write_table)
 
 
@@ -44,3 +44,16 @@ def test_columns_round_trip_in_order_with_their_types(tmp_path):
         assert back[name].dtype == column.dtype
         np.testing.assert_array_equal(back[name], column)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.npz"]  # no temporary left
+
+
+def test_concatenated_columns_stack_rows_and_keep_types():
+    first = {"run": np.array(["run01", "run01"]), "zeta": np.array([0.01, 0.02]), "kept": np.array([True, False])}
+    empty = {"run": np.array([], dtype=str), "zeta": np.array([], dtype=float), "kept": np.array([], dtype=bool)}
+    second = {"run": np.array(["run10"]), "zeta": np.array([0.03]), "kept": np.array([True])}
+    stacked = concatenate_columns([first, empty, second])
+    assert list(stacked) == ["run", "zeta", "kept"]
+    assert stacked["run"].tolist() == ["run01", "run01", "run10"]
+    np.testing.assert_array_equal(stacked["zeta"], [0.01, 0.02, 0.03])
+    assert stacked["kept"].dtype == bool and stacked["kept"].tolist() == [True, False, True]
+    with pytest.raises(ValueError, match="columns differ"):
+        concatenate_columns([first, {"run": first["run"], "zeta": first["zeta"]}])

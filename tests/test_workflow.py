@@ -28,6 +28,11 @@ def job_counts(dry_run_output: str) -> dict[str, int]:
 
 
 
+# Two runs per analyse_runs job, so that a configuration has several jobs and the
+# corrupted run04 shares its job with the good run03.
+GROUPED = "runs_per_job=2"
+
+
 @pytest.fixture(scope="module")
 def finished_run(tmp_path_factory):
     """A 2-configuration x 3-run virtual-lab campaign with one corrupted run, analysed."""
@@ -40,7 +45,7 @@ def finished_run(tmp_path_factory):
     before = checksums(campaign)
     workdir = root / "work"
     workdir.mkdir()
-    result = snakemake(workdir, "-c2", "measured", "--config", f"campaign={campaign}")
+    result = snakemake(workdir, "-c2", "measured", "--config", f"campaign={campaign}", GROUPED)
     assert result.returncode == 0, result.stderr[-4000:]
     return campaign, workdir, before
 
@@ -79,6 +84,18 @@ def test_bad_run_is_listed_with_file_and_line_and_others_complete(finished_run):
     assert set(zip(segments["configuration"], segments["run"])) == set(zip(used["configuration"], used["run"]))
 
 
+def test_tables_do_not_depend_on_how_runs_are_grouped_into_jobs(finished_run, tmp_path):
+    campaign, workdir, _ = finished_run
+    tables = ["segments", "segments_rejected", "runs", "quality", "modes"]
+    targets = [f"results/tables/{name}.parquet" for name in tables]
+    result = snakemake(tmp_path, "-c2", *targets, "--config", f"campaign={campaign}", "runs_per_job=1")
+    assert result.returncode == 0, result.stderr[-4000:]
+    assert len(list((tmp_path / "results/benchmarks/analyse_runs").rglob("*.tsv"))) == 7  # a job per run
+    for name in tables:
+        pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / f"results/tables/{name}.parquet"),
+                                      pd.read_parquet(workdir / f"results/tables/{name}.parquet"))
+
+
 def test_raw_files_are_never_modified(finished_run):
     campaign, _, before = finished_run
     assert checksums(campaign) == before
@@ -97,18 +114,18 @@ def test_figures_and_fit_tables_exist(finished_run):
 
 def test_nothing_to_do_after_a_complete_run(finished_run):
     campaign, workdir, _ = finished_run
-    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}")
+    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}", GROUPED)
     assert result.returncode == 0, result.stderr[-2000:]
     assert "Nothing to be done" in result.stdout + result.stderr
 
 
 def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
     campaign, workdir, _ = finished_run
-    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}",
+    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}", GROUPED,
                        "analysis={segment_cycles: 8}")
     assert result.returncode == 0, result.stderr[-2000:]
     counts = job_counts(result.stdout)
-    assert counts["analyse_run"] == 7
+    assert counts["analyse_runs"] == 4  # 4 + 3 runs, two per job
     assert "collect_tables" in counts and "fit_curves" in counts
     # figures 10-13 and the backbones of every configuration: one job
     assert counts["figures_measured"] == 1
@@ -126,7 +143,7 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
     counts = job_counts(result.stdout)
     assert counts["demo_campaign"] == 1
-    assert counts["analyse_run"] == 30
+    assert counts["analyse_runs"] == 6  # 3 configurations x 10 runs, 5 per job
     assert counts["identify_mode"] == 3
     assert counts["figures_measured"] == 1
 

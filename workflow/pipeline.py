@@ -286,6 +286,76 @@ def read_and_check(campaign_dir, path: str, campaign, quality_settings) -> tuple
     return record, failed_checks(path, rows)
 
 
+@dataclass(frozen=True)
+class RunAnalysis:
+    """What the workflow keeps of one run file: its segments (columns of
+    :data:`SEGMENT_COLUMNS`), its quality checks (columns of
+    :func:`workflow.quality.quality_columns`) and its status (used, or excluded with
+    the reason)."""
+
+    segments: dict[str, np.ndarray]
+    quality: dict[str, np.ndarray]
+    status: dict[str, str]
+
+
+def analyse_run_file(
+    campaign_dir,
+    run_path: str,
+    *,
+    configuration: str,
+    campaign,
+    mode_document: dict,
+    quality_settings: QualitySettings,
+    analysis: dict,
+) -> RunAnalysis:
+    """Read, check and analyse one run file; a run that cannot be used is excluded
+    with its reason, never raised.
+
+    Parameters
+    ----------
+    campaign_dir : path
+        The campaign folder.
+    run_path : str
+        The run file, relative to ``campaign_dir``.
+    configuration : str
+        Its configuration.
+    campaign : Campaign
+        The validated campaign.yaml.
+    mode_document : dict
+        The configuration's mode (:meth:`ModeInfo.to_dict`), or ``{"error": reason}``
+        when no mode was found.
+    quality_settings : QualitySettings
+        Quality thresholds.
+    analysis : dict
+        The decay analysis settings (:meth:`workflow.config.AnalysisSettings.run_parameters`).
+    """
+    from pathlib import PurePosixPath
+
+    run = PurePosixPath(run_path).stem
+    segments = empty_segments()
+    record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
+    problems = failed_checks(run_path, rows)
+    if record is not None and not problems:
+        if "error" in mode_document:
+            problems = [mode_document["error"]]
+        else:
+            segments, decay_rows = analyse_run_with_quality(
+                record,
+                configuration=configuration,
+                run=run,
+                mode=ModeInfo.from_dict(mode_document),
+                window=analysis_window(record, campaign.configurations[configuration].window_s),
+                min_snr_db=quality_settings.min_snr_db,
+                min_segments=quality_settings.min_segments,
+                **analysis,
+            )
+            rows += decay_rows
+            problems = failed_checks(run_path, decay_rows)
+    status = {"configuration": configuration, "run": run, "path": run_path,
+              "status": "excluded" if problems else "used", "reason": "; ".join(problems)}
+    return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
+
+
 def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, campaign) -> dict[str, pd.DataFrame]:
     """Merge the per-run outputs into the campaign's tables.
 
@@ -301,7 +371,8 @@ def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, ca
 
     from workflow.tables import read_columns
 
-    statuses = pd.DataFrame([json.loads(Path(path).read_text()) for path in status_paths])
+    # Each status file holds the statuses of one job's runs.
+    statuses = pd.DataFrame([status for path in status_paths for status in json.loads(Path(path).read_text())])
     runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
     frames = [frame for frame in frames if len(frame)]

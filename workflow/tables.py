@@ -13,7 +13,7 @@ import json
 import os
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Mapping
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
@@ -93,6 +93,17 @@ def read_columns(path: Path | str) -> dict[str, np.ndarray]:
     """The columns written by :func:`write_columns`, in their order."""
     with np.load(path, allow_pickle=False) as archive:
         return {name: archive[name] for name in archive.files}
+
+
+def concatenate_columns(tables: Sequence[Mapping[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """Tables with the same columns (as from :func:`read_columns`) stacked row-wise."""
+    if not tables:
+        raise ValueError("no tables to concatenate")
+    names = list(tables[0])
+    for table in tables[1:]:
+        if list(table) != names:
+            raise ValueError(f"columns differ: {list(table)} vs {names}")
+    return {name: np.concatenate([np.asarray(table[name]) for table in tables]) for name in names}
 
 
 def write_table(frame: pd.DataFrame, path: Path | str, units: Mapping[str, str] | None = None) -> None:

@@ -1,0 +1,42 @@
+"""Rule analyse_runs: band-pass, envelope and segmented log decrement of a group of
+runs of one configuration (``runs_per_job`` of them), with their quality checks.
+
+Each run is read, checked and analysed on its own: a run that cannot be used is
+excluded with its reason and the others go on."""
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
+
+from workflow.campaign import read_validated_campaign
+from workflow.config import QualitySettings
+from workflow.logs import setup_script_logging
+from workflow.pipeline import analyse_run_file
+from workflow.tables import concatenate_columns, write_columns, write_json
+
+log = setup_script_logging(snakemake.log[0], "analyse_runs")
+campaign_dir = Path(snakemake.params.campaign)
+campaign = read_validated_campaign(snakemake.input.campaign_settings)
+quality_settings = QualitySettings(**snakemake.params.quality)
+mode_document = json.loads(Path(snakemake.input.mode).read_text())
+
+results = []
+for run_file in snakemake.input.runs:
+    run_path = Path(run_file).relative_to(campaign_dir).as_posix()
+    result = analyse_run_file(campaign_dir, run_path, configuration=snakemake.wildcards.configuration,
+                              campaign=campaign, mode_document=mode_document,
+                              quality_settings=quality_settings, analysis=snakemake.params.analysis)
+    if result.status["status"] == "excluded":
+        log.warning("excluded %s", result.status["reason"])
+        if snakemake.params.strict:
+            raise SystemExit(f"strict mode: run excluded: {result.status['reason']}")
+    else:
+        kept = result.segments["kept"]
+        log.info("%s: %d segments kept of %d", run_path, int(kept.sum()), len(kept))
+    results.append(result)
+
+write_columns(snakemake.output.segments, concatenate_columns([result.segments for result in results]))
+write_columns(snakemake.output.quality, concatenate_columns([result.quality for result in results]))
+write_json(snakemake.output.status, [result.status for result in results])
