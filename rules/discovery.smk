@@ -45,6 +45,8 @@ rule figure_discovery_residuals:
         ),
     log:
         "results/logs/figure_discovery_residuals/{configuration}.log",
+    benchmark:
+        "results/benchmarks/figure_discovery_residuals/{configuration}.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -73,6 +75,8 @@ rule figure_discovery_summary:
         ),
     log:
         "results/logs/figure_discovery_summary.log",
+    benchmark:
+        "results/benchmarks/figure_discovery_summary.tsv"
     threads: 1
     resources:
         mem_mb=1000,

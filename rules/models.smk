@@ -20,6 +20,8 @@ rule figure_friction_loops:
         ),
     log:
         "results/logs/figure_friction_loops.log",
+    benchmark:
+        "results/benchmarks/figure_friction_loops.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -58,6 +60,8 @@ rule model_table:
         "results/tables/model_fits.parquet",
     log:
         "results/logs/model_table.log",
+    benchmark:
+        "results/benchmarks/model_table.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -87,6 +91,8 @@ rule figure_models:
         ),
     log:
         "results/logs/figure_models/{configuration}.log",
+    benchmark:
+        "results/benchmarks/figure_models/{configuration}.tsv"
     threads: 1
     resources:
         mem_mb=1000,

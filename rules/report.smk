@@ -89,6 +89,8 @@ rule report_summary:
         ),
     log:
         "results/logs/report_summary.log",
+    benchmark:
+        "results/benchmarks/report_summary.tsv"
     threads: 1
     resources:
         mem_mb=1000,
@@ -110,6 +112,8 @@ rule report_model_fits:
         ),
     log:
         "results/logs/report_model_fits.log",
+    benchmark:
+        "results/benchmarks/report_model_fits.tsv"
     threads: 1
     resources:
         mem_mb=1000,
