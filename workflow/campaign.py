@@ -6,10 +6,9 @@ problem belongs to one) and what is wrong, so that a person can fix the file; th
 files are only ever opened for reading.
 
 Run files are parsed in two passes. The fast pass hands the numeric block (everything
-after the header) to pandas' C parser, which reads the 131,072-line real record in a
-few tens of milliseconds. Whenever it fails or its result is suspicious, a careful
-line-by-line pass re-reads the block to find and name the first bad line, so speed
-never costs an exact error message.
+after the header) to NumPy's C reader (``np.loadtxt``). Whenever it fails or its result
+is suspicious, a careful line-by-line pass re-reads the block to find and name the
+first bad line, so speed never costs an exact error message.
 
 Decisions where the contract leaves room (documented here because outside campaigns
 are run against them):
