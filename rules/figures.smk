@@ -31,10 +31,9 @@ rule figure_time_history:
         "../scripts/figure_time_history.py"
 
 
-rule figures_measured:
-    # Figures 10-13 and the backbones of every configuration in one job: they all read
-    # the same campaign-wide tables, so one job per figure would only repeat start-up
-    # (Python, matplotlib, pandas), not run anything in parallel that a re-run could reuse.
+rule figures_damping:
+    # Figures 10-13 of every configuration in one job: they read the same campaign-wide
+    # tables, so a job per figure would only repeat start-up (Python, matplotlib, pandas).
     input:
         segments="results/tables/segments.parquet",
         curves="results/tables/damping_curves.parquet",
@@ -51,16 +50,6 @@ rule figures_measured:
             )
             for name, path in zip(CONFIGURATIONS, damping_figures())
         ],
-        backbones=[
-            report(
-                path,
-                caption="../report/backbone.rst",
-                category="2 Measured data",
-                subcategory="2.3 Backbones (frequency vs amplitude)",
-                labels={"figure": f"backbone: {name}"},
-            )
-            for name, path in zip(CONFIGURATIONS, backbone_figures())
-        ],
         area=report(
             "results/figures/fig13_area_fits.png",
             caption="../report/fig13_area_fits.rst",
@@ -71,12 +60,42 @@ rule figures_measured:
     params:
         configurations=CONFIGURATIONS,
     log:
-        "results/logs/figures_measured.log",
+        "results/logs/figures_damping.log",
     benchmark:
-        "results/benchmarks/figures_measured.tsv"
+        "results/benchmarks/figures_damping.tsv"
     threads: 1
     resources:
         mem_mb=1000,
         runtime=10,
     script:
-        "../scripts/figures_measured.py"
+        "../scripts/figures_damping.py"
+
+
+rule figures_backbone:
+    # The backbones need only the segments: apart from figures_damping, they are drawn
+    # while fit_curves runs.
+    input:
+        segments="results/tables/segments.parquet",
+    output:
+        backbones=[
+            report(
+                path,
+                caption="../report/backbone.rst",
+                category="2 Measured data",
+                subcategory="2.3 Backbones (frequency vs amplitude)",
+                labels={"figure": f"backbone: {name}"},
+            )
+            for name, path in zip(CONFIGURATIONS, backbone_figures())
+        ],
+    params:
+        configurations=CONFIGURATIONS,
+    log:
+        "results/logs/figures_backbone.log",
+    benchmark:
+        "results/benchmarks/figures_backbone.tsv"
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
+    script:
+        "../scripts/figures_backbone.py"

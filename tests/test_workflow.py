@@ -127,8 +127,8 @@ def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
     counts = job_counts(result.stdout)
     assert counts["analyse_runs"] == 4  # 4 + 3 runs, two per job
     assert "collect_tables" in counts and "fit_curves" in counts
-    # figures 10-13 and the backbones of every configuration: one job
-    assert counts["figures_measured"] == 1
+    # figures 10-13 of every configuration in one job, the backbones in another
+    assert counts["figures_damping"] == 1 and counts["figures_backbone"] == 1
     assert "identify_mode" not in counts  # the mode search does not use segments
 
 
@@ -145,7 +145,7 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert counts["demo_campaign"] == 1
     assert counts["analyse_runs"] == 6  # 3 configurations x 10 runs, 5 per job
     assert counts["identify_mode"] == 3
-    assert counts["figures_measured"] == 1
+    assert counts["figures_damping"] == 1 and counts["figures_backbone"] == 1
 
 
 def test_quality_table_has_every_check_of_every_run_and_agrees_with_runs(finished_run):
