@@ -1,4 +1,4 @@
-# Measured-data chain: raw ASCII -> first mode -> per-run band-pass, envelope,
+# Measured-data chain: raw ASCII -> first mode -> each run's band-pass, envelope,
 # segmented log decrement -> Parquet tables -> damping fits and hypotheses.
 
 

@@ -563,7 +563,7 @@ def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -
             block.rstrip().endswith(delimiter):
         block = block.replace(delimiter + "\n", "\n").rstrip()[:-1]  # one trailing delimiter per row
     try:
-        # NumPy's C reader (not pandas): the per-run jobs then start without pandas.
+        # NumPy's C reader (not pandas): the run-analysis jobs then start without pandas.
         values = np.loadtxt(io.StringIO(block), delimiter=None if delimiter == _SPACES else delimiter,
                             comments=None, ndmin=2, dtype=np.float64)
     except ValueError:

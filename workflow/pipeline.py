@@ -3,9 +3,9 @@
 Each function takes already-read records and plain settings and returns tables or
 small documents; the scripts in ``scripts/`` only read inputs and write outputs.
 
-The per-run stages return columns as NumPy arrays and this module imports pandas
-only inside the campaign-level functions: a per-run job then starts without pandas
-(about half of its start-up; ``bench/bench_workflow.py``).
+The run-level stages return columns as NumPy arrays and this module imports pandas
+only inside the campaign-level functions: a run-analysis job then starts without
+pandas.
 """
 
 from __future__ import annotations

@@ -21,8 +21,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 # pyarrow (and through it pandas, which pyarrow imports on its first conversion) are
-# imported where a Parquet table is read or written, not here: the per-run jobs write
-# their columns with write_columns and start without them (about 0.3 s of a 0.7 s job).
+# imported where a Parquet table is read or written, not here: the run-analysis jobs
+# write their columns with write_columns and start without them.
 
 #: Units of the columns that the output contract and the project's tables use.
 COLUMN_UNITS: dict[str, str] = {
