@@ -29,6 +29,7 @@ def test_paper_band_from_default_half_width():
         ({"analysis": {"filter_order": 9}}, "filter_order"),
         ({"fits": {"bootstrap_samples": "many"}}, "fits.bootstrap_samples"),
         ({"campain": "x"}, "campain"),
+        ({"runs_per_job": 0}, "runs_per_job"),
     ],
 )
 def test_bad_values_name_the_key(raw, key):
