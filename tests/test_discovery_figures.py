@@ -12,6 +12,7 @@ import pytest
 
 from workflow import discovery as disc
 from workflow import discovery_figures as dfig
+from workflow.figures import save
 from workflow.describing import CurveGrid, model_curves
 
 from tests.test_discovery import synthetic_segments
@@ -95,7 +96,7 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
         assert any(entry["baseline"]["model"] in t for t in legend)
         assert all(ax.get_xscale() == "log" for ax in fig.axes)
         assert fig.axes[-1].get_xlabel() == dfig.VELOCITY_LABEL
-        dfig.save(fig, tmp_path / f"residuals_{name}.png")
+        save(fig, tmp_path / f"residuals_{name}.png")
         assert (tmp_path / f"residuals_{name}.png").stat().st_size > 0
     fig = dfig.candidates_figure(document)
     assert len(fig.axes) == len(document["configurations"])
@@ -103,7 +104,7 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
         labels = [t.get_text() for t in ax.get_yticklabels()]
         assert any("baseline" in t for t in labels) and len(labels) == 5
         assert "held-out error" in ax.get_xlabel()
-    dfig.save(fig, tmp_path / "candidates.png")
+    save(fig, tmp_path / "candidates.png")
     fig = dfig.heldout_figure(document)
     assert document["across_configurations"]["applicable"]
     ax = fig.axes[0]
@@ -112,7 +113,7 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
     expected = sorted(v for e in document["across_configurations"]["configurations"].values()
                       for k, v in e.items() if k.endswith("_error"))
     assert heights == pytest.approx(expected)
-    dfig.save(fig, tmp_path / "heldout.png")
+    save(fig, tmp_path / "heldout.png")
 
 
 def test_heldout_figure_says_not_applicable():

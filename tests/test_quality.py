@@ -1,7 +1,6 @@
 """Per-run quality checks on synthetic records: pass and fail cases and their messages."""
 
 import numpy as np
-import pytest
 
 from workflow.campaign import RunRecord
 from workflow.config import QualitySettings

@@ -22,21 +22,14 @@ from matplotlib import ticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from workflow.figures import (  # noqa: E402,F401  (save, run_colours: one import for callers)
-    DAMPING_LABEL,
-    FREQUENCY_LABEL,
-    STYLE,
-    VELOCITY_LABEL,
-    run_colours,
-    save,
-)
+from workflow.figures import STYLE, VELOCITY_LABEL  # noqa: E402
 
-__all__ = ["residuals_figure", "candidates_figure", "heldout_figure", "save"]
+__all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
 ROLE_COLOURS = {"baseline": "tab:red", "extended": "tab:blue"}
 CURVE_LABELS = {
-    "zeta": f"damping residual\n(ln ζ_measured/ζ_model) / scatter (1)",
-    "frequency_hz": f"frequency residual\n(f_measured/f_model − 1) / scatter (1)",
+    "zeta": "damping residual\n(ln ζ_measured/ζ_model) / scatter (1)",
+    "frequency_hz": "frequency residual\n(f_measured/f_model − 1) / scatter (1)",
 }
 ERROR_LABEL = "held-out error (RMS residual / scatter, 1)"
 
