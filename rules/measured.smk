@@ -7,8 +7,6 @@ rule campaign_settings:
         campaign_yaml=CAMPAIGN / "campaign.yaml",
     output:
         "results/interim/campaign.json",
-    params:
-        campaign=str(CAMPAIGN),
     log:
         "results/logs/campaign_settings.log",
     benchmark:

@@ -11,6 +11,6 @@ from workflow.logs import setup_script_logging
 from workflow.tables import write_json
 
 log = setup_script_logging(snakemake.log[0], "campaign_settings")
-campaign = load_campaign(Path(snakemake.params.campaign))
+campaign = load_campaign(Path(snakemake.input.campaign_yaml).parent)
 write_json(snakemake.output[0], campaign_to_dict(campaign))
 log.info("campaign %s: %d configurations", campaign.name, len(campaign.configurations))
