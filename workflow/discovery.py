@@ -40,6 +40,7 @@ import pandas as pd
 from scipy import optimize, stats
 from scipy.stats import qmc
 
+from workflow.config import DiscoverySettings
 from workflow.describing import MODELS, RESPONSE_ORDER, AveragedModel, CurveGrid
 
 __all__ = [
@@ -119,12 +120,13 @@ NESTED_DAHL = {
 
 @dataclass(frozen=True)
 class FitSettings:
-    """Optimiser settings (``models`` section of config.yaml)."""
+    """Optimiser settings: the ``discovery`` section of config.yaml (its defaults are
+    :class:`workflow.config.DiscoverySettings`'), then the refinement budgets."""
 
-    global_samples: int = 256
-    local_starts: int = 4
-    seed: int = 1976
-    folds: int = 5
+    global_samples: int = DiscoverySettings.global_samples
+    local_starts: int = DiscoverySettings.local_starts
+    seed: int = DiscoverySettings.seed
+    folds: int = DiscoverySettings.folds
     max_nfev: int = 60
     """Most residual evaluations of one local refinement from a global start."""
     two_stage_models: tuple[str, ...] = ("lugre",)
