@@ -23,12 +23,12 @@ include: "rules/report.smk"  # last: it reads the names the others define
 
 
 rule all:
+    default_target: True
     input:
         measured_outputs(),
         model_outputs(),
         discovery_outputs(),
         report_outputs(),
-    default_target: True
 
 
 rule measured:

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from workflow import virtual_lab
-from workflow.paper_layout import PAPER_CONFIGURATIONS
+from workflow.lab import virtual_lab
+from workflow.lab.layout import PAPER_CONFIGURATIONS
 
 
 def main(repeats: int = 5) -> None:
@@ -29,14 +29,15 @@ def main(repeats: int = 5) -> None:
             setups.append(time.perf_counter() - start)
             virtual_lab._configuration_physics.cache_clear()
             start = time.perf_counter()
-            virtual_lab.generate_campaign(Path(tmp) / f"demo{i}", seed=2004,
-                                          runs_per_configuration=10)
+            virtual_lab.generate_campaign(Path(tmp) / f"demo{i}", seed=2004, runs_per_configuration=10)
             totals.append(time.perf_counter() - start)
     totals, setups = np.array(totals), np.array(setups)
     print(f"{'stage':<28}{'median s':>10}{'min s':>8}{'max s':>8}")
-    for label, values in (("configuration set-up (x3)", setups),
-                          ("30 runs (by difference)", totals - setups),
-                          ("generate_campaign (cold)", totals)):
+    for label, values in (
+        ("configuration set-up (x3)", setups),
+        ("30 runs (by difference)", totals - setups),
+        ("generate_campaign (cold)", totals),
+    ):
         print(f"{label:<28}{np.median(values):>10.2f}{values.min():>8.2f}{values.max():>8.2f}")
 
 

@@ -10,7 +10,7 @@ the demo's 30 runs with records 4 times as long (32768 samples) for the growth w
 record length, each repeated as often. Per rule: wall time from Snakemake's
 ``benchmark:`` files, and each job's CPU split into start-up (interpreter, Snakemake's
 script preamble, imports) and work, with its peak memory, from the cost line that every
-script logs (workflow/logs.py).
+script logs (workflow/runtime/logs.py).
 """
 
 import argparse
@@ -31,18 +31,35 @@ REPO = Path(__file__).resolve().parents[1]
 def snakemake(workdir: Path, *args: str) -> float:
     """Wall time of one ``snakemake -c2`` call in ``workdir``, seconds."""
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile"), "-d", str(workdir),
-                    "-c2", *args, "--quiet", "all"], check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "-s",
+            str(REPO / "Snakefile"),
+            "-d",
+            str(workdir),
+            "-c2",
+            *args,
+            "--quiet",
+            "all",
+        ],
+        check=True,
+        capture_output=True,
+    )
     return time.perf_counter() - start
 
 
-COST = re.compile(r" (\S+) INFO cost: start-up ([0-9.]+) s CPU, work ([0-9.]+) s CPU, peak memory ([0-9]+) MB")
+COST = re.compile(
+    r" (\S+) INFO cost: start-up ([0-9.]+) s CPU, work ([0-9.]+) s CPU, peak memory ([0-9]+) MB"
+)
 
 
 def rule_table(workdir: Path) -> pd.DataFrame:
     """Per rule: jobs, wall seconds (Snakemake's benchmark files), and the split of each
     job's CPU time into start-up and work with its peak memory (the cost line every
-    script logs, workflow/logs.py)."""
+    script logs, workflow/runtime/logs.py)."""
     walls, costs = [], []
     for path in glob.glob(str(workdir / "results/benchmarks/**/*.tsv"), recursive=True):
         rule = Path(path).relative_to(workdir / "results/benchmarks").parts[0].removesuffix(".tsv")
@@ -51,13 +68,23 @@ def rule_table(workdir: Path) -> pd.DataFrame:
         found = COST.search(Path(path).read_text())
         if found:
             rule, start_up, work, peak = found.groups()
-            costs.append({"rule": rule, "start_up_s": float(start_up), "work_s": float(work),
-                          "peak_mb": float(peak)})
-    wall = pd.DataFrame(walls).groupby("rule").agg(jobs=("wall_s", "size"), median_wall_s=("wall_s", "median"),
-                                                   total_wall_s=("wall_s", "sum"))
-    cost = pd.DataFrame(costs).groupby("rule").agg(median_start_up_s=("start_up_s", "median"),
-                                                   median_work_s=("work_s", "median"),
-                                                   peak_mb=("peak_mb", "max"))
+            costs.append(
+                {"rule": rule, "start_up_s": float(start_up), "work_s": float(work), "peak_mb": float(peak)}
+            )
+    wall = (
+        pd.DataFrame(walls)
+        .groupby("rule")
+        .agg(jobs=("wall_s", "size"), median_wall_s=("wall_s", "median"), total_wall_s=("wall_s", "sum"))
+    )
+    cost = (
+        pd.DataFrame(costs)
+        .groupby("rule")
+        .agg(
+            median_start_up_s=("start_up_s", "median"),
+            median_work_s=("work_s", "median"),
+            peak_mb=("peak_mb", "max"),
+        )
+    )
     return wall.join(cost, how="outer").round(2)
 
 
@@ -77,8 +104,12 @@ def main() -> None:
     parser.add_argument("--scale", action="store_true")
     args = parser.parse_args()
     cold = f"cold {args.target}"
-    timings: dict[str, list[float]] = {"demo generation": [], cold: [], "nothing to do": [],
-                                       "segment_cycles changed": []}
+    timings: dict[str, list[float]] = {
+        "demo generation": [],
+        cold: [],
+        "nothing to do": [],
+        "segment_cycles changed": [],
+    }
     last = None
     for _ in range(args.repeats):
         workdir = Path(tempfile.mkdtemp(prefix="lapjoint-bench-"))
@@ -86,7 +117,8 @@ def main() -> None:
         timings[cold].append(snakemake(workdir, args.target))
         timings["nothing to do"].append(snakemake(workdir, args.target))
         timings["segment_cycles changed"].append(
-            snakemake(workdir, args.target, "--config", "analysis={segment_cycles: 8}"))
+            snakemake(workdir, args.target, "--config", "analysis={segment_cycles: 8}")
+        )
         last = workdir
     print(f"| step (median of {args.repeats}, 2 cores) | seconds |")
     print("|---|---|")
@@ -97,19 +129,27 @@ def main() -> None:
     print(rule_table(last).to_string())
     if not args.scale:
         return
-    from workflow.virtual_lab import generate_campaign
+    from workflow.lab.virtual_lab import generate_campaign
 
     reference = statistics.median(timings[cold])
     root = Path(tempfile.mkdtemp(prefix="lapjoint-scale-"))
-    generate_campaign(root / "runs300", seed=3, runs_per_configuration=30,
-                      configurations={f"c{index:02d}": 0.17 + 0.12 * index for index in range(10)})
+    generate_campaign(
+        root / "runs300",
+        seed=3,
+        runs_per_configuration=30,
+        configurations={f"c{index:02d}": 0.17 + 0.12 * index for index in range(10)},
+    )
     generate_campaign(root / "long", seed=3, samples_per_run=4 * 8192)
-    for label, campaign in (("300 runs (10 x 30)", root / "runs300"),
-                            ("30 runs of 32768 samples (4 x longer records)", root / "long")):
+    for label, campaign in (
+        ("300 runs (10 x 30)", root / "runs300"),
+        ("30 runs of 32768 samples (4 x longer records)", root / "long"),
+    ):
         seconds, workdir = cold_runs(campaign, args.target, args.repeats)
         median = statistics.median(seconds)
-        print(f"\n{label}, cold {args.target}: {median:.1f} s (median of {args.repeats}) "
-              f"= {median / reference:.2f} x the 30-run demo time")
+        print(
+            f"\n{label}, cold {args.target}: {median:.1f} s (median of {args.repeats}) "
+            f"= {median / reference:.2f} x the 30-run demo time"
+        )
         print(rule_table(workdir).to_string())
 
 

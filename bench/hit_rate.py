@@ -23,8 +23,14 @@ sys.path.insert(0, str(ROOT))
 
 from tests.test_hidden_effects import CASES, run_case  # noqa: E402
 
-VERDICTS = ["none", "microslip_power_law", "quadratic_damping", "stiffness_nonlinearity",
-            "run_drift", "unknown"]
+VERDICTS = [
+    "none",
+    "microslip_power_law",
+    "quadratic_damping",
+    "stiffness_nonlinearity",
+    "run_drift",
+    "unknown",
+]
 
 
 def _one(args):
@@ -37,8 +43,11 @@ def _one(args):
         verdict = doc["cause"] if conf else "no data"
         if conf:  # the hidden cause's own candidate, whatever the verdict
             own = conf["evidence"]["candidates"].get(cause, {}).get("ratio_to_baseline")
-            case = {**case, "true_candidate_ratio": own,
-                    "baseline_misfit": conf["evidence"]["baseline_misfit_significant"]}
+            case = {
+                **case,
+                "true_candidate_ratio": own,
+                "baseline_misfit": conf["evidence"]["baseline_misfit_significant"],
+            }
     except Exception as error:  # report, do not hide
         case, verdict, ratio = {}, f"error: {error}", None
     return cause, seed, verdict, ratio, case, time.perf_counter() - start
@@ -55,9 +64,15 @@ def visibility() -> None:
     """
     import numpy as np
 
-    from workflow import virtual_lab as vl
-    from workflow.discovery import (ConfigurationData, FitContext, FitSettings, Scatter,
-                                    fit_model, model_residuals)
+    from workflow.discovery.diagnosis import (
+        ConfigurationData,
+        FitContext,
+        FitSettings,
+        Scatter,
+        fit_model,
+        model_residuals,
+    )
+    from workflow.lab import virtual_lab as vl
 
     lab = vl.LabSettings()
     v = np.geomspace(0.07, 3.0, 60)
@@ -70,8 +85,7 @@ def visibility() -> None:
             setup, curves = vl.setup_configuration("x", area, lab)
             table = vl.mode_table(setup, curves, lab, "dahl", "quadratic_damping", size)
             zeta, freq = vl.truth_curves(setup, table, v)
-            data = ConfigurationData("x", v, zeta, freq, np.zeros(v.size, int), ["r"], area,
-                                     response_order=0)
+            data = ConfigurationData("x", v, zeta, freq, np.zeros(v.size, int), ["r"], area, response_order=0)
             best = None
             for m in ("dahl", "lugre"):
                 fit = fit_model(m, data, noise, FitContext(2.0), settings=settings)
@@ -85,15 +99,15 @@ def visibility() -> None:
     vv = np.logspace(-2, 1, 301)
     for area in np.arange(0.6, 1.41, 0.05):
         setup, curves = vl.setup_configuration("x", float(area), lab)
-        zeta, _ = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "patches", None,
-                                                       None), vv)
+        zeta, _ = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "patches", None, None), vv)
         excess = zeta - lab.zeta0
         onset = vv[np.argmax(excess > 0.1 * lab.zeta0)]
         sel = (vv >= onset) & (vv <= 3.0)
-        slope = (np.polyfit(np.log(vv[sel]), np.log(excess[sel]), 1)[0] if sel.sum() > 3
-                 else float("nan"))
-        print(f"  A = {area:.2f} in^2   onset {onset:6.3f} in/s   "
-              f"{max(np.log10(3.0 / onset), 0):.2f} decades   slope {slope:.2f}")
+        slope = np.polyfit(np.log(vv[sel]), np.log(excess[sel]), 1)[0] if sel.sum() > 3 else float("nan")
+        print(
+            f"  A = {area:.2f} in^2   onset {onset:6.3f} in/s   "
+            f"{max(np.log10(3.0 / onset), 0):.2f} decades   slope {slope:.2f}"
+        )
 
 
 def main() -> None:
@@ -102,21 +116,27 @@ def main() -> None:
     parser.add_argument("--first-seed", type=int, default=1)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--causes", nargs="*", default=list(CASES))
-    parser.add_argument("--visibility", action="store_true",
-                        help="print where the hidden effects are visible (truth curves) and exit")
+    parser.add_argument(
+        "--visibility",
+        action="store_true",
+        help="print where the hidden effects are visible (truth curves) and exit",
+    )
     args = parser.parse_args()
     if args.visibility:
         visibility()
         return
     with tempfile.TemporaryDirectory() as work:
-        tasks = [(c, s, work) for c in args.causes
-                 for s in range(args.first_seed, args.first_seed + args.seeds)]
+        tasks = [
+            (c, s, work) for c in args.causes for s in range(args.first_seed, args.first_seed + args.seeds)
+        ]
         start = time.perf_counter()
         with ProcessPoolExecutor(args.jobs) as pool:
             results = list(pool.map(_one, tasks))
         wall = time.perf_counter() - start
-    print(f"{len(results)} campaigns, {args.seeds} seeds per cause, wall {wall:.0f} s, "
-          f"mean {sum(r[5] for r in results) / len(results):.1f} s per campaign\n")
+    print(
+        f"{len(results)} campaigns, {args.seeds} seeds per cause, wall {wall:.0f} s, "
+        f"mean {sum(r[5] for r in results) / len(results):.1f} s per campaign\n"
+    )
     header = "hidden cause".ljust(24) + "".join(v[:12].rjust(13) for v in VERDICTS) + "   other  hit"
     print(header)
     for cause in args.causes:
@@ -130,8 +150,10 @@ def main() -> None:
     for cause in args.causes:
         ratios = [r[3] for r in results if r[0] == cause and r[2] == cause and r[3] is not None]
         if ratios:
-            print(f"  {cause:24s} median {sorted(ratios)[len(ratios) // 2]:.3f}  "
-                  f"max {max(ratios):.3f}  (n={len(ratios)})")
+            print(
+                f"  {cause:24s} median {sorted(ratios)[len(ratios) // 2]:.3f}  "
+                f"max {max(ratios):.3f}  (n={len(ratios)})"
+            )
     print("\nmisses:")
     for r in results:
         if r[2] != r[0]:

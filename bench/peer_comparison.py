@@ -15,15 +15,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from workflow.campaign import list_runs, load_campaign
-from workflow.config import AnalysisSettings, QualitySettings
-from workflow.pipeline import analyse_run, analysis_window, identify_mode, read_and_check
+from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.settings import AnalysisSettings, QualitySettings
+from workflow.measured.runs import analyse_run, analysis_window, identify_mode, read_and_check
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--realdata", type=Path,
-                        default=Path(__file__).resolve().parents[2] / "shared" / "realdata")
+    parser.add_argument(
+        "--realdata", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "realdata"
+    )
     args = parser.parse_args()
     folder = args.realdata / "pff-lms-sample"
     reference = pd.read_csv(args.realdata / "pff-lms-sample.reference.csv")
@@ -32,25 +33,45 @@ def main() -> None:
     record, problems = read_and_check(folder, run_file.path, campaign, QualitySettings())
     assert not problems, problems
     window = analysis_window(record, None)
-    mode = identify_mode([record], windows=[window], campaign_mode_hz=campaign.mode_hz,
-                         campaign_band_hz=campaign.band_hz, band_half_width=0.2,
-                         mode_search_hz=None, mode_search_fraction=0.3)
+    mode = identify_mode(
+        [record],
+        windows=[window],
+        campaign_mode_hz=campaign.mode_hz,
+        campaign_band_hz=campaign.band_hz,
+        band_half_width=0.2,
+        mode_search_hz=None,
+        mode_search_fraction=0.3,
+    )
     analysis = AnalysisSettings().run_parameters()
-    segments, _ = analyse_run(record, configuration="decay", run=run_file.run, mode=mode, window=window,
-                              min_snr_db=20.0, min_segments=3, **analysis)
+    segments, _ = analyse_run(
+        record,
+        configuration="decay",
+        run=run_file.run,
+        mode=mode,
+        window=window,
+        min_snr_db=20.0,
+        min_segments=3,
+        **analysis,
+    )
     kept = segments[segments["kept"]]
     valid = reference[(reference["time_s"] > 0.2) & (reference["time_s"] < reference["time_s"].max() - 0.2)]
     overlap = kept[(kept["t_s"] >= valid["time_s"].min()) & (kept["t_s"] <= valid["time_s"].max())]
     peer_zeta = np.interp(overlap["t_s"], valid["time_s"], valid["damping_ratio"])
     peer_hz = np.interp(overlap["t_s"], valid["time_s"], valid["frequency_hz"])
     relative = overlap["zeta"].to_numpy() / peer_zeta - 1
-    print(f"mode {mode.mode_hz:.2f} Hz, band {mode.band_hz[0]:.1f}-{mode.band_hz[1]:.1f} Hz; "
-          f"{len(kept)} of {len(segments)} segments kept, {len(overlap)} inside the peer's valid range")
+    print(
+        f"mode {mode.mode_hz:.2f} Hz, band {mode.band_hz[0]:.1f}-{mode.band_hz[1]:.1f} Hz; "
+        f"{len(kept)} of {len(segments)} segments kept, {len(overlap)} inside the peer's valid range"
+    )
     print("| quantity | median difference | median absolute difference |")
     print("|---|---|---|")
-    print(f"| damping ratio (relative) | {100 * np.median(relative):+.1f} % | {100 * np.median(np.abs(relative)):.1f} % |")
-    print(f"| frequency | {np.median(overlap['frequency_hz'] - peer_hz):+.3f} Hz | "
-          f"{np.median(np.abs(overlap['frequency_hz'] - peer_hz)):.3f} Hz |")
+    print(
+        f"| damping ratio (relative) | {100 * np.median(relative):+.1f} % | {100 * np.median(np.abs(relative)):.1f} % |"
+    )
+    print(
+        f"| frequency | {np.median(overlap['frequency_hz'] - peer_hz):+.3f} Hz | "
+        f"{np.median(np.abs(overlap['frequency_hz'] - peer_hz)):.3f} Hz |"
+    )
 
 
 if __name__ == "__main__":

@@ -5,9 +5,8 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-sys.path.insert(0, workflow.basedir)
 
-from workflow.config import ConfigError, validate_config
+from workflow.io.settings import ConfigError, validate_config
 
 try:
     SETTINGS = validate_config(config)
@@ -19,8 +18,8 @@ USES_DEMO = SETTINGS.uses_demo_campaign()
 
 if workflow.is_main_process:
     # After a hard kill, Snakemake's lock files stay behind; clear them when no other
-    # lapjoint run is alive here, so that `snakemake -c2 all` resumes (workflow/locks.py).
-    from workflow.locks import clear_stale_snakemake_locks
+    # lapjoint run is alive here, so that `snakemake -c2 all` resumes (workflow/runtime/locks.py).
+    from workflow.runtime.locks import clear_stale_snakemake_locks
 
     for _stale in clear_stale_snakemake_locks():
         logger.info(f"removed stale lock .snakemake/locks/{_stale} (no lapjoint run is alive here)")
@@ -32,10 +31,10 @@ def campaign_inventory():
     The demo campaign is planned from its settings (it may not exist yet: a rule
     generates it); any other campaign is listed from its campaign.yaml.
     """
-    from workflow.campaign import CampaignFormatError, list_runs, load_campaign
+    from workflow.io.campaign import CampaignFormatError, list_runs, load_campaign
 
     if USES_DEMO:
-        from workflow.paper_layout import planned_run_files
+        from workflow.lab.layout import planned_run_files
 
         return planned_run_files(SETTINGS.demo.runs_per_configuration)
     try:
@@ -47,9 +46,7 @@ def campaign_inventory():
 
 RUN_FILES = campaign_inventory()
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
-RUNS = {
-    name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS
-}
+RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:
     raise WorkflowError(f"campaign {CAMPAIGN} has no run files")
 
@@ -69,10 +66,7 @@ def run_groups(configuration):
     analyse_runs job each: name -> runs."""
     runs = RUNS[configuration]
     size = SETTINGS.runs_per_job
-    return {
-        f"runs{index // size + 1:02d}": runs[index : index + size]
-        for index in range(0, len(runs), size)
-    }
+    return {f"runs{index // size + 1:02d}": runs[index : index + size] for index in range(0, len(runs), size)}
 
 
 def run_group_files(wildcards):
@@ -99,8 +93,7 @@ def damping_figure_number(configuration):
 
 def damping_figures():
     return [
-        f"results/figures/fig{damping_figure_number(name):02d}_damping_{name}.png"
-        for name in CONFIGURATIONS
+        f"results/figures/fig{damping_figure_number(name):02d}_damping_{name}.png" for name in CONFIGURATIONS
     ]
 
 

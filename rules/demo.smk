@@ -1,4 +1,4 @@
-# The built-in demo: a campaign measured in the virtual lab (workflow/virtual_lab.py).
+# The built-in demo: a campaign measured in the virtual lab (workflow/lab/virtual_lab.py).
 # It exists only when config.yaml's campaign points at demo.path.
 
 if USES_DEMO:
@@ -8,9 +8,6 @@ if USES_DEMO:
             campaign_yaml=CAMPAIGN / "campaign.yaml",
             runs=[CAMPAIGN / run.path for run in RUN_FILES],
             truth=f"{CAMPAIGN}.truth.json",
-        params:
-            seed=SETTINGS.demo.seed,
-            runs_per_configuration=SETTINGS.demo.runs_per_configuration,
         log:
             "results/logs/demo_campaign.log",
         benchmark:
@@ -19,5 +16,8 @@ if USES_DEMO:
         resources:
             mem_mb=1000,
             runtime=10,
+        params:
+            seed=SETTINGS.demo.seed,
+            runs_per_configuration=SETTINGS.demo.runs_per_configuration,
         script:
             "../scripts/make_demo_campaign.py"

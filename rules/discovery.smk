@@ -15,10 +15,6 @@ rule diagnose:
             labels={"item": "file: diagnosis.json (download)"},
         ),
         residuals="results/tables/diagnosis_residuals.parquet",
-    params:
-        campaign=str(CAMPAIGN),
-        segment_cycles=SETTINGS.analysis.segment_cycles,
-        discovery=asdict(SETTINGS.discovery),
     log:
         "results/logs/diagnose.log",
     benchmark:
@@ -27,6 +23,10 @@ rule diagnose:
     resources:
         mem_mb=3000,
         runtime=30,
+    params:
+        campaign=str(CAMPAIGN),
+        segment_cycles=SETTINGS.analysis.segment_cycles,
+        discovery=asdict(SETTINGS.discovery),
     script:
         "../scripts/diagnose.py"
 

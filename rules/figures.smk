@@ -14,11 +14,6 @@ rule figure_time_history:
             subcategory="2.1 Time history (fig. 9)",
             labels={"figure": "fig. 9: raw, band-passed, envelope"},
         ),
-    params:
-        campaign=str(CAMPAIGN),
-        configuration=CONFIGURATIONS[0],
-        filter_order=SETTINGS.analysis.filter_order,
-        analysis=SETTINGS.analysis.run_parameters(),
     log:
         "results/logs/figure_time_history.log",
     benchmark:
@@ -27,6 +22,11 @@ rule figure_time_history:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        campaign=str(CAMPAIGN),
+        configuration=CONFIGURATIONS[0],
+        filter_order=SETTINGS.analysis.filter_order,
+        analysis=SETTINGS.analysis.run_parameters(),
     script:
         "../scripts/figure_time_history.py"
 
@@ -57,8 +57,6 @@ rule figures_damping:
             subcategory="3.1 Damping vs bearing area (fig. 13)",
             labels={"figure": "fig. 13: damping vs bearing area"},
         ),
-    params:
-        configurations=CONFIGURATIONS,
     log:
         "results/logs/figures_damping.log",
     benchmark:
@@ -67,6 +65,8 @@ rule figures_damping:
     resources:
         mem_mb=1000,
         runtime=10,
+    params:
+        configurations=CONFIGURATIONS,
     script:
         "../scripts/figures_damping.py"
 
@@ -87,8 +87,6 @@ rule figures_backbone:
             )
             for name, path in zip(CONFIGURATIONS, backbone_figures())
         ],
-    params:
-        configurations=CONFIGURATIONS,
     log:
         "results/logs/figures_backbone.log",
     benchmark:
@@ -97,5 +95,7 @@ rule figures_backbone:
     resources:
         mem_mb=1000,
         runtime=10,
+    params:
+        configurations=CONFIGURATIONS,
     script:
         "../scripts/figures_backbone.py"

@@ -25,12 +25,6 @@ rule identify_mode:
         runs=configuration_run_files,
     output:
         "results/interim/mode/{configuration}.json",
-    params:
-        campaign=str(CAMPAIGN),
-        band_half_width=SETTINGS.analysis.band_half_width,
-        mode_search_hz=SETTINGS.analysis.mode_search_hz,
-        mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
-        quality=asdict(SETTINGS.quality),
     log:
         "results/logs/identify_mode/{configuration}.log",
     benchmark:
@@ -39,6 +33,12 @@ rule identify_mode:
     resources:
         mem_mb=2000,
         runtime=10,
+    params:
+        campaign=str(CAMPAIGN),
+        band_half_width=SETTINGS.analysis.band_half_width,
+        mode_search_hz=SETTINGS.analysis.mode_search_hz,
+        mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
+        quality=asdict(SETTINGS.quality),
     script:
         "../scripts/identify_mode.py"
 
@@ -52,11 +52,6 @@ rule analyse_runs:
         segments="results/interim/segments/{configuration}/{group}.npz",
         quality="results/interim/quality/{configuration}/{group}.npz",
         status="results/interim/status/{configuration}/{group}.json",
-    params:
-        campaign=str(CAMPAIGN),
-        strict=SETTINGS.strict,
-        analysis=SETTINGS.analysis.run_parameters(),
-        quality=asdict(SETTINGS.quality),
     log:
         "results/logs/analyse_runs/{configuration}/{group}.log",
     benchmark:
@@ -65,6 +60,11 @@ rule analyse_runs:
     resources:
         mem_mb=1000,
         runtime=10,
+    params:
+        campaign=str(CAMPAIGN),
+        strict=SETTINGS.strict,
+        analysis=SETTINGS.analysis.run_parameters(),
+        quality=asdict(SETTINGS.quality),
     script:
         "../scripts/analyse_runs.py"
 
@@ -82,8 +82,6 @@ rule collect_tables:
         runs="results/tables/runs.parquet",
         quality="results/tables/quality.parquet",
         modes="results/tables/modes.parquet",
-    params:
-        campaign=str(CAMPAIGN),
     log:
         "results/logs/collect_tables.log",
     benchmark:
@@ -92,6 +90,8 @@ rule collect_tables:
     resources:
         mem_mb=2000,
         runtime=10,
+    params:
+        campaign=str(CAMPAIGN),
     script:
         "../scripts/collect_tables.py"
 
@@ -105,9 +105,6 @@ rule fit_curves:
         curves="results/tables/damping_curves.parquet",
         hypotheses="results/tables/hypotheses.parquet",
         area="results/tables/area_fits.parquet",
-    params:
-        campaign=str(CAMPAIGN),
-        fits=asdict(SETTINGS.fits),
     log:
         "results/logs/fit_curves.log",
     benchmark:
@@ -116,5 +113,8 @@ rule fit_curves:
     resources:
         mem_mb=2000,
         runtime=20,
+    params:
+        campaign=str(CAMPAIGN),
+        fits=asdict(SETTINGS.fits),
     script:
         "../scripts/fit_curves.py"

@@ -37,10 +37,6 @@ rule fit_friction_models:
         campaign_settings="results/interim/campaign.json",
     output:
         "results/models/{configuration}.json",
-    params:
-        campaign=str(CAMPAIGN),
-        analysis={key: getattr(SETTINGS.analysis, key) for key in ("filter_order", "segment_cycles", "segment_overlap", "edge_time_constants")},
-        models=asdict(SETTINGS.models),
     log:
         "results/logs/fit_friction_models/{configuration}.log",
     benchmark:
@@ -49,6 +45,13 @@ rule fit_friction_models:
     resources:
         mem_mb=3000,
         runtime=30,
+    params:
+        campaign=str(CAMPAIGN),
+        analysis={
+            key: getattr(SETTINGS.analysis, key)
+            for key in ("filter_order", "segment_cycles", "segment_overlap", "edge_time_constants")
+        },
+        models=asdict(SETTINGS.models),
     script:
         "../scripts/fit_friction_models.py"
 

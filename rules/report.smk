@@ -15,7 +15,6 @@ else:
     report: "../report/workflow.rst"
 
 
-
 def report_outputs():
     """The report's own pages (the figures and tables they describe come from the others)."""
     return [

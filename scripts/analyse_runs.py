@@ -5,16 +5,13 @@ Each run is read, checked and analysed on its own: a run that cannot be used is
 excluded with its reason and the others go on."""
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.campaign import read_validated_campaign
-from workflow.config import QualitySettings
-from workflow.logs import setup_script_logging
-from workflow.pipeline import analyse_run_file
-from workflow.tables import concatenate_columns, write_columns, write_json
+from workflow.io.campaign import read_validated_campaign
+from workflow.io.settings import QualitySettings
+from workflow.io.tables import concatenate_columns, write_columns, write_json
+from workflow.measured.runs import analyse_run_file
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "analyse_runs")
 campaign_dir = Path(snakemake.params.campaign)
@@ -25,9 +22,15 @@ mode_document = json.loads(Path(snakemake.input.mode).read_text())
 results = []
 for run_file in snakemake.input.runs:
     run_path = Path(run_file).relative_to(campaign_dir).as_posix()
-    result = analyse_run_file(campaign_dir, run_path, configuration=snakemake.wildcards.configuration,
-                              campaign=campaign, mode_document=mode_document,
-                              quality_settings=quality_settings, analysis=snakemake.params.analysis)
+    result = analyse_run_file(
+        campaign_dir,
+        run_path,
+        configuration=snakemake.wildcards.configuration,
+        campaign=campaign,
+        mode_document=mode_document,
+        quality_settings=quality_settings,
+        analysis=snakemake.params.analysis,
+    )
     if result.status["status"] == "excluded":
         log.warning("excluded %s", result.status["reason"])
         if snakemake.params.strict:

@@ -1,14 +1,9 @@
 """Rule collect_tables: the campaign's segments, runs and modes as Parquet tables."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.campaign import read_validated_campaign
-from workflow.logs import setup_script_logging
-from workflow.pipeline import collect_tables
-from workflow.tables import write_table
+from workflow.io.campaign import read_validated_campaign
+from workflow.io.tables import write_table
+from workflow.measured.runs import collect_tables
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "collect_tables")
 campaign = read_validated_campaign(snakemake.input.campaign_settings)

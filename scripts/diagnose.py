@@ -1,14 +1,9 @@
 """Rule diagnose: results/diagnosis.json and the residuals behind it."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.campaign import read_validated_campaign
-from workflow.discovery import FitSettings, diagnose_campaign, residual_table
-from workflow.logs import setup_script_logging
-from workflow.tables import read_table, write_json, write_table
+from workflow.discovery.diagnosis import FitSettings, diagnose_campaign, residual_table
+from workflow.io.campaign import read_validated_campaign
+from workflow.io.tables import read_table, write_json, write_table
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
 campaign = read_validated_campaign(snakemake.input.campaign_settings)
@@ -25,4 +20,6 @@ write_table(residual_table(details), snakemake.output.residuals)
 write_json(snakemake.output.diagnosis, document)
 log.info("campaign verdict: %s", document["cause"])
 for name, entry in document["configurations"].items():
-    log.info("%s: %s (gain ratio %s) - %s", name, entry["cause"], entry["gain"]["ratio"], entry["discrepancy"])
+    log.info(
+        "%s: %s (gain ratio %s) - %s", name, entry["cause"], entry["gain"]["ratio"], entry["discrepancy"]
+    )

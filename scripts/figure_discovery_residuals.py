@@ -1,14 +1,11 @@
 """Rule figure_discovery_residuals: baseline and extended model residuals of one configuration."""
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow import discovery_figures, figures
-from workflow.logs import setup_script_logging
-from workflow.tables import read_table
+from workflow.io.tables import read_table
+from workflow.outputs import discovery_figures, figures
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_discovery_residuals")
 document = json.loads(Path(snakemake.input.diagnosis).read_text())

@@ -1,13 +1,10 @@
 """Rule figure_discovery_summary: candidate comparison and held-out area prediction."""
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow import discovery_figures, figures
-from workflow.logs import setup_script_logging
+from workflow.outputs import discovery_figures, figures
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_discovery_summary")
 document = json.loads(Path(snakemake.input.diagnosis).read_text())

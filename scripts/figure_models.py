@@ -1,15 +1,12 @@
 """Rule figure_models: paper figures 14 (Dahl) and 15 (LuGre) for one configuration."""
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow import figures
-from workflow.logs import setup_script_logging
-from workflow.modelling import model_curve_frames
-from workflow.tables import read_table
+from workflow.io.tables import read_table
+from workflow.models.paper import model_curve_frames
+from workflow.outputs import figures
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_models")
 configuration = snakemake.wildcards.configuration
@@ -19,14 +16,21 @@ document = json.loads(Path(snakemake.input.fit).read_text())
 # the simulated curves only where they are compared with data (their ends carry the
 # simulation's own start-up and noise-floor effects)
 low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
-curves = {model: frame[frame["velocity_amplitude_in_s"].between(low, high)]
-          for model, frame in model_curve_frames(document).items()}
-for model, path, label in (("dahl", snakemake.output.dahl, "Dahl"), ("lugre", snakemake.output.lugre, "LuGre")):
+curves = {
+    model: frame[frame["velocity_amplitude_in_s"].between(low, high)]
+    for model, frame in model_curve_frames(document).items()
+}
+for model, path, label in (
+    ("dahl", snakemake.output.dahl, "Dahl"),
+    ("lugre", snakemake.output.lugre, "LuGre"),
+):
     fit = document["models"].get(model)
     if fit is None:
         title = f"{configuration}: {label} not fitted ({document.get('skipped', 'no fit')})"
         figures.save(figures.model_comparison(mine, {}, title=title), path)
         continue
-    title = (f"{configuration}: measured vs fitted {label} simulation\n"
-             f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)")
+    title = (
+        f"{configuration}: measured vs fitted {label} simulation\n"
+        f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)"
+    )
     figures.save(figures.model_comparison(mine, {f"{label} + ζ0 (fitted)": curves[model]}, title=title), path)

@@ -1,17 +1,15 @@
 """Rule figure_time_history: paper figure 9 for the first used run of the first configuration."""
 
-import sys
 from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
 
 import numpy as np
 
-from workflow import decay, figures
-from workflow.campaign import read_run, read_validated_campaign
-from workflow.logs import setup_script_logging
-from workflow.pipeline import analysis_window
-from workflow.tables import read_table
+from workflow.io.campaign import read_run, read_validated_campaign
+from workflow.io.tables import read_table
+from workflow.measured import decay
+from workflow.measured.runs import analysis_window
+from workflow.outputs import figures
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_time_history")
 campaign_dir = Path(snakemake.params.campaign)
@@ -25,8 +23,11 @@ if used.empty:
     all_used = runs[runs["status"] == "used"]
     if all_used.empty:
         raise SystemExit("no usable run in the campaign to show (see runs.parquet)")
-    log.warning("configuration %s has no usable run (see runs.parquet); figure 9 shows %s",
-                configuration, all_used.iloc[0]["configuration"])
+    log.warning(
+        "configuration %s has no usable run (see runs.parquet); figure 9 shows %s",
+        configuration,
+        all_used.iloc[0]["configuration"],
+    )
     configuration = all_used.iloc[0]["configuration"]
     used = all_used[all_used["configuration"] == configuration]
 modes = read_table(snakemake.input.modes).set_index("configuration")

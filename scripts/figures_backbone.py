@@ -1,18 +1,15 @@
 """Rule figures_backbone: damped frequency vs velocity amplitude of every configuration."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow import figures
-from workflow.logs import setup_script_logging
-from workflow.tables import read_table
+from workflow.io.tables import read_table
+from workflow.outputs import figures
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_backbone")
 segments = read_table(snakemake.input.segments)
 for configuration, path in zip(snakemake.params.configurations, snakemake.output.backbones, strict=True):
     mine = segments[segments["configuration"] == configuration]
-    figure = figures.frequency_vs_amplitude(mine, title=f"{configuration}: backbone (frequency vs velocity amplitude)")
+    figure = figures.frequency_vs_amplitude(
+        mine, title=f"{configuration}: backbone (frequency vs velocity amplitude)"
+    )
     figures.save(figure, path)
     log.info("%s: %d segments plotted", configuration, len(mine))

@@ -1,15 +1,10 @@
 """Rule figures_damping: paper figures 10-12 (damping vs velocity amplitude, one per
 configuration) and paper figure 13 (damping fits against bearing area)."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow import figures
-from workflow.campaign import read_validated_campaign
-from workflow.logs import setup_script_logging
-from workflow.tables import read_table
+from workflow.io.campaign import read_validated_campaign
+from workflow.io.tables import read_table
+from workflow.outputs import figures
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_damping")
 segments = read_table(snakemake.input.segments)

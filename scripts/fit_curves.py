@@ -1,14 +1,9 @@
 """Rule fit_curves: damping polynomial fits, bootstrap bands, hypotheses, area fits."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.campaign import read_validated_campaign
-from workflow.logs import setup_script_logging
-from workflow.pipeline import fit_damping_curves
-from workflow.tables import read_table, write_table
+from workflow.io.campaign import read_validated_campaign
+from workflow.io.tables import read_table, write_table
+from workflow.measured.runs import fit_damping_curves
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_curves")
 campaign = read_validated_campaign(snakemake.input.campaign_settings)
@@ -18,5 +13,12 @@ tables = fit_damping_curves(segments, areas, **snakemake.params.fits)
 for name in ("fits", "curves", "hypotheses", "area"):
     write_table(tables[name], snakemake.output[name])
 for row in tables["hypotheses"].itertuples():
-    log.info("%s [%s]: %s (%.4g, CI %.4g..%.4g)", row.hypothesis, row.configuration, row.verdict,
-             row.estimate, row.ci_low, row.ci_high)
+    log.info(
+        "%s [%s]: %s (%.4g, CI %.4g..%.4g)",
+        row.hypothesis,
+        row.configuration,
+        row.verdict,
+        row.estimate,
+        row.ci_low,
+        row.ci_high,
+    )

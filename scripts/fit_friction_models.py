@@ -1,15 +1,14 @@
 """Rule fit_friction_models: Dahl and LuGre (plus zeta0 and the linear frequency)
 fitted to one configuration's measured damping and frequency curves."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.campaign import read_validated_campaign
-from workflow.logs import setup_script_logging
-from workflow.modelling import MIN_SEGMENTS_TO_FIT, choose_modal_coordinate, fit_configuration
-from workflow.tables import read_table, write_json
+from workflow.io.campaign import read_validated_campaign
+from workflow.io.tables import read_table, write_json
+from workflow.models.paper import (
+    MIN_SEGMENTS_TO_FIT,
+    choose_modal_coordinate,
+    fit_configuration,
+)
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_friction_models")
 configuration = snakemake.wildcards.configuration
@@ -20,8 +19,11 @@ mine = segments[segments["configuration"] == configuration]
 
 if len(mine) < MIN_SEGMENTS_TO_FIT:
     # a configuration whose runs were all excluded: the others still get their fits
-    document = {"models": {}, "skipped": f"only {len(mine)} usable segments "
-                f"(at least {MIN_SEGMENTS_TO_FIT} needed to fit); see runs.parquet"}
+    document = {
+        "models": {},
+        "skipped": f"only {len(mine)} usable segments "
+        f"(at least {MIN_SEGMENTS_TO_FIT} needed to fit); see runs.parquet",
+    }
     log.warning("%s: models not fitted: %s", configuration, document["skipped"])
 else:
     areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
@@ -44,6 +46,13 @@ else:
         seed=settings["seed"],
     )
     for model, fit in document["models"].items():
-        log.info("%s %s: rms ln zeta %.3f, rms rel f %.2e, %d ring-downs, %s", configuration, model,
-                 fit["rms_log_zeta"], fit["rms_rel_frequency"], fit["n_simulations"], fit["params"])
+        log.info(
+            "%s %s: rms ln zeta %.3f, rms rel f %.2e, %d ring-downs, %s",
+            configuration,
+            model,
+            fit["rms_log_zeta"],
+            fit["rms_rel_frequency"],
+            fit["n_simulations"],
+            fit["params"],
+        )
 write_json(snakemake.output[0], {"configuration": configuration, **document})

@@ -1,15 +1,12 @@
 """Rule identify_mode: first-mode frequency and analysis band of one configuration."""
 
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.campaign import list_runs, read_validated_campaign
-from workflow.config import QualitySettings
-from workflow.logs import setup_script_logging
-from workflow.pipeline import analysis_window, identify_mode, read_and_check
-from workflow.tables import write_json
+from workflow.io.campaign import list_runs, read_validated_campaign
+from workflow.io.settings import QualitySettings
+from workflow.io.tables import write_json
+from workflow.measured.runs import analysis_window, identify_mode, read_and_check
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "identify_mode")
 configuration = snakemake.wildcards.configuration
@@ -22,9 +19,7 @@ records, windows, skipped = [], [], {}
 for run_file in list_runs(campaign_dir, campaign):
     if run_file.configuration != configuration:
         continue
-    record, problems = read_and_check(
-        campaign_dir, run_file.path, campaign, quality_settings
-    )
+    record, problems = read_and_check(campaign_dir, run_file.path, campaign, quality_settings)
     if problems:
         skipped[run_file.run] = problems
         log.warning("mode search skips %s: %s", run_file.path, "; ".join(problems))
@@ -44,10 +39,15 @@ try:
         min_mode_prominence=quality_settings.min_mode_prominence,
     )
     document = {**mode.to_dict(), "skipped_runs": skipped}
-    log.info("configuration %s: mode %.3f Hz (%s), band %s", configuration, mode.mode_hz, mode.method, mode.band_hz)
+    log.info(
+        "configuration %s: mode %.3f Hz (%s), band %s", configuration, mode.mode_hz, mode.method, mode.band_hz
+    )
 except ValueError as error:
     # Every run of this configuration then gets excluded with this reason;
     # the other configurations go on.
-    document = {"error": f"configuration {configuration}: first mode not found: {error}", "skipped_runs": skipped}
+    document = {
+        "error": f"configuration {configuration}: first mode not found: {error}",
+        "skipped_runs": skipped,
+    }
     log.error(document["error"])
 write_json(snakemake.output[0], document)

@@ -1,12 +1,9 @@
 """Rule demo_campaign: the built-in campaign, measured in the virtual lab."""
 
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.logs import setup_script_logging
-from workflow.virtual_lab import generate_campaign
+from workflow.lab.virtual_lab import generate_campaign
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "demo_campaign")
 out_dir = Path(snakemake.output.campaign_yaml).parent

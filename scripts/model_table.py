@@ -1,14 +1,11 @@
 """Rule model_table: fitted friction-model parameters of every configuration, one table."""
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.logs import setup_script_logging
-from workflow.modelling import fit_table
-from workflow.tables import write_table
+from workflow.io.tables import write_table
+from workflow.models.paper import fit_table
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "model_table")
 documents = {}

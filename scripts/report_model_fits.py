@@ -1,13 +1,8 @@
 """Rule report_model_fits: the Dahl and LuGre parameters as a readable HTML table."""
 
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow.logs import setup_script_logging
-from workflow.report import model_fits_html
-from workflow.tables import atomic_write_bytes, read_table
+from workflow.io.tables import atomic_write_bytes, read_table
+from workflow.outputs.report import model_fits_html
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "report_model_fits")
 fits = read_table(snakemake.input[0])

@@ -1,14 +1,11 @@
 """Rule report_summary: the report's first page (the verdict) and its tables as HTML."""
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(snakemake.scriptdir).parent))
-
-from workflow import report
-from workflow.logs import setup_script_logging
-from workflow.tables import atomic_write_bytes, read_table
+from workflow.io.tables import atomic_write_bytes, read_table
+from workflow.outputs import report
+from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "report_summary")
 document = json.loads(Path(snakemake.input.diagnosis).read_text())
@@ -29,7 +26,9 @@ pages = {
 for name, text in pages.items():
     atomic_write_bytes(snakemake.output[name], text.encode())
 # the report's first page: the verdict, then report/workflow.rst (see rules/report.smk)
-landing = report.landing_rst(report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
-                             Path(snakemake.input.description).read_text())
+landing = report.landing_rst(
+    report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
+    Path(snakemake.input.description).read_text(),
+)
 atomic_write_bytes(snakemake.output.landing, landing.encode())
 log.info("verdict %s; %d pages written", document.get("cause"), len(pages))

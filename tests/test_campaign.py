@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflow.campaign import (
+from workflow.io.campaign import (
     MIN_SAMPLES,
     CampaignFormatError,
     RunFile,
@@ -112,7 +112,12 @@ configurations:
     assert campaign.force.unit == "lbf"
 
 
-@pytest.mark.parametrize("text", [YAML_FORCE, YAML_NO_FORCE, """\
+@pytest.mark.parametrize(
+    "text",
+    [
+        YAML_FORCE,
+        YAML_NO_FORCE,
+        """\
 name: 2004
 pretrigger_samples: 25
 band_hz: [100, 150]
@@ -120,7 +125,9 @@ response: {quantity: velocity, unit: "IN/S"}
 force: {unit: newton}
 configurations:
   a: {bearing_area_in2: 0.17, window_s: [0.5, 3.0]}
-"""])
+""",
+    ],
+)
 def test_validated_campaign_survives_its_json_copy(tmp_path, text):
     # Later jobs read campaign.yaml's validated JSON copy: it must give back the very
     # same campaign, including what is not a key (pretrigger_given) and the tuples.
@@ -145,10 +152,16 @@ def test_name_defaults_to_folder_and_bare_configuration(tmp_path):
 @pytest.mark.parametrize(
     ("text", "line", "words"),
     [
-        (YAML_NO_FORCE.replace("name: test", "name: test\nsampel_rate_hz: 2560"), 2,
-         ["sampel_rate_hz", "unknown key", "sample_rate_hz"]),
-        (YAML_NO_FORCE.replace("cfg: {}", "cfg: {bearing_area: 1.0}"), 4,
-         ["configurations.cfg.bearing_area", "unknown key", "bearing_area_in2"]),
+        (
+            YAML_NO_FORCE.replace("name: test", "name: test\nsampel_rate_hz: 2560"),
+            2,
+            ["sampel_rate_hz", "unknown key", "sample_rate_hz"],
+        ),
+        (
+            YAML_NO_FORCE.replace("cfg: {}", "cfg: {bearing_area: 1.0}"),
+            4,
+            ["configurations.cfg.bearing_area", "unknown key", "bearing_area_in2"],
+        ),
         (YAML_NO_FORCE.replace("unit: g}", "unit: g, units: g}"), 2, ["response.units", "unknown key"]),
         (YAML_NO_FORCE.replace("unit: g", "unit: m/s"), 2, ["response", "'m/s'", "acceleration"]),
         (YAML_NO_FORCE.replace("acceleration", "jerk"), 2, ["response.quantity"]),
@@ -197,12 +210,14 @@ def test_error_survives_pickling():
 
 
 def test_list_runs_orders_and_paths(tmp_path):
-    yaml_text = YAML_NO_FORCE.replace(
-        "  cfg: {}", '  zeta: {files: "z/**/*.txt"}\n  alpha: {}'
-    )
+    yaml_text = YAML_NO_FORCE.replace("  cfg: {}", '  zeta: {files: "z/**/*.txt"}\n  alpha: {}')
     files = {
-        "z/b.txt": "", "z/sub/a.txt": "", "alpha/run10.txt": "", "alpha/run02.txt": "",
-        "alpha/._run01.txt": "", "alpha/notes.csv": "",
+        "z/b.txt": "",
+        "z/sub/a.txt": "",
+        "alpha/run10.txt": "",
+        "alpha/run02.txt": "",
+        "alpha/._run01.txt": "",
+        "alpha/notes.csv": "",
     }
     campaign = write_campaign(tmp_path, yaml_text, files)
     runs = list_runs(tmp_path, campaign)
@@ -276,7 +291,9 @@ def test_sample_rate_header_forms(tmp_path, line):
 
 def test_pretrigger_in_milliseconds(tmp_path):
     _, _, response = signals()
-    record = read_one(tmp_path, "Sample rate: 2560 Hz\nPre-trigger: 10 ms\n" + table((response,)), YAML_NO_FORCE)
+    record = read_one(
+        tmp_path, "Sample rate: 2560 Hz\nPre-trigger: 10 ms\n" + table((response,)), YAML_NO_FORCE
+    )
     assert record.pretrigger_samples == round(0.010 * 2560)
 
 
@@ -374,7 +391,7 @@ def test_raw_file_is_not_modified_and_may_be_read_only(tmp_path):
 
 def _rows(n=N, ncols=3):
     t, force, response = signals(n)
-    return table((t, force, response)[3 - ncols:]).splitlines()
+    return table((t, force, response)[3 - ncols :]).splitlines()
 
 
 def _replace_row(rows, index, new):
@@ -404,7 +421,11 @@ def _replace_row(rows, index, new):
         (lambda: _replace_row(_rows(), 0, "0.0\tx\t0.1"), 1, ["non-numeric", "'x'"]),
         (lambda: _replace_row(_rows(), 0, "nan\t0.0\t0.1"), 1, ["NaN/inf"]),
         (lambda: _replace_row(_rows(), 0, "0.0,0.0\t0.1"), 1, ["mixed delimiters"]),
-        (lambda: "Time\tForce\tAcc\n" + _replace_row(_rows(ncols=3), 0, "zz"), 2, ["unexpected text", "line 1"]),
+        (
+            lambda: "Time\tForce\tAcc\n" + _replace_row(_rows(ncols=3), 0, "zz"),
+            2,
+            ["unexpected text", "line 1"],
+        ),
         (lambda: "\n".join(_rows(MIN_SAMPLES - 1)) + "\n", MIN_SAMPLES - 1, ["only 255 samples", "256"]),
         (lambda: "\x00\x01binary", 1, ["binary"]),
     ],
@@ -420,7 +441,9 @@ def test_malformed_run_files_name_file_line_and_problem(tmp_path, make_text, lin
 def test_time_not_increasing(tmp_path):
     t, force, response = signals()
     t[50] = t[49]
-    error = format_error(tmp_path, "Time (s)\tForce (lbf)\tAcceleration (g)\n" + table((t, force, response)), YAML_NO_FORCE)
+    error = format_error(
+        tmp_path, "Time (s)\tForce (lbf)\tAcceleration (g)\n" + table((t, force, response)), YAML_NO_FORCE
+    )
     assert error.line == 52 and "not increasing" in error.problem
 
 
@@ -489,7 +512,9 @@ def test_unreadable_header_values(tmp_path):
 
 def test_response_unit_disagrees_with_campaign_yaml(tmp_path):
     t, _, response = signals()
-    error = format_error(tmp_path, "Head\nTime (s)\tAcceleration (m/s^2)\n" + table((t, response)), YAML_NO_FORCE)
+    error = format_error(
+        tmp_path, "Head\nTime (s)\tAcceleration (m/s^2)\n" + table((t, response)), YAML_NO_FORCE
+    )
     assert error.line == 2 and "'m/s^2'" in error.problem and "'g'" in error.problem
 
 

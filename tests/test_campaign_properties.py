@@ -15,11 +15,9 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from workflow.campaign import MIN_SAMPLES, CampaignFormatError, load_campaign, read_run
+from workflow.io.campaign import MIN_SAMPLES, CampaignFormatError, load_campaign, read_run
 
-SETTINGS = settings(
-    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow]
-)
+SETTINGS = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 ROLE_NAMES = {"time": "Time (s)", "force": "Force (lbf)", "response": "Acceleration (g)"}
 
@@ -102,9 +100,7 @@ def render(d: Dialect):
     if d.header in ("names", "both", "title_names"):
         header.append(d.delimiter.join(ROLE_NAMES[role] for role in d.roles))
     columns = make_columns(d)
-    rows = [
-        [format_cell(v, role, d) for v, role in zip(values, d.roles)] for values in zip(*columns)
-    ]
+    rows = [[format_cell(v, role, d) for v, role in zip(values, d.roles)] for values in zip(*columns)]
     return header, rows, columns
 
 
@@ -236,7 +232,7 @@ def test_arbitrary_text_gives_a_record_or_a_format_error(junk, position, in_head
         return
     if in_header or position == 0:
         # Text before the numbers is header; numeric-looking lines there start the data.
-        assert np.array_equal(record.response[-printed.size:], printed)
+        assert np.array_equal(record.response[-printed.size :], printed)
     else:
         # Inside the numbers, junk is accepted only when every line of it is a number
         # (or blank at the very end): then it is data, in place.

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from workflow.config import ConfigError, WorkflowConfig, validate_config
+from workflow.io.settings import ConfigError, WorkflowConfig, validate_config
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 
-from workflow import contact
+from workflow.models import contact
 
 
 def _cycle(amplitude, n=4000):
@@ -27,7 +27,7 @@ def test_jenkins_time_domain_matches_closed_form(amplitude):
     x, theta = _cycle(amplitude)
     # two cycles: the first reaches the steady loop, the second is measured
     x2 = np.concatenate([x, x[1:]])
-    force = _drive_jenkins(x2, k, fs)[x.size - 1:]
+    force = _drive_jenkins(x2, k, fs)[x.size - 1 :]
     work = np.sum(0.5 * (force[1:] + force[:-1]) * np.diff(x))
     expected = contact.jenkins_dissipation_per_cycle(amplitude, k, fs)
     # trapezoid loop integration error is far below 0.5 % with 4000 steps
@@ -87,8 +87,7 @@ def test_dahl_dissipation_formula_by_time_integration():
             force[i] = contact.dahl_force_update(force[i - 1], x[i] - x[i - 1], sigma, fc)
         last = slice(14 * n, 15 * n + 1)
         work = np.sum(0.5 * (force[last][1:] + force[last][:-1]) * np.diff(x[last]))
-        assert work == pytest.approx(contact.dahl_dissipation_per_cycle(amplitude, sigma, fc),
-                                     rel=2e-3)
+        assert work == pytest.approx(contact.dahl_dissipation_per_cycle(amplitude, sigma, fc), rel=2e-3)
         # loop saturates at +-Fc and never exceeds it
         assert np.max(np.abs(force)) <= fc * (1 + 1e-12)
         assert np.max(force[last]) == pytest.approx(fc * np.tanh(sigma * amplitude / fc), rel=1e-3)
@@ -96,12 +95,13 @@ def test_dahl_dissipation_formula_by_time_integration():
 
 def test_dahl_ode_and_secant_stiffness():
     sigma, fc, amplitude, omega = 50.0, 2.0, 0.3, 2 * np.pi
+
     def rhs(t, z):
         v = -amplitude * omega * np.sin(omega * t)
         return [v - sigma * abs(v) / fc * z[0]]
+
     t = np.linspace(0, 4, 8001)
-    sol = scipy.integrate.solve_ivp(rhs, (0, 4), [0.0], t_eval=t, rtol=1e-10, atol=1e-12,
-                                    max_step=1e-3)
+    sol = scipy.integrate.solve_ivp(rhs, (0, 4), [0.0], t_eval=t, rtol=1e-10, atol=1e-12, max_step=1e-3)
     f = sigma * sol.y[0]
     last = t >= 3
     theta = omega * t[last]
@@ -119,9 +119,9 @@ def test_micro_slip_power_law_and_area_ordering():
     for area in (1.36, 0.66, 0.17):
         jm = contact.joint_first_mode(area, params)
         a = v / (abs(jm.mode.accelerometer_participation) * jm.omega_rad_s)
-        d, loss = contact.patch_describing_function(a, jm.slip_per_xi,
-                                                    jm.patches.stiffness_lbf_in,
-                                                    jm.patches.slip_force_lbf)
+        d, loss = contact.patch_describing_function(
+            a, jm.slip_per_xi, jm.patches.stiffness_lbf_in, jm.patches.slip_force_lbf
+        )
         assert np.all(d >= 0) and np.all(loss >= 0)
         zeta[area], omega = contact.equivalent_damping(a, jm.omega_rad_s, 0.0, d, loss)
         if area == 1.36:

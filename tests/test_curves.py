@@ -1,4 +1,4 @@
-"""Tests of workflow.curves against data generated from a known truth.
+"""Tests of workflow.measured.curves against data generated from a known truth.
 
 Synthetic ring-down segments: every run covers roughly 0.03-5 in/s (log10 v
 from about -1.5 to 0.65) with evenly spaced segments, and its damping ratios are
@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow import curves
+from workflow.measured import curves
 
 SD_RUN = 3e-4
 SD_NOISE = 4e-4
@@ -150,9 +150,7 @@ def test_linear_amplitude_option_fits_against_velocity():
     rng = np.random.default_rng(4)
     amplitude = np.tile(np.linspace(0.1, 3.0, 20), 3)
     zeta = 0.002 + 0.001 * amplitude + rng.normal(0, 1e-5, amplitude.size)
-    fit = curves.fit_damping_polynomial(
-        amplitude, zeta, np.repeat(["a", "b", "c"], 20), log_amplitude=False
-    )
+    fit = curves.fit_damping_polynomial(amplitude, zeta, np.repeat(["a", "b", "c"], 20), log_amplitude=False)
     assert fit.x_transform == "identity" and fit.degree == 1
     # slope se ~ 1e-5 / (0.86 in/s * sqrt(60)) ~ 1.5e-6; 1e-5 is > 6 se
     np.testing.assert_allclose(fit.coefficients, [0.001, 0.002], atol=1e-5)
@@ -231,9 +229,7 @@ def test_h1_supported_on_rising_data():
 
 
 def test_h1_contradicted_on_falling_data():
-    row = curves.amplitude_hypothesis(
-        *synthetic_segments(np.random.default_rng(22), -RISING + 0.012)
-    ).iloc[0]
+    row = curves.amplitude_hypothesis(*synthetic_segments(np.random.default_rng(22), -RISING + 0.012)).iloc[0]
     assert not row.supported and row.verdict == "contradicted"
 
 
@@ -254,9 +250,9 @@ def test_h1_inconclusive_on_flat_data_at_about_the_nominal_rate():
 
 
 def test_h1_with_one_run_is_inconclusive():
-    row = curves.amplitude_hypothesis(
-        *synthetic_segments(np.random.default_rng(23), RISING, n_runs=1)
-    ).iloc[0]
+    row = curves.amplitude_hypothesis(*synthetic_segments(np.random.default_rng(23), RISING, n_runs=1)).iloc[
+        0
+    ]
     assert row.verdict == "inconclusive" and np.isnan(row.ci_low)
     assert "two runs" in row.note
 
@@ -267,9 +263,7 @@ def test_h1_with_one_run_is_inconclusive():
 def _configurations(rng, slope_per_in2, areas=AREAS_IN2, n_runs=8):
     """Data of three configurations whose damping shifts by slope * area."""
     return {
-        name: synthetic_segments(
-            rng, RISING + np.array([0.0, 0.0, slope_per_in2 * area]), n_runs=n_runs
-        )
+        name: synthetic_segments(rng, RISING + np.array([0.0, 0.0, slope_per_in2 * area]), n_runs=n_runs)
         for name, area in areas.items()
     }
 
@@ -311,9 +305,7 @@ def test_h2_needs_two_configurations_with_areas():
 def test_hypothesis_tests_from_a_segments_table():
     data = _configurations(np.random.default_rng(35), 0.001)
     frames = [
-        pd.DataFrame(
-            {"configuration": name, "run": d[2], "velocity_amplitude_in_s": d[0], "zeta": d[1]}
-        )
+        pd.DataFrame({"configuration": name, "run": d[2], "velocity_amplitude_in_s": d[0], "zeta": d[1]})
         for name, d in data.items()
     ]
     table = curves.hypothesis_tests(pd.concat(frames), AREAS_IN2, n_boot=100)
@@ -329,9 +321,7 @@ def test_hypothesis_tests_from_a_segments_table():
 def _exact_fit(coefficients, log_range):
     """Fit to noise-free data: recovers ``coefficients`` to rounding."""
     x = np.linspace(*log_range, 30)
-    return curves.fit_damping_polynomial(
-        10.0**x, np.polyval(coefficients, x), np.repeat(["a", "b", "c"], 10)
-    )
+    return curves.fit_damping_polynomial(10.0**x, np.polyval(coefficients, x), np.repeat(["a", "b", "c"], 10))
 
 
 def test_area_surface_rows_by_area_and_nan_outside_each_range():
@@ -351,10 +341,7 @@ def test_area_surface_rows_by_area_and_nan_outside_each_range():
 
 def test_damping_vs_area_recovers_a_linear_area_law():
     # truth: zeta = 0.002 + 0.003 * area + 0.001 * log10 v, exactly linear in area
-    fits = {
-        name: _exact_fit([0.001, 0.002 + 0.003 * area], (-1.5, 0.5))
-        for name, area in AREAS_IN2.items()
-    }
+    fits = {name: _exact_fit([0.001, 0.002 + 0.003 * area], (-1.5, 0.5)) for name, area in AREAS_IN2.items()}
     amplitude = np.array([0.05, 0.5, 2.0])
     area_grid = np.array([0.1, 0.17, 0.4, 1.0, 1.36, 2.0])
     zeta = curves.damping_vs_area(fits, AREAS_IN2, amplitude, area_grid)
@@ -362,9 +349,7 @@ def test_damping_vs_area_recovers_a_linear_area_law():
     inside = (area_grid >= 0.17) & (area_grid <= 1.36)
     np.testing.assert_allclose(zeta[inside], expected[inside], atol=1e-10)
     assert np.all(np.isnan(zeta[~inside]))
-    extrapolated = curves.damping_vs_area(
-        fits, AREAS_IN2, amplitude, area_grid, extrapolate_area=True
-    )
+    extrapolated = curves.damping_vs_area(fits, AREAS_IN2, amplitude, area_grid, extrapolate_area=True)
     np.testing.assert_allclose(extrapolated, expected, atol=1e-10)
 
 

@@ -1,11 +1,11 @@
-"""Accuracy tests of workflow.decay on ring-downs with known damping and frequency."""
+"""Accuracy tests of workflow.measured.decay on ring-downs with known damping and frequency."""
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from workflow import decay
-from workflow.decay import (
+from workflow.measured import decay
+from workflow.measured.decay import (
     analyse_decay,
     analytic_signal,
     bandpass,
@@ -149,7 +149,9 @@ def test_edge_and_noise_rules_follow_their_definitions():
     edge = 3.0 * result.time_constant_s * fs_hz
     reasons = seg["reject_reason"]
     has = np.vectorize(lambda text, code: code in text.split(","))
-    np.testing.assert_array_equal(has(reasons, "excitation_edge"), seg["start_index"] < result.start_index + edge)
+    np.testing.assert_array_equal(
+        has(reasons, "excitation_edge"), seg["start_index"] < result.start_index + edge
+    )
     np.testing.assert_array_equal(has(reasons, "record_end"), seg["stop_index"] > x.size - edge)
     np.testing.assert_array_equal(has(reasons, "noise_floor"), seg["min_envelope"] < 10 * result.noise_floor)
     np.testing.assert_array_equal(seg["kept"], reasons == "")
@@ -227,9 +229,11 @@ def test_amplitude_dependent_damping_and_frequency_are_recovered():
 
 # --- the NumPy-only filter against scipy.signal's forward-backward Butterworth -------
 
-@pytest.mark.parametrize("fs_hz, band_hz, order", [(2560.0, (100.0, 150.0), 10),
-                                                  (1024.0, (15.0, 22.0), 10),
-                                                  (51200.0, (120.0, 180.0), 6)])
+
+@pytest.mark.parametrize(
+    "fs_hz, band_hz, order",
+    [(2560.0, (100.0, 150.0), 10), (1024.0, (15.0, 22.0), 10), (51200.0, (120.0, 180.0), 6)],
+)
 def test_power_response_matches_scipy_butter_squared(fs_hz, band_hz, order):
     from scipy import signal as sp_signal
 
@@ -270,7 +274,6 @@ def test_per_run_analysis_does_not_import_scipy_signal():
     import subprocess
     import sys
 
-    code = ("import sys, workflow.decay, workflow.pipeline; "
-            "print('scipy.signal' in sys.modules)")
+    code = "import sys, workflow.measured.decay, workflow.measured.runs; print('scipy.signal' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -4,18 +4,20 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from workflow import describing as dsc
-from workflow import friction
+from workflow.models import averaged as dsc
+from workflow.models import friction
 
 
 def _loop_averages(model, params, amplitude, frequency_hz=10.0, points=4000):
     """Dissipation and in-phase first harmonic of a directly integrated steady loop."""
-    x, force = friction.hysteresis_loop(model, params, amplitude, frequency_hz=frequency_hz,
-                                        cycles=4, points_per_cycle=points)
+    x, force = friction.hysteresis_loop(
+        model, params, amplitude, frequency_hz=frequency_hz, cycles=4, points_per_cycle=points
+    )
     d = friction.loop_dissipation(x, force, points)
-    f = np.asarray(force)[..., -(points + 1):-1]
+    f = np.asarray(force)[..., -(points + 1) : -1]
     phase = 2 * np.pi * np.arange(points) / points  # x = A sin(phase)
     k1 = 2.0 / points * np.sum(f * np.sin(phase), axis=-1) / amplitude
     return d, k1
@@ -37,7 +39,7 @@ def test_dahl_small_and_large_amplitude_limits():
     av = dsc.dahl_averages(y)
     assert av.dissipation[0] == pytest.approx(4 * y[0] ** 3 / 3, rel=1e-6)
     assert av.dissipation[1] == pytest.approx(av.dissipation[2], rel=1e-2)  # series/exact join
-    assert av.dissipation[3] == pytest.approx(4 * (50 - 1), rel=1e-9)       # Coulomb 4 Fc A
+    assert av.dissipation[3] == pytest.approx(4 * (50 - 1), rel=1e-9)  # Coulomb 4 Fc A
     assert av.inphase[0] == pytest.approx(1.0, abs=1e-6)
     # macro-slip: Coulomb friction has no in-phase part; Dahl's decays like y^-3/2
     assert av.inphase[3] == pytest.approx(4 / (50 * np.sqrt(2 * np.pi * 50)), rel=2e-2)
@@ -58,11 +60,17 @@ def test_lugre_steady_cycle_matches_direct_integration(y, velocity_ratio):
     amplitude = y * alpha0 / sigma0
     v0 = amplitude * 2 * np.pi * frequency / velocity_ratio
     sigma1 = 0.3 * sigma0 / (2 * np.pi * frequency)
-    params = {"sigma0": sigma0, "sigma1": sigma1, "alpha0": alpha0, "alpha1": 0.7 * alpha0,
-              "alpha2": 0.0, "v0": v0, "vd": v0}
+    params = {
+        "sigma0": sigma0,
+        "sigma1": sigma1,
+        "alpha0": alpha0,
+        "alpha1": 0.7 * alpha0,
+        "alpha2": 0.0,
+        "v0": v0,
+        "vd": v0,
+    }
     d, k1 = _loop_averages("lugre", params, amplitude, frequency_hz=frequency)
-    av = dsc.lugre_averages(y, velocity_ratio, 0.7, sigma1 * 2 * np.pi * frequency / sigma0,
-                            n_steps=400)
+    av = dsc.lugre_averages(y, velocity_ratio, 0.7, sigma1 * 2 * np.pi * frequency / sigma0, n_steps=400)
     assert av.dissipation == pytest.approx(d / (alpha0**2 / sigma0), rel=5e-3)
     assert av.inphase == pytest.approx(k1 / sigma0, rel=5e-3, abs=2e-4)
 
@@ -105,8 +113,11 @@ def test_iwan_tip_energy_slope_is_the_derivative_of_the_stored_energy():
     s = beta / (1 + beta)
     m = np.minimum(x, 1.0)
     # stored energy at the tip: stuck elements x^2/2, slipped ones t^2/2 (at their limit)
-    energy = (0.5 * x**2 * (r * (1 - m ** (chi + 1)) / (chi + 1) + np.where(x <= 1, s, 0.0))
-              + 0.5 * r * m ** (chi + 3) / (chi + 3) + np.where(x > 1, 0.5 * s, 0.0))
+    energy = (
+        0.5 * x**2 * (r * (1 - m ** (chi + 1)) / (chi + 1) + np.where(x <= 1, s, 0.0))
+        + 0.5 * r * m ** (chi + 3) / (chi + 3)
+        + np.where(x > 1, 0.5 * s, 0.0)
+    )
     slope = dsc.iwan_averages(x, chi, beta).tip_energy_slope
     smooth = np.abs(x - 1.0) > 0.02  # the slope jumps at macro-slip onset (x = 1)
     smooth[[0, -1]] = False
@@ -114,13 +125,12 @@ def test_iwan_tip_energy_slope_is_the_derivative_of_the_stored_energy():
 
 
 def test_power_stiffness_harmonic_factor():
-    assert dsc.power_stiffness_harmonic_factor(2.0) == pytest.approx(0.75)   # cubic spring
-    assert dsc.power_stiffness_harmonic_factor(0.0) == pytest.approx(1.0)    # linear spring
+    assert dsc.power_stiffness_harmonic_factor(2.0) == pytest.approx(0.75)  # cubic spring
+    assert dsc.power_stiffness_harmonic_factor(0.0) == pytest.approx(1.0)  # linear spring
 
 
 # ------------------------------------------------------------ direct integration
-def _simulate_dahl_oscillator(f_lin, zeta0, beta, v_slip, quadratic, y0, duration=1.5,
-                              fs=20000.0, sub=5):
+def _simulate_dahl_oscillator(f_lin, zeta0, beta, v_slip, quadratic, y0, duration=1.5, fs=20000.0, sub=5):
     """RK4 of xi'' + c xi' + k_nj xi + sigma z + c2 xi'|xi'| = 0, Dahl z (phi = psi = 1).
 
     Returns time, displacement and acceleration sampled at ``fs``.
@@ -181,8 +191,13 @@ def test_averaged_dahl_model_matches_direct_integration_of_the_ringdown(beta, qu
     f_lin, zeta0, v_slip = 125.0, 0.001, 0.8
     t, x, acc = _simulate_dahl_oscillator(f_lin, zeta0, beta, v_slip, quadratic, y0=30)
     velocity, zeta, freq = _log_decrement(t, x, acc)
-    params = {"f_lin_hz": f_lin, "zeta0": zeta0, "joint_stiffness_fraction": beta,
-              "slip_velocity_in_s": v_slip, "quadratic_zeta_per_in_s": max(quadratic, 1e-12)}
+    params = {
+        "f_lin_hz": f_lin,
+        "zeta0": zeta0,
+        "joint_stiffness_fraction": beta,
+        "slip_velocity_in_s": v_slip,
+        "quadratic_zeta_per_in_s": max(quadratic, 1e-12),
+    }
     model_zeta, model_f = dsc.model_curves("dahl_quadratic", params, velocity, response_order=2)
     assert velocity.max() > 10 * v_slip and velocity.min() < 0.2 * v_slip
     np.testing.assert_allclose(model_zeta, zeta, rtol=0.03)
@@ -190,8 +205,7 @@ def test_averaged_dahl_model_matches_direct_integration_of_the_ringdown(beta, qu
 
 
 def test_response_order_changes_the_envelope_decay_only_where_frequency_moves():
-    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.1,
-              "slip_velocity_in_s": 1.0}
+    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.1, "slip_velocity_in_s": 1.0}
     v = np.geomspace(0.01, 100, 50)
     z0, _ = dsc.model_curves("dahl", params, v, response_order=0)
     z2, _ = dsc.model_curves("dahl", params, v, response_order=2)
@@ -203,8 +217,7 @@ def test_response_order_changes_the_envelope_decay_only_where_frequency_moves():
 
 
 def test_drift_model_at_the_middle_run_is_dahl_and_shifts_the_slip_scale():
-    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05,
-              "slip_velocity_in_s": 1.0}
+    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05, "slip_velocity_in_s": 1.0}
     v = np.geomspace(0.05, 5, 30)
     runs = np.array([0, 1, 2])
     grid = dsc.CurveGrid(np.tile(v, 3), run_index=np.repeat(runs, v.size), n_runs=3)
@@ -213,13 +226,20 @@ def test_drift_model_at_the_middle_run_is_dahl_and_shifts_the_slip_scale():
     middle = slice(v.size, 2 * v.size)
     np.testing.assert_allclose(z_drift[middle], z_dahl[middle], rtol=1e-12)
     shifted = dsc.CurveGrid(v, grid_range=(v.min(), v.max()))(
-        "dahl", {**params, "slip_velocity_in_s": 1.0 * (1 + 0.6 * (2 - 1) / 3)})
-    np.testing.assert_allclose(z_drift[2 * v.size:], shifted[0], rtol=1e-9)
+        "dahl", {**params, "slip_velocity_in_s": 1.0 * (1 + 0.6 * (2 - 1) / 3)}
+    )
+    np.testing.assert_allclose(z_drift[2 * v.size :], shifted[0], rtol=1e-9)
 
 
 def test_curve_grid_interpolation_is_accurate():
-    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05,
-              "slip_velocity_in_s": 0.3, "chi": -0.4, "macro_ratio": 0.2}
+    params = {
+        "f_lin_hz": 100.0,
+        "zeta0": 1e-3,
+        "joint_stiffness_fraction": 0.05,
+        "slip_velocity_in_s": 0.3,
+        "chi": -0.4,
+        "macro_ratio": 0.2,
+    }
     v = np.geomspace(0.01, 10, 333)
     z_fine, f_fine = dsc.model_curves_on_grid(dsc.MODELS["iwan"], params, v)
     z, f = dsc.CurveGrid(v)("iwan", params)
@@ -230,14 +250,17 @@ def test_curve_grid_interpolation_is_accurate():
 
 
 def test_stiffness_term_moves_frequency_not_damping():
-    params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.01,
-              "slip_velocity_in_s": 1.0, "reference_velocity_in_s": 1.0,
-              "stiffness_exponent": 2.0}
+    params = {
+        "f_lin_hz": 100.0,
+        "zeta0": 1e-3,
+        "joint_stiffness_fraction": 0.01,
+        "slip_velocity_in_s": 1.0,
+        "reference_velocity_in_s": 1.0,
+        "stiffness_exponent": 2.0,
+    }
     v = np.append(np.geomspace(0.01, 3, 40), 1.0)
-    z0, f0 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": 0.0}, v,
-                              response_order=0)
-    z1, f1 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": -0.02}, v,
-                              response_order=0)
+    z0, f0 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": 0.0}, v, response_order=0)
+    z1, f1 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": -0.02}, v, response_order=0)
     i = v.size - 1  # V = reference velocity
     # omega^2 changes by -2 % at the reference amplitude: f by about -1 %
     assert f1[i] / f0[i] - 1 == pytest.approx(-0.01, rel=0.05)

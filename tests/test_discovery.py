@@ -8,16 +8,25 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow import discovery as disc
-from workflow.describing import CurveGrid
+from workflow.discovery.diagnosis import diagnosis as disc
+from workflow.models.averaged import CurveGrid
 
 FAST = disc.FitSettings(global_samples=128, local_starts=2)
-DAHL = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01,
-        "slip_velocity_in_s": 1.5}
+DAHL = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01, "slip_velocity_in_s": 1.5}
 
 
-def synthetic_segments(model, params, *, seed, n_runs=8, configuration="c", area=1.0,
-                       noise_ln_zeta=0.015, noise_rel_f=3e-5, departure=None):
+def synthetic_segments(
+    model,
+    params,
+    *,
+    seed,
+    n_runs=8,
+    configuration="c",
+    area=1.0,
+    noise_ln_zeta=0.015,
+    noise_rel_f=3e-5,
+    departure=None,
+):
     """Segments of ``n_runs`` ring-downs from an averaged model, with scatter.
 
     Each run starts at a random amplitude (0.8-4 in/s) and decays over 1.3 decades;
@@ -33,13 +42,22 @@ def synthetic_segments(model, params, *, seed, n_runs=8, configuration="c", area
         zeta, freq = grid(model, params)
         zeta = zeta * np.exp(noise_ln_zeta * rng.standard_normal(v.size))
         freq = freq * (1 + noise_rel_f * rng.standard_normal(v.size))
-        fit_rms = (departure * 2 * np.pi * 10 * zeta if departure is not None
-                   else 2e-4 * v[0] / v)
-        rows.append(pd.DataFrame({
-            "configuration": configuration, "run": f"run{r + 1:02d}",
-            "t_s": np.arange(v.size) * 0.04, "response_amplitude": v * 2 * np.pi * freq / 386.0,
-            "velocity_amplitude_in_s": v, "zeta": zeta, "frequency_hz": freq,
-            "fit_rms": fit_rms, "bearing_area_in2": area}))
+        fit_rms = departure * 2 * np.pi * 10 * zeta if departure is not None else 2e-4 * v[0] / v
+        rows.append(
+            pd.DataFrame(
+                {
+                    "configuration": configuration,
+                    "run": f"run{r + 1:02d}",
+                    "t_s": np.arange(v.size) * 0.04,
+                    "response_amplitude": v * 2 * np.pi * freq / 386.0,
+                    "velocity_amplitude_in_s": v,
+                    "zeta": zeta,
+                    "frequency_hz": freq,
+                    "fit_rms": fit_rms,
+                    "bearing_area_in2": area,
+                }
+            )
+        )
     return pd.concat(rows, ignore_index=True)
 
 
@@ -66,12 +84,21 @@ def test_dahl_data_gives_none_with_unit_gain():
 
 EXTENDED = {
     "quadratic_damping": ("dahl_quadratic", {**DAHL, "quadratic_zeta_per_in_s": 8e-4}),
-    "stiffness_nonlinearity": ("dahl_stiffness", {**DAHL, "stiffness_shift": -0.01,
-                                                  "stiffness_exponent": 2.0,
-                                                  "reference_velocity_in_s": 3.0}),
+    "stiffness_nonlinearity": (
+        "dahl_stiffness",
+        {**DAHL, "stiffness_shift": -0.01, "stiffness_exponent": 2.0, "reference_velocity_in_s": 3.0},
+    ),
     "run_drift": ("dahl_drift", {**DAHL, "drift": -0.8}),
-    "microslip_power_law": ("iwan", {**DAHL, "slip_velocity_in_s": 20.0, "chi": -0.5,
-                                     "macro_ratio": 0.1, "joint_stiffness_fraction": 0.02}),
+    "microslip_power_law": (
+        "iwan",
+        {
+            **DAHL,
+            "slip_velocity_in_s": 20.0,
+            "chi": -0.5,
+            "macro_ratio": 0.1,
+            "joint_stiffness_fraction": 0.02,
+        },
+    ),
 }
 
 
@@ -99,8 +126,9 @@ def test_envelopes_that_are_not_decays_give_unknown():
 
 
 def test_single_run_uses_amplitude_blocks_and_still_decides():
-    segments = synthetic_segments("dahl_quadratic",
-                                  {**DAHL, "quadratic_zeta_per_in_s": 1.5e-3}, seed=11, n_runs=1)
+    segments = synthetic_segments(
+        "dahl_quadratic", {**DAHL, "quadratic_zeta_per_in_s": 1.5e-3}, seed=11, n_runs=1
+    )
     data = disc.prepare_configuration(segments, "c")
     folds = disc.folds_of(data, 5)
     assert sum(m.sum() for m in folds) == data.n
@@ -128,7 +156,6 @@ def test_scatter_estimate_recovers_the_noise():
     assert np.median(spread) == pytest.approx(0.03, rel=0.15)
 
 
-
 def test_scatter_within_runs_excludes_differences_between_runs():
     # Eight ring-downs of one curve, each shifted by its own level (a drift of 0.2 in
     # ln zeta over the sequence, 7x the noise): pooled, the shifts count as scatter;
@@ -137,21 +164,24 @@ def test_scatter_within_runs_excludes_differences_between_runs():
     rng = np.random.default_rng(6)
     runs = np.repeat(np.arange(8), 75)
     v = np.tile(np.geomspace(0.05, 5, 75), 8)
-    values = (np.log(1e-3 * (1 + v) ** 0.5) + 0.2 * runs / 7
-              + 0.03 * rng.standard_normal(v.size))
+    values = np.log(1e-3 * (1 + v) ** 0.5) + 0.2 * runs / 7 + 0.03 * rng.standard_normal(v.size)
     within = disc.estimate_scatter(v, values, runs=runs)
     pooled = disc.estimate_scatter(v, values)
     assert np.median(within) == pytest.approx(0.03, rel=0.15)
     assert np.median(pooled) > 1.5 * 0.03
 
+
 def _data_with_offset(offset, n_runs=6, seed=0):
     rng = np.random.default_rng(seed)
     v = np.tile(np.geomspace(0.1, 3, 30), n_runs)
     run = np.repeat(np.arange(n_runs), 30)
-    data = disc.ConfigurationData("c", v, np.full(v.size, 1e-3), np.full(v.size, 100.0), run,
-                                  [f"r{i}" for i in range(n_runs)], None)
-    res = {"ln_zeta": offset * (v > 1) + 0.01 * rng.standard_normal(v.size),
-           "rel_f": 1e-5 * rng.standard_normal(v.size)}
+    data = disc.ConfigurationData(
+        "c", v, np.full(v.size, 1e-3), np.full(v.size, 100.0), run, [f"r{i}" for i in range(n_runs)], None
+    )
+    res = {
+        "ln_zeta": offset * (v > 1) + 0.01 * rng.standard_normal(v.size),
+        "rel_f": 1e-5 * rng.standard_normal(v.size),
+    }
     return data, res
 
 
@@ -194,20 +224,25 @@ def test_decision_rule_branches():
 
 def test_campaign_verdict_rule():
     assert disc.campaign_verdict(["none", "none"], [1, 1]) == "none"
-    assert disc.campaign_verdict(["none", "run_drift", "run_drift", "unknown"], [1, .5, .6, .9]) \
+    assert (
+        disc.campaign_verdict(["none", "run_drift", "run_drift", "unknown"], [1, 0.5, 0.6, 0.9])
         == "run_drift"
+    )
     assert disc.campaign_verdict(["unknown", "run_drift"], [0.9, 0.5]) == "run_drift"
 
 
 def test_across_configurations_predicts_a_left_out_area():
     frames = []
     for i, area in enumerate([0.2, 0.6, 1.3]):
-        params = {**DAHL, "slip_velocity_in_s": 1.5 * area ** -0.8,
-                  "joint_stiffness_fraction": 0.01 * area ** 0.5}
-        frames.append(synthetic_segments("dahl", params, seed=20 + i, n_runs=5,
-                                         configuration=f"a{i}", area=area))
-    document = disc.diagnose_campaign(pd.concat(frames, ignore_index=True), "areas",
-                                      settings=FAST)
+        params = {
+            **DAHL,
+            "slip_velocity_in_s": 1.5 * area**-0.8,
+            "joint_stiffness_fraction": 0.01 * area**0.5,
+        }
+        frames.append(
+            synthetic_segments("dahl", params, seed=20 + i, n_runs=5, configuration=f"a{i}", area=area)
+        )
+    document = disc.diagnose_campaign(pd.concat(frames, ignore_index=True), "areas", settings=FAST)
     _strict_json(document)
     across = document["across_configurations"]
     assert across["applicable"]
@@ -217,5 +252,4 @@ def test_across_configurations_predicts_a_left_out_area():
     # the middle area is interpolated: its prediction is close to its own fit
     assert across["configurations"]["a1"]["baseline_error"] < 10.0
     two = pd.concat(frames[:2], ignore_index=True)
-    assert not disc.diagnose_campaign(two, "two", settings=FAST)["across_configurations"][
-        "applicable"]
+    assert not disc.diagnose_campaign(two, "two", settings=FAST)["across_configurations"]["applicable"]

@@ -10,16 +10,21 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow import discovery as disc
-from workflow import discovery_figures as dfig
-from workflow.figures import save
-from workflow.describing import CurveGrid, model_curves
-
 from tests.test_discovery import synthetic_segments
+from workflow.discovery.diagnosis import diagnosis as disc
+from workflow.models.averaged import CurveGrid, model_curves
+from workflow.outputs import discovery_figures as dfig
+from workflow.outputs.figures import save
 
 FAST = disc.FitSettings(global_samples=64, local_starts=2)
-IWAN = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01,
-        "slip_velocity_in_s": 6.0, "chi": -0.5, "macro_ratio": 0.1}
+IWAN = {
+    "f_lin_hz": 120.0,
+    "zeta0": 8e-4,
+    "joint_stiffness_fraction": 0.01,
+    "slip_velocity_in_s": 6.0,
+    "chi": -0.5,
+    "macro_ratio": 0.1,
+}
 
 
 @pytest.fixture(scope="module")
@@ -28,11 +33,11 @@ def diagnosis():
     frames = []
     for k, (name, area) in enumerate({"a": 1.3, "b": 0.9, "c": 0.6}.items()):
         params = dict(IWAN, slip_velocity_in_s=IWAN["slip_velocity_in_s"] * area)
-        frames.append(synthetic_segments("iwan", params, seed=10 + k, n_runs=4,
-                                         configuration=name, area=area))
+        frames.append(
+            synthetic_segments("iwan", params, seed=10 + k, n_runs=4, configuration=name, area=area)
+        )
     segments = pd.concat(frames, ignore_index=True)
-    document, details = disc.diagnose_campaign(segments, "figures", settings=FAST,
-                                               return_details=True)
+    document, details = disc.diagnose_campaign(segments, "figures", settings=FAST, return_details=True)
     return segments, document, details
 
 
@@ -46,8 +51,7 @@ def test_residual_table_has_one_row_per_segment_role_and_curve(diagnosis):
     for name, entry in document["configurations"].items():
         rows = table[table["configuration"] == name]
         assert set(rows.loc[rows["role"] == "baseline", "model"]) == {entry["baseline"]["model"]}
-        assert set(rows.loc[rows["role"] == "extended", "model"]) == {
-            entry["extended_model"]["model"]}
+        assert set(rows.loc[rows["role"] == "extended", "model"]) == {entry["extended_model"]["model"]}
     assert np.isfinite(table[["measured", "predicted", "scatter", "residual"]].to_numpy()).all()
 
 
@@ -56,24 +60,32 @@ def test_residual_table_predictions_are_the_fitted_curves(diagnosis):
     _, document, details = diagnosis
     table = disc.residual_table(details)
     for name, entry in document["configurations"].items():
-        for role, model in (("baseline", entry["baseline"]["model"]),
-                            ("extended", entry["extended_model"]["model"])):
+        for role, model in (
+            ("baseline", entry["baseline"]["model"]),
+            ("extended", entry["extended_model"]["model"]),
+        ):
             rows = table[(table["configuration"] == name) & (table["role"] == role)]
             z_rows = rows[rows["curve"] == "zeta"].sort_values("segment")
             f_rows = rows[rows["curve"] == "frequency_hz"].sort_values("segment")
             data = details[name].data
             params = dict(details[name].fits[model].params)
             assert params == pytest.approx(
-                entry["baseline" if role == "baseline" else "extended_model"]["params"])
+                entry["baseline" if role == "baseline" else "extended_model"]["params"]
+            )
             # the fits' own evaluation: a 48-point grid over the measured amplitudes
-            grid = CurveGrid(data.velocity_in_s, run_index=data.run_index, n_runs=data.n_runs,
-                             grid_range=(data.velocity_in_s.min(), data.velocity_in_s.max()))
+            grid = CurveGrid(
+                data.velocity_in_s,
+                run_index=data.run_index,
+                n_runs=data.n_runs,
+                grid_range=(data.velocity_in_s.min(), data.velocity_in_s.max()),
+            )
             zeta, freq = grid(model, params)
             np.testing.assert_allclose(z_rows["predicted"], zeta, rtol=1e-12)
             np.testing.assert_allclose(f_rows["predicted"], freq, rtol=1e-12)
             # and, independently of that grid, the model's curves (64-point grid)
-            zeta64, freq64 = model_curves(model, params, data.velocity_in_s,
-                                          run_index=data.run_index, n_runs=data.n_runs)
+            zeta64, freq64 = model_curves(
+                model, params, data.velocity_in_s, run_index=data.run_index, n_runs=data.n_runs
+            )
             np.testing.assert_allclose(z_rows["predicted"], zeta64, rtol=5e-3)
             np.testing.assert_allclose(f_rows["predicted"], freq64, rtol=1e-5)
             np.testing.assert_allclose(z_rows["measured"], data.zeta)
@@ -110,14 +122,24 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
     ax = fig.axes[0]
     assert "in²" in ax.get_xlabel() and ax.get_yscale() == "log"
     heights = sorted(p.get_height() for p in ax.patches)
-    expected = sorted(v for e in document["across_configurations"]["configurations"].values()
-                      for k, v in e.items() if k.endswith("_error"))
+    expected = sorted(
+        v
+        for e in document["across_configurations"]["configurations"].values()
+        for k, v in e.items()
+        if k.endswith("_error")
+    )
     assert heights == pytest.approx(expected)
     save(fig, tmp_path / "heldout.png")
 
 
 def test_heldout_figure_says_not_applicable():
-    fig = dfig.heldout_figure({"across_configurations": {
-        "applicable": False, "reason": "1 configuration(s) with a bearing area; 3 are needed"}})
+    fig = dfig.heldout_figure(
+        {
+            "across_configurations": {
+                "applicable": False,
+                "reason": "1 configuration(s) with a bearing area; 3 are needed",
+            }
+        }
+    )
     texts = " ".join(t.get_text() for t in fig.axes[0].texts)
     assert "not applicable" in texts and "3 are needed" in texts

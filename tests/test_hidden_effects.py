@@ -5,7 +5,7 @@ Each case generates a small campaign (one configuration, 8 runs) with the effect
 size and the configuration's bearing area drawn from a range with a random seed
 (``LAPJOINT_HIDDEN_SEED`` overrides the base seed), analyses it with the real chain
 (campaign reader, mode identification, band-pass + Hilbert envelope + segmented log
-decrement from :mod:`workflow.pipeline`), and diagnoses the segments.
+decrement from :mod:`workflow.measured.runs`), and diagnoses the segments.
 ``bench/hit_rate.py`` runs the same cases over many seeds.
 """
 
@@ -19,10 +19,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.campaign import list_runs, load_campaign
-from workflow.config import AnalysisSettings, QualitySettings
-from workflow.discovery import diagnose_campaign
-from workflow.pipeline import analyse_run, analysis_window, identify_mode, read_and_check
+from workflow.discovery.diagnosis import diagnose_campaign
+from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.settings import AnalysisSettings, QualitySettings
+from workflow.measured.runs import analyse_run, analysis_window, identify_mode, read_and_check
 
 CASES = {
     # cause: (joint, effect, effect-size range or None)
@@ -94,28 +94,46 @@ def campaign_segments(campaign_dir: Path) -> pd.DataFrame:
         if not usable:
             continue
         windows = [analysis_window(record, spec.window_s) for _, record in usable]
-        mode = identify_mode([record for _, record in usable], windows=windows,
-                             campaign_mode_hz=campaign.mode_hz, campaign_band_hz=campaign.band_hz,
-                             band_half_width=analysis.band_half_width,
-                             mode_search_hz=analysis.mode_search_hz,
-                             mode_search_fraction=analysis.mode_search_fraction)
+        mode = identify_mode(
+            [record for _, record in usable],
+            windows=windows,
+            campaign_mode_hz=campaign.mode_hz,
+            campaign_band_hz=campaign.band_hz,
+            band_half_width=analysis.band_half_width,
+            mode_search_hz=analysis.mode_search_hz,
+            mode_search_fraction=analysis.mode_search_fraction,
+        )
         for (run_file, record), window in zip(usable, windows):
             segments, problems = analyse_run(
-                record, configuration=name, run=run_file.run, mode=mode, window=window,
-                filter_order=analysis.filter_order, segment_cycles=analysis.segment_cycles,
+                record,
+                configuration=name,
+                run=run_file.run,
+                mode=mode,
+                window=window,
+                filter_order=analysis.filter_order,
+                segment_cycles=analysis.segment_cycles,
                 segment_overlap=analysis.segment_overlap,
                 noise_floor_factor=analysis.noise_floor_factor,
                 edge_time_constants=analysis.edge_time_constants,
-                min_snr_db=quality.min_snr_db, min_segments=quality.min_segments)
+                min_snr_db=quality.min_snr_db,
+                min_segments=quality.min_segments,
+            )
             if problems:
                 continue
             kept = segments[segments["kept"]].drop(columns=["kept", "reject_reason"])
-            kept["bearing_area_in2"] = (spec.bearing_area_in2 if spec.bearing_area_in2 is not None
-                                        else np.nan)
+            kept["bearing_area_in2"] = spec.bearing_area_in2 if spec.bearing_area_in2 is not None else np.nan
             frames.append(kept)
     if not frames:
-        return pd.DataFrame(columns=["configuration", "run", "velocity_amplitude_in_s", "zeta",
-                                     "frequency_hz", "bearing_area_in2"])
+        return pd.DataFrame(
+            columns=[
+                "configuration",
+                "run",
+                "velocity_amplitude_in_s",
+                "zeta",
+                "frequency_hz",
+                "bearing_area_in2",
+            ]
+        )
     return pd.concat(frames, ignore_index=True)
 
 
@@ -123,24 +141,39 @@ def draw_case(cause: str, seed: int) -> dict:
     """Random effect size and bearing area for a case (reproducible from the seed)."""
     joint, effect, size_range = CASES[cause]
     rng = np.random.default_rng([seed, zlib.crc32(cause.encode())])
-    area_range = (MICROSLIP_AREA_RANGE_IN2 if joint == "patches"
-                  else QUADRATIC_AREA_RANGE_IN2 if effect == "quadratic_damping"
-                  else AREA_RANGE_IN2)
+    area_range = (
+        MICROSLIP_AREA_RANGE_IN2
+        if joint == "patches"
+        else QUADRATIC_AREA_RANGE_IN2
+        if effect == "quadratic_damping"
+        else AREA_RANGE_IN2
+    )
     area = float(rng.uniform(*area_range))
     size = float(rng.uniform(*size_range)) if size_range else None
-    return {"joint": joint, "effect": effect, "effect_size": size, "bearing_area_in2": area,
-            "seed": int(rng.integers(1, 2**31 - 1))}
+    return {
+        "joint": joint,
+        "effect": effect,
+        "effect_size": size,
+        "bearing_area_in2": area,
+        "seed": int(rng.integers(1, 2**31 - 1)),
+    }
 
 
 def run_case(cause: str, seed: int, work_dir: Path) -> tuple[dict, dict]:
     """Generate, analyse and diagnose one hidden-effect campaign; (drawn case, diagnosis)."""
-    from workflow.virtual_lab import generate_campaign
+    from workflow.lab.virtual_lab import generate_campaign
 
     case = draw_case(cause, seed)
     out = Path(work_dir) / f"{cause}_{seed}"
-    generate_campaign(out, seed=case["seed"], runs_per_configuration=RUNS, joint=case["joint"],
-                      effect=case["effect"], effect_size=case["effect_size"],
-                      configurations={"joint": case["bearing_area_in2"]})
+    generate_campaign(
+        out,
+        seed=case["seed"],
+        runs_per_configuration=RUNS,
+        joint=case["joint"],
+        effect=case["effect"],
+        effect_size=case["effect_size"],
+        configurations={"joint": case["bearing_area_in2"]},
+    )
     segments = campaign_segments(out)
     return case, diagnose_campaign(segments, out.name)
 
@@ -161,7 +194,12 @@ def test_hidden_effect_is_named(cause, tmp_path):
     elif cause != "unknown":
         assert gain["ratio"] < 0.7, gain
     causes = [row["cause"] for row in configuration["ranking"]]
-    assert set(causes) == {"none", "microslip_power_law", "quadratic_damping",
-                           "stiffness_nonlinearity", "run_drift"}
+    assert set(causes) == {
+        "none",
+        "microslip_power_law",
+        "quadratic_damping",
+        "stiffness_nonlinearity",
+        "run_drift",
+    }
     scores = [row["score"] for row in configuration["ranking"]]
     assert scores == sorted(scores)

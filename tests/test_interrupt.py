@@ -11,7 +11,6 @@ results/, and leave the raw files untouched.
 from __future__ import annotations
 
 import functools
-
 import json
 import os
 import signal
@@ -23,20 +22,25 @@ from pathlib import Path
 import pandas as pd
 import pyarrow.parquet as pq
 import pytest
-
-from workflow import locks
-from workflow.virtual_lab import generate_campaign
 from helpers import checksums, run_snakemake
+
+from workflow.lab.virtual_lab import generate_campaign
+from workflow.runtime import locks
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIGURATIONS = {"no_washer": 1.36, "small_washer": 0.17}
 # The measured-data chain's part of ``all`` (the friction-model fits take minutes).
 TARGETS = [
-    "results/tables/segments.parquet", "results/tables/runs.parquet",
-    "results/tables/damping_fits.parquet", "results/tables/hypotheses.parquet",
-    "results/figures/fig09_time_history.png", "results/figures/fig13_area_fits.png",
-    "results/figures/fig10_damping_no_washer.png", "results/figures/fig11_damping_small_washer.png",
-    "results/figures/backbone_no_washer.png", "results/figures/backbone_small_washer.png",
+    "results/tables/segments.parquet",
+    "results/tables/runs.parquet",
+    "results/tables/damping_fits.parquet",
+    "results/tables/hypotheses.parquet",
+    "results/figures/fig09_time_history.png",
+    "results/figures/fig13_area_fits.png",
+    "results/figures/fig10_damping_no_washer.png",
+    "results/figures/fig11_damping_small_washer.png",
+    "results/figures/backbone_no_washer.png",
+    "results/figures/backbone_small_washer.png",
 ]
 
 
@@ -45,14 +49,26 @@ snakemake = functools.partial(run_snakemake, timeout=600)
 ONE_RUN_PER_JOB = "runs_per_job=1"
 
 
-
-
 def start_snakemake(workdir: Path, campaign: Path, output: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     return subprocess.Popen(
-        [sys.executable, "-m", "snakemake", "-s", str(REPO / "Snakefile"), "-d", str(workdir),
-         "-c2", *TARGETS, "--config", f"campaign={campaign}", ONE_RUN_PER_JOB],
-        stdout=output.open("w"), stderr=subprocess.STDOUT, env=env,
+        [
+            sys.executable,
+            "-m",
+            "snakemake",
+            "-s",
+            str(REPO / "Snakefile"),
+            "-d",
+            str(workdir),
+            "-c2",
+            *TARGETS,
+            "--config",
+            f"campaign={campaign}",
+            ONE_RUN_PER_JOB,
+        ],
+        stdout=output.open("w"),
+        stderr=subprocess.STDOUT,
+        env=env,
         start_new_session=True,  # its own process group: the kill takes every job with it
     )
 
@@ -82,7 +98,8 @@ def result_files(workdir: Path) -> set[str]:
     """Everything under results/ except logs and benchmarks (timestamps, timings)."""
     results = workdir / "results"
     return {
-        path.relative_to(results).as_posix() for path in results.rglob("*")
+        path.relative_to(results).as_posix()
+        for path in results.rglob("*")
         if path.is_file() and path.relative_to(results).parts[0] not in ("logs", "benchmarks")
     }
 
@@ -105,8 +122,10 @@ def interrupted_and_reference(tmp_path_factory):
     }
     # What a kill during a table or figure write leaves: its temporary file (the
     # target itself is only ever renamed into place, complete).
-    stale = [killed / "results/tables/.segments.parquet.k1ll3d",
-             killed / "results/figures/.fig09_time_history.tmp.png"]
+    stale = [
+        killed / "results/tables/.segments.parquet.k1ll3d",
+        killed / "results/figures/.fig09_time_history.tmp.png",
+    ]
     for path in stale:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(b"PAR1 truncated")
@@ -117,8 +136,12 @@ def interrupted_and_reference(tmp_path_factory):
     reference.mkdir()
     uninterrupted = snakemake(reference, "-c2", *TARGETS, "--config", f"campaign={campaign}", ONE_RUN_PER_JOB)
     return {
-        "campaign": campaign, "raw_before": raw_before, "killed": killed,
-        "reference": reference, "left": left, "resumed": resumed,
+        "campaign": campaign,
+        "raw_before": raw_before,
+        "killed": killed,
+        "reference": reference,
+        "left": left,
+        "resumed": resumed,
         "uninterrupted": uninterrupted,
     }
 
@@ -186,7 +209,7 @@ def test_raw_files_unchanged(interrupted_and_reference):
 
 HOLDER = """
 import sys, time
-from workflow.locks import clear_stale_snakemake_locks
+from workflow.runtime.locks import clear_stale_snakemake_locks
 clear_stale_snakemake_locks(sys.argv[1])
 print("holding", flush=True)
 time.sleep(60)
@@ -204,7 +227,9 @@ def _fake_locks(workdir: Path) -> Path:
 def test_locks_of_a_live_run_are_kept(tmp_path, monkeypatch):
     monkeypatch.setattr(locks, "_held", None)
     holder = subprocess.Popen(
-        [sys.executable, "-c", HOLDER, str(tmp_path)], stdout=subprocess.PIPE, text=True,
+        [sys.executable, "-c", HOLDER, str(tmp_path)],
+        stdout=subprocess.PIPE,
+        text=True,
         env={**os.environ, "PYTHONPATH": str(REPO)},
     )
     try:
@@ -224,7 +249,7 @@ def test_stale_locks_go_once_per_process(tmp_path, monkeypatch):
     monkeypatch.setattr(locks, "_held", None)
     folder = _fake_locks(tmp_path)
     assert locks.clear_stale_snakemake_locks(tmp_path) == ["0.input.lock", "0.output.lock"]
-    _fake_locks_again = (folder / "0.input.lock")
+    _fake_locks_again = folder / "0.input.lock"
     _fake_locks_again.write_text("x\n")  # this process's own Snakemake lock from now on
     assert locks.clear_stale_snakemake_locks(tmp_path) == []
     assert _fake_locks_again.exists()

@@ -11,7 +11,7 @@ REPO = Path(__file__).resolve().parents[1]
 SCRIPT = """
 import sys
 sys.path.insert(0, {repo!r})
-from workflow.logs import setup_script_logging
+from workflow.runtime.logs import setup_script_logging
 log = setup_script_logging({log!r}, "demo")
 log.info("hello")
 import numpy as np
@@ -56,8 +56,10 @@ def test_peak_memory_is_the_scripts_own_not_its_parents(tmp_path):
     # the script's reported peak must not include the parent's memory.
     log = tmp_path / "logs" / "demo.log"
     child = SCRIPT.format(repo=str(REPO), log=str(log), tail="")
-    parent = (f"import subprocess, sys\nblock = b\"\\x01\" * (300 * 2**20)  # resident: every page written\n"
-              f"subprocess.run([sys.executable, '-c', {child!r}], check=True)")
+    parent = (
+        f'import subprocess, sys\nblock = b"\\x01" * (300 * 2**20)  # resident: every page written\n'
+        f"subprocess.run([sys.executable, '-c', {child!r}], check=True)"
+    )
     subprocess.run([sys.executable, "-c", parent], check=True)
     peak_mb = float(COST.search(log.read_text().splitlines()[-1]).group(3))
     assert 80 <= peak_mb < 300

@@ -1,9 +1,9 @@
-"""Tests of workflow.modal_id against a two-mode linear system with known modes."""
+"""Tests of workflow.measured.mode against a two-mode linear system with known modes."""
 
 import numpy as np
 import pytest
 
-from workflow.modal_id import band_around, find_mode_hz, h1_frf, response_spectrum
+from workflow.measured.mode import band_around, find_mode_hz, h1_frf, response_spectrum
 
 FS_HZ = 2560.0
 MODES_HZ = (125.0, 310.0)
@@ -128,8 +128,9 @@ def test_spectra_equal_scipys_welch_and_csd(segment):
     np.testing.assert_allclose(f_hz, signal.welch(forces[0], **options)[0], rtol=1e-15)
     # The DC bin of mean-removed segments is rounding noise in both: left out.
     np.testing.assert_allclose(h1[1:], (cross / auto_force)[1:], rtol=1e-9)
-    np.testing.assert_allclose(coherence[1:], (np.abs(cross) ** 2 / (auto_force * auto_response))[1:],
-                               rtol=1e-9)
+    np.testing.assert_allclose(
+        coherence[1:], (np.abs(cross) ** 2 / (auto_force * auto_response))[1:], rtol=1e-9
+    )
     _, psd = response_spectrum(responses, FS_HZ, nperseg=segment)
     np.testing.assert_allclose(psd, auto_response / 3, rtol=0, atol=1e-12 * auto_response.max())
 

@@ -1,11 +1,11 @@
-"""Tests of friction-model fitting (workflow.model_fit)."""
+"""Tests of friction-model fitting (workflow.models.fitting)."""
 
 import numpy as np
 import pytest
 
-from workflow.decay import analyse_decay
-from workflow.model_fit import FitContext, fit_friction_model, measurement_scatter, model_space
-from workflow.modal_sim import simulate_ringdown
+from workflow.measured.decay import analyse_decay
+from workflow.models.fitting import FitContext, fit_friction_model, measurement_scatter, model_space
+from workflow.models.ringdown import simulate_ringdown
 
 FS, T, BAND = 2560.0, 3.2, (100.0, 150.0)
 
@@ -19,9 +19,15 @@ def synthetic_campaign(seed=1, runs=10):
     truth = {"sigma": sigma, "fc": sigma * knee / w0, "omega_rad_s": w0 * np.sqrt(1 - r)}
     truth["zeta0"] = zeta0 * w0 / truth["omega_rad_s"]
     starts = rng.uniform(3.0, 10.0, runs)
-    sim = simulate_ringdown("dahl", {"sigma": truth["sigma"], "fc": truth["fc"]},
-                            omega_rad_s=truth["omega_rad_s"], zeta0=truth["zeta0"],
-                            initial_velocity=starts, fs_out_hz=FS, duration_s=T)
+    sim = simulate_ringdown(
+        "dahl",
+        {"sigma": truth["sigma"], "fc": truth["fc"]},
+        omega_rad_s=truth["omega_rad_s"],
+        zeta0=truth["zeta0"],
+        initial_velocity=starts,
+        fs_out_hz=FS,
+        duration_s=T,
+    )
     v, z, f, run, peak = [], [], [], [], []
     for i, x in enumerate(sim["acceleration"]):
         x = x + rng.normal(0.0, 1e-3 * np.abs(x).max(), x.size)  # sensor noise, -60 dB
@@ -40,8 +46,9 @@ def synthetic_campaign(seed=1, runs=10):
 def dahl_fit():
     truth, (v, z, f, run, peak) = synthetic_campaign()
     ctx = FitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
-    fit = fit_friction_model("dahl", v, z, f, run, peak, ctx, global_samples=64,
-                             local_starts=2, max_iterations=20)
+    fit = fit_friction_model(
+        "dahl", v, z, f, run, peak, ctx, global_samples=64, local_starts=2, max_iterations=20
+    )
     return truth, fit
 
 

@@ -5,17 +5,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.campaign import list_runs, load_campaign
-from workflow.config import AnalysisSettings, QualitySettings
-from workflow.pipeline import analyse_run, analysis_window, identify_mode, read_and_check
-from workflow.virtual_lab import generate_campaign
+from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.settings import AnalysisSettings, QualitySettings
+from workflow.lab.virtual_lab import generate_campaign
+from workflow.measured.runs import analyse_run, analysis_window, identify_mode, read_and_check
 
 
 @pytest.fixture(scope="module")
 def analysed(tmp_path_factory):
     folder = tmp_path_factory.mktemp("lab") / "campaign"
-    truth = generate_campaign(folder, seed=11, runs_per_configuration=4,
-                              configurations={"no_washer": 1.36, "small_washer": 0.17})
+    truth = generate_campaign(
+        folder, seed=11, runs_per_configuration=4, configurations={"no_washer": 1.36, "small_washer": 0.17}
+    )
     campaign = load_campaign(folder)
     analysis = AnalysisSettings().run_parameters()
     quality = QualitySettings()
@@ -28,14 +29,27 @@ def analysed(tmp_path_factory):
                 assert not problems, problems
                 records.append((run_file.run, record))
         windows = [analysis_window(record, None) for _, record in records]
-        mode = identify_mode([record for _, record in records], windows=windows,
-                             campaign_mode_hz=campaign.mode_hz, campaign_band_hz=None,
-                             band_half_width=0.2, mode_search_hz=None, mode_search_fraction=0.3)
+        mode = identify_mode(
+            [record for _, record in records],
+            windows=windows,
+            campaign_mode_hz=campaign.mode_hz,
+            campaign_band_hz=None,
+            band_half_width=0.2,
+            mode_search_hz=None,
+            mode_search_fraction=0.3,
+        )
         frames = []
         for (run, record), window in zip(records, windows):
-            frame, problems = analyse_run(record, configuration=name, run=run, mode=mode, window=window,
-                                          min_snr_db=quality.min_snr_db, min_segments=quality.min_segments,
-                                          **analysis)
+            frame, problems = analyse_run(
+                record,
+                configuration=name,
+                run=run,
+                mode=mode,
+                window=window,
+                min_snr_db=quality.min_snr_db,
+                min_segments=quality.min_segments,
+                **analysis,
+            )
             assert not problems, problems
             frames.append(frame[frame["kept"]])
         results[name] = (mode, pd.concat(frames, ignore_index=True))
@@ -70,7 +84,9 @@ def test_damping_and_frequency_recover_the_truth(analysed, name):
     bins = np.digitize(velocity, edges)
     for label in np.unique(bins):
         assert abs(np.median(relative[bins == label])) < 0.03
-    frequency_error = segments["frequency_hz"].to_numpy() - truth_at(truth, name, velocity, "damped_frequency_hz")
+    frequency_error = segments["frequency_hz"].to_numpy() - truth_at(
+        truth, name, velocity, "damped_frequency_hz"
+    )
     assert np.max(np.abs(frequency_error)) < 0.05
     assert abs(np.median(frequency_error)) < 0.01
     # the decay is followed over more than a decade of amplitude for the no-washer joint
@@ -84,7 +100,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
     # segments; a configuration without a mode excludes its runs with that reason.
     from helpers import BAD_CELL, write_run_with_bad_cell
 
-    from workflow.pipeline import analyse_run_file
+    from workflow.measured.runs import analyse_run_file
 
     folder = tmp_path / "campaign"
     generate_campaign(folder, seed=11, runs_per_configuration=1, configurations={"no_washer": 1.36})
@@ -92,23 +108,43 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
     campaign = load_campaign(folder)
     (_, results) = analysed
     mode, _ = results["no_washer"]
-    options = dict(configuration="no_washer", campaign=campaign, quality_settings=QualitySettings(),
-                   analysis=AnalysisSettings().run_parameters())
+    options = dict(
+        configuration="no_washer",
+        campaign=campaign,
+        quality_settings=QualitySettings(),
+        analysis=AnalysisSettings().run_parameters(),
+    )
     good = analyse_run_file(folder, "no_washer/run01.txt", mode_document=mode.to_dict(), **options)
-    assert good.status == {"configuration": "no_washer", "run": "run01", "path": "no_washer/run01.txt",
-                           "status": "used", "reason": ""}
+    assert good.status == {
+        "configuration": "no_washer",
+        "run": "run01",
+        "path": "no_washer/run01.txt",
+        "status": "used",
+        "reason": "",
+    }
     assert good.segments["kept"].sum() >= 3 and set(good.segments["run"]) == {"run01"}
     assert good.quality["passed"][good.quality["applied"]].all()
-    assert list(good.quality["check"]) == ["clipping", "excitation", "double_hit", "trigger",
-                                           "record_length", "snr", "segments"]
+    assert list(good.quality["check"]) == [
+        "clipping",
+        "excitation",
+        "double_hit",
+        "trigger",
+        "record_length",
+        "snr",
+        "segments",
+    ]
 
     bad = analyse_run_file(folder, "no_washer/run02.txt", mode_document=mode.to_dict(), **options)
     assert bad.status["status"] == "excluded"
     assert "no_washer/run02.txt:40:" in bad.status["reason"] and BAD_CELL in bad.status["reason"]
     assert len(bad.segments["t_s"]) == 0 and list(bad.quality["check"]) == ["read"]
 
-    no_mode = analyse_run_file(folder, "no_washer/run01.txt",
-                               mode_document={"error": "configuration no_washer: first mode not found"}, **options)
+    no_mode = analyse_run_file(
+        folder,
+        "no_washer/run01.txt",
+        mode_document={"error": "configuration no_washer: first mode not found"},
+        **options,
+    )
     assert no_mode.status["status"] == "excluded"
     assert no_mode.status["reason"] == "configuration no_washer: first mode not found"
     assert len(no_mode.segments["t_s"]) == 0

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from workflow.campaign import RunRecord
-from workflow.config import QualitySettings
-from workflow.quality import (
+from workflow.io.campaign import RunRecord
+from workflow.io.settings import QualitySettings
+from workflow.measured.quality import (
     check_clipping,
     check_double_hit,
     check_excitation,
@@ -33,9 +33,16 @@ def hammer(peak_lbf=80.0, at_sample=PRETRIGGER + 2, width_samples=2.0, n=N):
 def record(response=None, force=None, pretrigger_source="header"):
     response = ring_down() if response is None else response
     return RunRecord(
-        path="cfg/run.txt", sample_rate_hz=FS_HZ, pretrigger_samples=PRETRIGGER,
-        time_s=None, force_lbf=force, response=response, response_quantity="acceleration",
-        response_unit="g", header={}, n_samples=response.size,
+        path="cfg/run.txt",
+        sample_rate_hz=FS_HZ,
+        pretrigger_samples=PRETRIGGER,
+        time_s=None,
+        force_lbf=force,
+        response=response,
+        response_quantity="acceleration",
+        response_unit="g",
+        header={},
+        n_samples=response.size,
         pretrigger_source=pretrigger_source,
     )
 

@@ -8,9 +8,8 @@ The end-to-end test builds everything except the time-domain Dahl/LuGre fits (fi
 
 from __future__ import annotations
 
-import functools
-
 import base64
+import functools
 import html
 import json
 import os
@@ -19,44 +18,70 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-
-from workflow import report
-from workflow.virtual_lab import generate_campaign
 from helpers import run_snakemake, write_run_with_bad_cell
+
+from workflow.lab.virtual_lab import generate_campaign
+from workflow.outputs import report
 
 REPO = Path(__file__).resolve().parents[1]
 FULL = os.environ.get("LAPJOINT_FULL_REPORT_TEST") == "1"
 
 
 # ------------------------------------------------------------------ a diagnosis document
-def entry(cause, *, baseline="lugre", extended="iwan", base_err=40.0, ext_err=5.0,
-          ranking=None, discrepancy="The measured damping differs from the lugre fit."):
+def entry(
+    cause,
+    *,
+    baseline="lugre",
+    extended="iwan",
+    base_err=40.0,
+    ext_err=5.0,
+    ranking=None,
+    discrepancy="The measured damping differs from the lugre fit.",
+):
     ratio = ext_err / base_err if cause not in ("none", "unknown") else 1.0
-    ranking = ranking or ([{"cause": cause, "score": ext_err}, {"cause": "none", "score": base_err},
-                           {"cause": "run_drift", "score": 2 * base_err}]
-                          if cause not in ("none", "unknown") else
-                          [{"cause": "none", "score": base_err},
-                           {"cause": "microslip_power_law", "score": 1.2 * base_err}])
+    ranking = ranking or (
+        [
+            {"cause": cause, "score": ext_err},
+            {"cause": "none", "score": base_err},
+            {"cause": "run_drift", "score": 2 * base_err},
+        ]
+        if cause not in ("none", "unknown")
+        else [{"cause": "none", "score": base_err}, {"cause": "microslip_power_law", "score": 1.2 * base_err}]
+    )
     return {
-        "baseline": {"model": baseline, "params": {"zeta0": 1e-3},
-                     "error": {"metric": "heldout_rms_residual_over_scatter", "value": base_err}},
+        "baseline": {
+            "model": baseline,
+            "params": {"zeta0": 1e-3},
+            "error": {"metric": "heldout_rms_residual_over_scatter", "value": base_err},
+        },
         "discrepancy": discrepancy,
         "cause": cause,
         "evidence": {
-            "decision_rule": "rule text", "n_runs": 10, "n_segments": 500,
-            "effective_observations": 60, "clear_gain_threshold": 0.85,
+            "decision_rule": "rule text",
+            "n_runs": 10,
+            "n_segments": 500,
+            "effective_observations": 60,
+            "clear_gain_threshold": 0.85,
             "baselines": {"dahl": {"heldout_error": 2 * base_err}, baseline: {"heldout_error": base_err}},
             "run_order_trend": {"change_over_sequence": 0.01, "p": 0.4, "significant": False},
-            "candidates": {"microslip_power_law": {"model": "iwan", "heldout_error": ext_err,
-                                                   "delta_bic": -120.0, "ratio_to_baseline": ratio,
-                                                   "params": {"chi": -0.5}}},
+            "candidates": {
+                "microslip_power_law": {
+                    "model": "iwan",
+                    "heldout_error": ext_err,
+                    "delta_bic": -120.0,
+                    "ratio_to_baseline": ratio,
+                    "params": {"chi": -0.5},
+                }
+            },
         },
         "ranking": ranking,
-        "extended_model": {"model": extended if cause not in ("none", "unknown") else baseline,
-                           "params": {}},
-        "gain": {"metric": "heldout_rms_residual_over_scatter", "baseline": base_err,
-                 "extended": ext_err if cause not in ("none", "unknown") else base_err,
-                 "ratio": ratio},
+        "extended_model": {"model": extended if cause not in ("none", "unknown") else baseline, "params": {}},
+        "gain": {
+            "metric": "heldout_rms_residual_over_scatter",
+            "baseline": base_err,
+            "extended": ext_err if cause not in ("none", "unknown") else base_err,
+            "ratio": ratio,
+        },
     }
 
 
@@ -66,13 +91,18 @@ def document():
         "campaign": "washers",
         "cause": "microslip_power_law",
         "configurations": {
-            "no_washer": entry("microslip_power_law",
-                               discrepancy="The measured damping differs from the lugre fit "
-                                           "between 1 and 10 in/s, by up to +31 % (|t| = 9.4)."),
-            "small_washer": entry("none", baseline="dahl", base_err=1.03,
-                                  ranking=[{"cause": "microslip_power_law", "score": 0.95},
-                                           {"cause": "none", "score": 1.03}],
-                                  discrepancy="The dahl baseline fits within the scatter."),
+            "no_washer": entry(
+                "microslip_power_law",
+                discrepancy="The measured damping differs from the lugre fit "
+                "between 1 and 10 in/s, by up to +31 % (|t| = 9.4).",
+            ),
+            "small_washer": entry(
+                "none",
+                baseline="dahl",
+                base_err=1.03,
+                ranking=[{"cause": "microslip_power_law", "score": 0.95}, {"cause": "none", "score": 1.03}],
+                discrepancy="The dahl baseline fits within the scatter.",
+            ),
         },
         "across_configurations": {"applicable": False, "reason": "only two areas"},
         "skipped_configurations": {"large_washer": "only 5 usable segments"},
@@ -81,35 +111,53 @@ def document():
 
 @pytest.fixture
 def runs():
-    return pd.DataFrame({
-        "configuration": ["no_washer", "no_washer", "small_washer"],
-        "run": ["run01", "run02", "run01"],
-        "path": ["no_washer/run01.txt", "no_washer/run02.txt", "small_washer/run01.txt"],
-        "status": ["used", "excluded", "used"],
-        "reason": ["", "no_washer/run02.txt: line 40: '1.2.3' is not a number", ""],
-    })
+    return pd.DataFrame(
+        {
+            "configuration": ["no_washer", "no_washer", "small_washer"],
+            "run": ["run01", "run02", "run01"],
+            "path": ["no_washer/run01.txt", "no_washer/run02.txt", "small_washer/run01.txt"],
+            "status": ["used", "excluded", "used"],
+            "reason": ["", "no_washer/run02.txt: line 40: '1.2.3' is not a number", ""],
+        }
+    )
 
 
 @pytest.fixture
 def hypotheses():
-    rows = [("H1: damping rises with amplitude at low amplitude", "no_washer", "supported", 0.05, 0.2),
-            ("H2: damping rises with bearing area", "all", "supported", 0.4, 0.4),
-            ("H2: damping rises with bearing area", "all", "inconclusive", 0.5, 0.5)]
-    return pd.DataFrame({
-        "hypothesis": [r[0] for r in rows], "configuration": [r[1] for r in rows],
-        "statistic": ["slope", "slope at velocity amplitude 0.4 in/s", "slope at velocity amplitude 0.5 in/s"],
-        "estimate": [1e-4, 2e-4, 1e-5], "ci_low": [5e-5, 1e-4, -1e-5], "ci_high": [2e-4, 3e-4, 3e-5],
-        "confidence": 0.95, "supported": [True, True, False], "verdict": [r[2] for r in rows],
-        "amplitude_low_in_s": [r[3] for r in rows], "amplitude_high_in_s": [r[4] for r in rows],
-        "n_runs": 6, "n_boot_valid": 400, "note": "",
-    })
+    rows = [
+        ("H1: damping rises with amplitude at low amplitude", "no_washer", "supported", 0.05, 0.2),
+        ("H2: damping rises with bearing area", "all", "supported", 0.4, 0.4),
+        ("H2: damping rises with bearing area", "all", "inconclusive", 0.5, 0.5),
+    ]
+    return pd.DataFrame(
+        {
+            "hypothesis": [r[0] for r in rows],
+            "configuration": [r[1] for r in rows],
+            "statistic": [
+                "slope",
+                "slope at velocity amplitude 0.4 in/s",
+                "slope at velocity amplitude 0.5 in/s",
+            ],
+            "estimate": [1e-4, 2e-4, 1e-5],
+            "ci_low": [5e-5, 1e-4, -1e-5],
+            "ci_high": [2e-4, 3e-4, 3e-5],
+            "confidence": 0.95,
+            "supported": [True, True, False],
+            "verdict": [r[2] for r in rows],
+            "amplitude_low_in_s": [r[3] for r in rows],
+            "amplitude_high_in_s": [r[4] for r in rows],
+            "n_runs": 6,
+            "n_boot_valid": 400,
+            "note": "",
+        }
+    )
 
 
 # ------------------------------------------------------------------ the verdict in words
 def test_verdict_page_states_the_verdict_and_its_evidence(document, runs, hypotheses):
     text = html.unescape(report.verdict_html(document, runs=runs, hypotheses=hypotheses))
     # what the paper's model gets wrong, per configuration
-    for name, item in document["configurations"].items():
+    for item in document["configurations"].values():
         assert item["discrepancy"] in text
     # the cause in plain words, the extended model and its held-out gain
     assert "micro-slip (power law)" in text and "slip spreads gradually" in text
@@ -128,8 +176,7 @@ def test_verdict_page_states_the_verdict_and_its_evidence(document, runs, hypoth
 
 def test_campaign_headline_for_each_kind_of_verdict(document):
     assert "falls short in 1 of 2 configurations (no_washer)" in report.campaign_headline(document)
-    none = {**document, "cause": "none",
-            "configurations": {"a": entry("none"), "b": entry("none")}}
+    none = {**document, "cause": "none", "configurations": {"a": entry("none"), "b": entry("none")}}
     assert "explains all 2 configurations" in report.campaign_headline(none)
     unknown = {**document, "cause": "unknown", "configurations": {"a": entry("unknown")}}
     assert "cause is unknown" in report.campaign_headline(unknown)
@@ -139,8 +186,9 @@ def test_campaign_headline_for_each_kind_of_verdict(document):
 def test_candidate_margin():
     margin = report.candidate_margin(entry("microslip_power_law", base_err=40.0, ext_err=5.0))
     assert margin["next"] == "none" and margin["ratio"] == pytest.approx(8.0)
-    none = entry("none", base_err=1.0, ranking=[{"cause": "run_drift", "score": 0.9},
-                                                {"cause": "none", "score": 1.0}])
+    none = entry(
+        "none", base_err=1.0, ranking=[{"cause": "run_drift", "score": 0.9}, {"cause": "none", "score": 1.0}]
+    )
     margin = report.candidate_margin(none)
     assert margin["next"] == "run_drift" and margin["ratio"] == pytest.approx(0.9)
     assert report.candidate_margin({"cause": "none", "ranking": []}) is None
@@ -160,8 +208,9 @@ def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
         config = {"campaign": "my/campaign"}
 
     rendered = jinja2.Environment().from_string(landing + links).render(snakemake=Snakemake)
-    body = publish_parts(rendered, writer="html",
-                         settings_overrides={"report_level": 2, "halt_level": 2})["html_body"]
+    body = publish_parts(rendered, writer="html", settings_overrides={"report_level": 2, "halt_level": 2})[
+        "html_body"
+    ]
     text = html.unescape(body)
     assert "System Message" not in text
     assert "no_washer" in text and "|t| = 9.4" in text
@@ -173,13 +222,19 @@ def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
 def test_tables_render(hypotheses, runs):
     assert "supported" in report.hypotheses_html(hypotheses)
     assert "excluded" in report.runs_html(runs)
-    quality = pd.DataFrame({
-        "configuration": ["a", "a", "a", "a"], "run": ["r1", "r1", "r2", "r2"],
-        "check": ["snr", "clip", "snr", "clip"], "applied": [True, True, True, False],
-        "passed": [True, True, False, False], "value": [40.0, 1.0, 12.0, float("nan")],
-        "threshold": [20.0, 3.0, 20.0, 3.0], "unit": ["dB (at least)", "samples (at most)"] * 2,
-        "reason": ["", "", "r2: signal 12 dB above noise, below 20 dB", ""],
-    })
+    quality = pd.DataFrame(
+        {
+            "configuration": ["a", "a", "a", "a"],
+            "run": ["r1", "r1", "r2", "r2"],
+            "check": ["snr", "clip", "snr", "clip"],
+            "applied": [True, True, True, False],
+            "passed": [True, True, False, False],
+            "value": [40.0, 1.0, 12.0, float("nan")],
+            "threshold": [20.0, 3.0, 20.0, 3.0],
+            "unit": ["dB (at least)", "samples (at most)"] * 2,
+            "reason": ["", "", "r2: signal 12 dB above noise, below 20 dB", ""],
+        }
+    )
     page = html.unescape(report.quality_html(quality))
     assert "signal 12 dB above noise" in page and "limit 20" in page
     assert report.fmt(None) == "–" and report.fmt(float("nan")) == "–"
@@ -197,16 +252,31 @@ CHEAP = [
 ]
 CONFIGURATIONS = ["no_washer", "small_washer"]
 FIGURES = [
-    "fig07_dahl_loops.png", "fig08_lugre_loops.png", "fig09_time_history.png",
-    "fig10_damping_no_washer.png", "fig11_damping_small_washer.png", "fig13_area_fits.png",
+    "fig07_dahl_loops.png",
+    "fig08_lugre_loops.png",
+    "fig09_time_history.png",
+    "fig10_damping_no_washer.png",
+    "fig11_damping_small_washer.png",
+    "fig13_area_fits.png",
     *[f"backbone_{name}.png" for name in CONFIGURATIONS],
     *[f"discovery_residuals_{name}.png" for name in CONFIGURATIONS],
-    "discovery_candidates.png", "discovery_heldout.png",
+    "discovery_candidates.png",
+    "discovery_heldout.png",
 ]
-MODEL_FIGURES = [f"fig{number}_{model}_{name}.png" for number, model in (("14", "dahl"), ("15", "lugre"))
-                 for name in CONFIGURATIONS]
-PAGES = ["verdict.html", "hypotheses.html", "runs.html", "quality.html",
-         "rejected_segments.html", "damping_fits.html", "diagnosis_candidates.html"]
+MODEL_FIGURES = [
+    f"fig{number}_{model}_{name}.png"
+    for number, model in (("14", "dahl"), ("15", "lugre"))
+    for name in CONFIGURATIONS
+]
+PAGES = [
+    "verdict.html",
+    "hypotheses.html",
+    "runs.html",
+    "quality.html",
+    "rejected_segments.html",
+    "damping_fits.html",
+    "diagnosis_candidates.html",
+]
 
 
 @pytest.fixture(scope="module")
@@ -215,23 +285,33 @@ def built_report(tmp_path_factory):
     and reported with `snakemake --report`."""
     root = tmp_path_factory.mktemp("report")
     campaign = root / "campaign"
-    generate_campaign(campaign, seed=11, runs_per_configuration=3,
-                      configurations={"no_washer": 1.36, "small_washer": 0.17})
-    write_run_with_bad_cell(campaign / "small_washer" / "run03.txt",
-                            campaign / "small_washer" / "run03.txt")
+    generate_campaign(
+        campaign, seed=11, runs_per_configuration=3, configurations={"no_washer": 1.36, "small_washer": 0.17}
+    )
+    write_run_with_bad_cell(campaign / "small_washer" / "run03.txt", campaign / "small_washer" / "run03.txt")
     workdir = root / "work"
     workdir.mkdir()
     config = ["--config", f"campaign={campaign}", *CHEAP]
     if FULL:
         targets = ["all", "results/report/model_fits.html"]
     else:  # everything but the time-domain friction fits (figures 14, 15)
-        targets = ["results/tables/segments.parquet", *[f"results/figures/{name}" for name in FIGURES],
-                   *[f"results/report/{name}" for name in PAGES], "results/report/landing.rst"]
+        targets = [
+            "results/tables/segments.parquet",
+            *[f"results/figures/{name}" for name in FIGURES],
+            *[f"results/report/{name}" for name in PAGES],
+            "results/report/landing.rst",
+        ]
     result = snakemake(workdir, "-c2", *targets, *config)
     assert result.returncode == 0, result.stderr[-4000:]
-    result = snakemake(workdir, "--report", "results/report.html",
-                       "--report-html-stylesheet-path", str(REPO / "report" / "report.css"),
-                       *targets, *config)
+    result = snakemake(
+        workdir,
+        "--report",
+        "results/report.html",
+        "--report-html-stylesheet-path",
+        str(REPO / "report" / "report.css"),
+        *targets,
+        *config,
+    )
     assert result.returncode == 0, result.stderr[-4000:]
     text = (workdir / "results" / "report.html").read_text()
     results = json.loads(re.search(r"var results = (\{.*\});\n", text).group(1))
@@ -253,12 +333,22 @@ def test_report_holds_every_figure_with_a_caption(built_report):
         key = f"results/figures/{name}"
         assert key in results, f"{name} is not in the report"
         assert results[key]["caption"].strip(), f"{name} has no caption"
-        assert results[key]["data_uri"].startswith("data:image/png") and ";base64," in results[key]["data_uri"]
+        assert (
+            results[key]["data_uri"].startswith("data:image/png") and ";base64," in results[key]["data_uri"]
+        )
     # one job draws figures 10-13 and every backbone; each figure keeps its own label
-    assert results["results/figures/fig11_damping_small_washer.png"]["labels"] == {"figure": "fig. 11: small_washer"}
+    assert results["results/figures/fig11_damping_small_washer.png"]["labels"] == {
+        "figure": "fig. 11: small_washer"
+    }
     assert results["results/figures/backbone_no_washer.png"]["labels"] == {"figure": "backbone: no_washer"}
-    assert {"1 Verdict", "2 Measured data", "3 Damping and area fits", "4 Friction models",
-            "5 Diagnosis", "6 Quality"} <= set(categories)
+    assert {
+        "1 Verdict",
+        "2 Measured data",
+        "3 Damping and area fits",
+        "4 Friction models",
+        "5 Diagnosis",
+        "6 Quality",
+    } <= set(categories)
 
 
 def test_report_first_page_states_the_verdict(built_report):
@@ -272,7 +362,7 @@ def test_report_first_page_states_the_verdict(built_report):
     assert "About this study" in first_page  # the workflow description follows
     # the full verdict page: discrepancy sentences, gains, and the unreadable run's reason
     verdict = html.unescape(decoded(results["results/report/verdict.html"]))
-    for name, item in document["configurations"].items():
+    for item in document["configurations"].values():
         assert item["discrepancy"] in verdict
         assert report.ratio(item["gain"]["ratio"]) in verdict
     assert "How sure we are" in verdict

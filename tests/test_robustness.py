@@ -13,7 +13,6 @@ short runs check ``strict: true`` and an unknown key in campaign.yaml.
 from __future__ import annotations
 
 import functools
-
 import os
 import re
 import stat
@@ -22,10 +21,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-
-from workflow import virtual_lab
-from workflow.virtual_lab import generate_campaign
 from helpers import checksums, run_snakemake
+
+from workflow.lab import virtual_lab
+from workflow.lab.virtual_lab import generate_campaign
 
 FS_HZ = virtual_lab.SAMPLE_RATE_HZ
 PRETRIGGER = virtual_lab.PRETRIGGER_SAMPLES
@@ -41,15 +40,18 @@ def measured_targets(configurations: list[str]) -> list[str]:
     """The measured-data chain's part of ``all``: every table and figure except the
     friction-model fits (minutes per configuration; tested on their own)."""
     return [
-        "results/tables/segments.parquet", "results/tables/runs.parquet",
-        "results/tables/damping_fits.parquet", "results/tables/hypotheses.parquet",
-        "results/figures/fig09_time_history.png", "results/figures/fig13_area_fits.png",
-        *[f"results/figures/fig{min(10 + i, 12):02d}_damping_{name}.png"
-          for i, name in enumerate(configurations)],
+        "results/tables/segments.parquet",
+        "results/tables/runs.parquet",
+        "results/tables/damping_fits.parquet",
+        "results/tables/hypotheses.parquet",
+        "results/figures/fig09_time_history.png",
+        "results/figures/fig13_area_fits.png",
+        *[
+            f"results/figures/fig{min(10 + i, 12):02d}_damping_{name}.png"
+            for i, name in enumerate(configurations)
+        ],
         *[f"results/figures/backbone_{name}.png" for name in configurations],
     ]
-
-
 
 
 def data_line(sample: int) -> int:
@@ -106,16 +108,19 @@ def build_campaign(root: Path) -> tuple[Path, dict[str, dict]]:
         expected[f"no_washer/{name}"] = {"line": line, "words": words}
 
     # ---------------------------------------------------------------- malformed files
-    malformed("bad_cell", replace_cell(lines, 40, 3, "n/a"), 40,
-              "non-numeric cell 'n/a' in column 3")
+    malformed("bad_cell", replace_cell(lines, 40, 3, "n/a"), 40, "non-numeric cell 'n/a' in column 3")
     ragged = list(lines)
     ragged[999] = ragged[999].rsplit("\t", 1)[0]
     malformed("bad_ragged", ragged, 1000, "ragged row: 2 values, expected 3")
     malformed("bad_nan", replace_cell(lines, 500, 3, "NaN"), 500, "NaN/inf value 'NaN' in column 3")
     malformed("bad_inf", replace_cell(lines, 2001, 2, "-inf"), 2001, "NaN/inf value '-inf' in column 2")
     malformed("bad_empty", "", 1, "the file is empty")
-    malformed("bad_header_only", lines[:HEADER_LINES], HEADER_LINES,
-              "no numeric rows: all 4 line(s) are header text")
+    malformed(
+        "bad_header_only",
+        lines[:HEADER_LINES],
+        HEADER_LINES,
+        "no numeric rows: all 4 line(s) are header text",
+    )
     mixed = list(lines)
     mixed[299] = mixed[299].replace("\t", ",")
     malformed("bad_delimiters", mixed, 300, "mixed delimiters: comma in a row separated by tab")
@@ -123,16 +128,29 @@ def build_campaign(root: Path) -> tuple[Path, dict[str, dict]]:
     malformed("bad_time_uneven", uneven, data_line(3000), "time column not uniform")
     backwards = list(lines)
     backwards[data_line(700) - 1], backwards[data_line(701) - 1] = (
-        backwards[data_line(701) - 1], backwards[data_line(700) - 1])
-    malformed("bad_time_backwards", backwards, data_line(701),
-              f"time column not increasing: {time_s[700]:.9g} s follows {time_s[701]:.9g} s")
+        backwards[data_line(701) - 1],
+        backwards[data_line(700) - 1],
+    )
+    malformed(
+        "bad_time_backwards",
+        backwards,
+        data_line(701),
+        f"time column not increasing: {time_s[700]:.9g} s follows {time_s[701]:.9g} s",
+    )
     rate = list(lines)
     rate[1] = "Sample rate: 2048 Hz"
-    malformed("bad_sample_rate", rate, 2,
-              "sample rate 2048 Hz from the header disagrees with 2560 Hz from the "
-              "campaign.yaml sample_rate_hz")
-    malformed("bad_few_samples", lines[:HEADER_LINES + 100], HEADER_LINES + 100,
-              "only 100 samples; a run needs at least 256")
+    malformed(
+        "bad_sample_rate",
+        rate,
+        2,
+        "sample rate 2048 Hz from the header disagrees with 2560 Hz from the campaign.yaml sample_rate_hz",
+    )
+    malformed(
+        "bad_few_samples",
+        lines[: HEADER_LINES + 100],
+        HEADER_LINES + 100,
+        "only 100 samples; a run needs at least 256",
+    )
 
     # ---------------------------------------------------------------- quality checks
     def failing(name: str, force, response, *words: str, n_samples: int = n) -> None:
@@ -142,36 +160,52 @@ def build_campaign(root: Path) -> tuple[Path, dict[str, dict]]:
     rail = 0.5 * np.abs(response_g).max()
     clipped = np.clip(response_g, -rail, rail)
     at_rail = int(np.count_nonzero(np.abs(clipped) >= 0.9999 * rail))
-    failing("qc_clipped", force_lbf, clipped,
-            f"response clipped: {at_rail} samples within 0.01 % of the peak {rail:.4g} g (limit 3)")
+    failing(
+        "qc_clipped",
+        force_lbf,
+        clipped,
+        f"response clipped: {at_rail} samples within 0.01 % of the peak {rail:.4g} g (limit 3)",
+    )
 
     main_at = int(np.argmax(force_lbf))
     delay = int(round(0.040 * FS_HZ))  # a bounce 40 ms later, at half the force
     double = force_lbf.copy()
-    double[main_at + delay - 5:main_at + delay + 6] += 0.5 * force_lbf[main_at - 5:main_at + 6]
-    second = double[main_at + delay - 5:main_at + delay + 6].max()
-    failing("qc_double_hit", double, response_g,
-            f"double hit: a second force pulse of {second:.3g} lbf "
-            f"({second / force_lbf[main_at]:.2f} of the main {force_lbf[main_at]:.3g} lbf pulse) "
-            f"{1e3 * delay / FS_HZ:.3g} ms after it (limit 0.30)")
+    double[main_at + delay - 5 : main_at + delay + 6] += 0.5 * force_lbf[main_at - 5 : main_at + 6]
+    second = double[main_at + delay - 5 : main_at + delay + 6].max()
+    failing(
+        "qc_double_hit",
+        double,
+        response_g,
+        f"double hit: a second force pulse of {second:.3g} lbf "
+        f"({second / force_lbf[main_at]:.2f} of the main {force_lbf[main_at]:.3g} lbf pulse) "
+        f"{1e3 * delay / FS_HZ:.3g} ms after it (limit 0.30)",
+    )
 
     tiny = force_lbf * (0.4 / force_lbf.max())
-    failing("qc_no_hit", tiny, response_g,
-            f"no real hit: peak force {tiny.max():.3g} lbf is below 1 lbf")
+    failing("qc_no_hit", tiny, response_g, f"no real hit: peak force {tiny.max():.3g} lbf is below 1 lbf")
 
     shift = 200  # the hit 200 samples later than the 25-sample pre-trigger says
     late_force = np.r_[np.tile(force_lbf[:PRETRIGGER], shift // PRETRIGGER), force_lbf][:n]
     late_response = np.r_[np.tile(response_g[:PRETRIGGER], shift // PRETRIGGER), response_g][:n]
     first = int(np.flatnonzero(late_force >= 1.0)[0])
-    failing("qc_trigger", late_force, late_response,
-            f"trigger: the force first reaches 1 lbf at sample {first}, {first - PRETRIGGER} "
-            f"samples after the pre-trigger length {PRETRIGGER} (tolerance 5)")
+    failing(
+        "qc_trigger",
+        late_force,
+        late_response,
+        f"trigger: the force first reaches 1 lbf at sample {first}, {first - PRETRIGGER} "
+        f"samples after the pre-trigger length {PRETRIGGER} (tolerance 5)",
+    )
 
     short = 300  # readable (>= 256 samples) but under 20 cycles of the mode
     mode_hz = float(re.search(r"mode_hz: (\S+)", yaml_text).group(1))
-    failing("qc_short", force_lbf, response_g,
-            f"record too short: {short / FS_HZ:.3g} s holds {short / FS_HZ * mode_hz:.3g} cycles "
-            f"of the {mode_hz:.4g} Hz mode (need 20)", n_samples=short)
+    failing(
+        "qc_short",
+        force_lbf,
+        response_g,
+        f"record too short: {short / FS_HZ:.3g} s holds {short / FS_HZ * mode_hz:.3g} cycles "
+        f"of the {mode_hz:.4g} Hz mode (need 20)",
+        n_samples=short,
+    )
 
     noise = np.random.default_rng(3).standard_normal(n) * 2.0 * np.abs(response_g).max()
     failing("qc_noisy", force_lbf, response_g + noise, "signal-to-noise ", " dB is below 20 dB")
@@ -185,14 +219,20 @@ def build_campaign(root: Path) -> tuple[Path, dict[str, dict]]:
     tau = time_s - (PRETRIGGER + 0.5) / FS_HZ
     for index in range(2):
         rng = np.random.default_rng(100 + index)
-        ring = np.where(tau >= 0, 2.0 * np.exp(-2 * np.pi * stiff_hz * 0.003 * tau)
-                        * np.sin(2 * np.pi * stiff_hz * tau), 0.0)
-        write_columns(folder / f"run{index + 1:02d}.txt", time_s, force_lbf,
-                      ring + 1e-3 * rng.standard_normal(n))
+        ring = np.where(
+            tau >= 0,
+            2.0 * np.exp(-2 * np.pi * stiff_hz * 0.003 * tau) * np.sin(2 * np.pi * stiff_hz * tau),
+            0.0,
+        )
+        write_columns(
+            folder / f"run{index + 1:02d}.txt", time_s, force_lbf, ring + 1e-3 * rng.standard_normal(n)
+        )
         expected[f"{OFF_MODE}/run{index + 1:02d}"] = {
             "line": None,
-            "words": (f"configuration {OFF_MODE}: first mode not found: no resonance in the "
-                      "search range", "the mode lies outside the range"),
+            "words": (
+                f"configuration {OFF_MODE}: first mode not found: no resonance in the search range",
+                "the mode lies outside the range",
+            ),
         }
     return campaign, expected
 
@@ -213,18 +253,28 @@ def study(tmp_path_factory):
 
 def test_every_file_has_one_row(study):
     campaign, _, expected, _, runs, _ = study
-    files = sorted(p.relative_to(campaign).with_suffix("").as_posix()
-                   for p in campaign.rglob("*.txt"))
+    files = sorted(p.relative_to(campaign).with_suffix("").as_posix() for p in campaign.rglob("*.txt"))
     assert sorted(runs["configuration"] + "/" + runs["run"]) == files
     assert set(runs["status"]) == {"used", "excluded"}
     assert (runs["path"] == runs["configuration"] + "/" + runs["run"] + ".txt").all()
 
 
-@pytest.mark.parametrize("case", [
-    "bad_cell", "bad_ragged", "bad_nan", "bad_inf", "bad_empty", "bad_header_only",
-    "bad_delimiters", "bad_time_uneven", "bad_time_backwards", "bad_sample_rate",
-    "bad_few_samples",
-])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "bad_cell",
+        "bad_ragged",
+        "bad_nan",
+        "bad_inf",
+        "bad_empty",
+        "bad_header_only",
+        "bad_delimiters",
+        "bad_time_uneven",
+        "bad_time_backwards",
+        "bad_sample_rate",
+        "bad_few_samples",
+    ],
+)
 def test_malformed_file_is_excluded_naming_file_line_and_problem(study, case):
     campaign, _, expected, _, runs, _ = study
     row = runs[(runs["configuration"] == "no_washer") & (runs["run"] == case)].iloc[0]
@@ -237,9 +287,17 @@ def test_malformed_file_is_excluded_naming_file_line_and_problem(study, case):
         assert words in row["reason"], row["reason"]
 
 
-@pytest.mark.parametrize("case", [
-    "qc_clipped", "qc_double_hit", "qc_no_hit", "qc_trigger", "qc_short", "qc_noisy",
-])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "qc_clipped",
+        "qc_double_hit",
+        "qc_no_hit",
+        "qc_trigger",
+        "qc_short",
+        "qc_noisy",
+    ],
+)
 def test_failed_quality_check_is_excluded_saying_by_how_much(study, case):
     _, _, expected, _, runs, _ = study
     row = runs[(runs["configuration"] == "no_washer") & (runs["run"] == case)].iloc[0]
@@ -299,14 +357,27 @@ def test_good_runs_are_used_with_segments(study):
 def test_tables_and_figures_are_produced(study):
     _, workdir, _, _, _, _ = study
     results = workdir / "results"
-    for name in ["segments", "segments_rejected", "runs", "modes", "damping_fits",
-                 "damping_curves", "hypotheses", "area_fits"]:
+    for name in [
+        "segments",
+        "segments_rejected",
+        "runs",
+        "modes",
+        "damping_fits",
+        "damping_curves",
+        "hypotheses",
+        "area_fits",
+    ]:
         assert (results / "tables" / f"{name}.parquet").is_file(), name
     fits = pd.read_parquet(results / "tables/damping_fits.parquet")
     assert set(fits["configuration"]) == set(GOOD_CONFIGURATIONS)
-    for name in ["fig09_time_history.png", f"fig10_damping_{OFF_MODE}.png",
-                 "fig11_damping_no_washer.png", "fig12_damping_small_washer.png",
-                 "fig13_area_fits.png", *[f"backbone_{c}.png" for c in [OFF_MODE, *GOOD_CONFIGURATIONS]]]:
+    for name in [
+        "fig09_time_history.png",
+        f"fig10_damping_{OFF_MODE}.png",
+        "fig11_damping_no_washer.png",
+        "fig12_damping_small_washer.png",
+        "fig13_area_fits.png",
+        *[f"backbone_{c}.png" for c in [OFF_MODE, *GOOD_CONFIGURATIONS]],
+    ]:
         assert (results / "figures" / name).stat().st_size > 5_000, name
 
 
@@ -341,8 +412,9 @@ def test_strict_mode_stops_at_a_bad_run_with_its_message(tmp_path):
     (campaign / "no_washer/run00.txt").write_text("\n".join(replace_cell(lines, 60, 2, "x1")) + "\n")
     workdir = tmp_path / "work"
     workdir.mkdir()
-    result = snakemake(workdir, "-c1", *measured_targets(["no_washer"]),
-                       "--config", f"campaign={campaign}", "strict=true")
+    result = snakemake(
+        workdir, "-c1", *measured_targets(["no_washer"]), "--config", f"campaign={campaign}", "strict=true"
+    )
     assert result.returncode != 0
     reason = f"{campaign.as_posix()}/no_washer/run00.txt:60: non-numeric cell 'x1' in column 2"
     assert f"strict mode: run excluded: {reason}" in result.stderr
@@ -372,9 +444,9 @@ def test_unknown_campaign_key_stops_before_any_job(tmp_path):
 
 
 def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
-    from workflow.campaign import load_campaign, read_run
-    from workflow.config import QualitySettings
-    from workflow.quality import QC_COLUMNS, quality_rows, run_quality_checks
+    from workflow.io.campaign import load_campaign, read_run
+    from workflow.io.settings import QualitySettings
+    from workflow.measured.quality import QC_COLUMNS, quality_rows, run_quality_checks
 
     meta = load_campaign(campaign)
     record = read_run(campaign, path, meta)
@@ -383,13 +455,16 @@ def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
     return table, run_quality_checks(record, QualitySettings(), mode_hz=meta.mode_hz)
 
 
-@pytest.mark.parametrize("case, check, value", [
-    ("qc_clipped", "clipping", None),
-    ("qc_double_hit", "double_hit", 0.5),
-    ("qc_no_hit", "excitation", 0.4),
-    ("qc_trigger", "trigger", None),
-    ("qc_short", "record_length", 300 / FS_HZ),
-])
+@pytest.mark.parametrize(
+    "case, check, value",
+    [
+        ("qc_clipped", "clipping", None),
+        ("qc_double_hit", "double_hit", 0.5),
+        ("qc_no_hit", "excitation", 0.4),
+        ("qc_trigger", "trigger", None),
+        ("qc_short", "record_length", 300 / FS_HZ),
+    ],
+)
 def test_quality_table_row_per_check_agrees_with_runs_table(study, case, check, value):
     campaign, _, _, _, runs, _ = study
     table, reasons = _qc_table(campaign, f"no_washer/{case}.txt")
@@ -431,15 +506,22 @@ def test_quality_table_of_a_good_run_passes_with_margins(study):
 
 
 def test_quality_rows_mark_checks_that_do_not_apply():
-    from workflow.campaign import RunRecord
-    from workflow.config import QualitySettings
-    from workflow.quality import analysis_rows, quality_rows
+    from workflow.io.campaign import RunRecord
+    from workflow.io.settings import QualitySettings
+    from workflow.measured.quality import analysis_rows, quality_rows
 
     t = np.arange(4096) / FS_HZ
     record = RunRecord(
-        path="cfg/run.txt", sample_rate_hz=FS_HZ, pretrigger_samples=0, time_s=None,
-        force_lbf=None, response=np.exp(-3 * t) * np.sin(2 * np.pi * 120 * t),
-        response_quantity="acceleration", response_unit="g", header={}, n_samples=t.size,
+        path="cfg/run.txt",
+        sample_rate_hz=FS_HZ,
+        pretrigger_samples=0,
+        time_s=None,
+        force_lbf=None,
+        response=np.exp(-3 * t) * np.sin(2 * np.pi * 120 * t),
+        response_quantity="acceleration",
+        response_unit="g",
+        header={},
+        n_samples=t.size,
     )
     rows = {row["check"]: row for row in quality_rows(record, QualitySettings())}
     for check in ("excitation", "double_hit", "trigger", "record_length"):

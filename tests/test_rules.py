@@ -17,7 +17,7 @@ def rule_blocks() -> dict[str, str]:
         text = path.read_text()
         starts = list(re.finditer(r"^( *)rule (\w+):\n", text, flags=re.M))
         for start, following in zip(starts, starts[1:] + [None]):
-            blocks[start.group(2)] = text[start.end(): following.start() if following else len(text)]
+            blocks[start.group(2)] = text[start.end() : following.start() if following else len(text)]
     return blocks
 
 
@@ -43,3 +43,38 @@ def test_rule_script_logs_to_the_rule_log(name):
     script = re.search(r'^\s+script:\n\s+"\.\./(scripts/\w+\.py)"', RULES[name], flags=re.M)
     assert script, f"{name} runs no script"
     assert "setup_script_logging(snakemake.log[0]" in (REPO / script.group(1)).read_text(), name
+
+
+SMK_FILES = sorted([REPO / "Snakefile", *(REPO / "rules").glob("*.smk")])
+# Statements that would rebind Snakemake's `workflow` object inside a Snakefile.
+BINDS_WORKFLOW = re.compile(
+    r"^\s*(?:import workflow\b|from \S+ import .*\bworkflow\b|workflow\s*=|def workflow\b"
+    r"|for .*\bworkflow\b.* in |with .* as workflow\b)",
+    flags=re.M,
+)
+
+
+@pytest.mark.parametrize("path", SMK_FILES, ids=lambda path: path.name)
+def test_no_smk_file_rebinds_snakemakes_workflow_object(path):
+    """Inside a Snakefile, `workflow` is Snakemake's object; the library is reached only as
+    `from workflow.<stage>.<module> import ...`, which leaves that name alone."""
+    assert not BINDS_WORKFLOW.findall(path.read_text())
+
+
+@pytest.mark.parametrize(
+    "line, binds",
+    [
+        ("import workflow.io.settings", True),
+        ("from lapjoint import workflow", True),
+        ("workflow = None", True),
+        ("from workflow.io.settings import validate_config", False),
+        ("configfile: workflow.source_path('config.yaml')", False),
+    ],
+)
+def test_the_binding_check_tells_a_binding_from_a_use(line, binds):
+    assert bool(BINDS_WORKFLOW.search(line)) == binds
+
+
+@pytest.mark.parametrize("path", sorted((REPO / "scripts").glob("*.py")), ids=lambda path: path.name)
+def test_scripts_reach_the_installed_library_without_path_edits(path):
+    assert "sys.path" not in path.read_text()

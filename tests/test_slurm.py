@@ -70,9 +70,7 @@ def slurm_unavailable() -> str | None:
 
 REASON = slurm_unavailable()
 REQUIRED = os.environ.get("LAPJOINT_REQUIRE_SLURM") == "1"
-pytestmark = pytest.mark.skipif(
-    REASON is not None and not REQUIRED, reason=f"SLURM smoke test: {REASON}"
-)
+pytestmark = pytest.mark.skipif(REASON is not None and not REQUIRED, reason=f"SLURM smoke test: {REASON}")
 
 
 def snakemake(workdir: Path, campaign: Path, *options: str) -> tuple[float, str]:
@@ -115,8 +113,7 @@ def snakemake(workdir: Path, campaign: Path, *options: str) -> tuple[float, str]
         slurm_logs = sorted((workdir / ".snakemake" / "slurm_logs").rglob("*.log"))
         rule_logs = sorted((workdir / "results" / "logs").rglob("*.log"))
         details = "\n".join(
-            f"---- {log}\n{log.read_text(errors='replace')[-3000:]}"
-            for log in [*slurm_logs, *rule_logs]
+            f"---- {log}\n{log.read_text(errors='replace')[-3000:]}" for log in [*slurm_logs, *rule_logs]
         )
         pytest.fail(
             f"{' '.join(command)} exited {process.returncode} after {seconds:.0f} s\n"
@@ -139,7 +136,7 @@ def outputs(workdir: Path) -> set[str]:
 def test_slurm_run_equals_local_run():
     if REASON is not None:
         pytest.fail(f"LAPJOINT_REQUIRE_SLURM=1 but {REASON}", pytrace=False)
-    from workflow.virtual_lab import generate_campaign
+    from workflow.lab.virtual_lab import generate_campaign
 
     base = Path(tempfile.mkdtemp(prefix="lapjoint-slurm-test-"))
     try:
@@ -155,9 +152,7 @@ def test_slurm_run_equals_local_run():
         on_slurm.mkdir()
         local.mkdir()
 
-        slurm_s, slurm_log = snakemake(
-            on_slurm, campaign, "--executor", "slurm", "--profile", str(PROFILE)
-        )
+        slurm_s, slurm_log = snakemake(on_slurm, campaign, "--executor", "slurm", "--profile", str(PROFILE))
         local_s, _ = snakemake(local, campaign, "-c2")
         print(f"SLURM run {slurm_s:.1f} s, local -c2 run {local_s:.1f} s")
 

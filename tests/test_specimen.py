@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from workflow import specimen
+from workflow.models import specimen
 
 
 @pytest.fixture(scope="module")
@@ -14,9 +14,9 @@ def mode1():
 def test_uniform_beam_matches_closed_form_and_converges():
     g = specimen.SpecimenGeometry()
     exact = specimen.uniform_beam_first_frequency_hz(
-        20.3125, specimen.STEEL_E_PSI * g.inertia_in4, specimen.STEEL_DENSITY_LBF_S2_IN4 * g.area_in2)
-    errors = [abs(specimen.uniform_beam_frequencies_hz(20.3125, n)[0] / exact - 1)
-              for n in (4, 8, 16)]
+        20.3125, specimen.STEEL_E_PSI * g.inertia_in4, specimen.STEEL_DENSITY_LBF_S2_IN4 * g.area_in2
+    )
+    errors = [abs(specimen.uniform_beam_frequencies_hz(20.3125, n)[0] / exact - 1) for n in (4, 8, 16)]
     # cubic Hermite elements: eigenvalue error ~ h^4, so halving h cuts it ~16x
     assert errors[2] < 1e-5
     assert errors[0] / errors[1] > 10 and errors[1] / errors[2] > 10
@@ -60,8 +60,8 @@ def test_nodes_lie_between_the_bonded_and_unbonded_joint_limits(mode1):
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 3 asks for nodes within 0.3\" of 4.5\"; beam theory for the paper's "
-    "geometry puts them at 4.9-5.35\" for any joint stiffness (central plate mass), so "
+    reason='issue 3 asks for nodes within 0.3" of 4.5"; beam theory for the paper\'s '
+    'geometry puts them at 4.9-5.35" for any joint stiffness (central plate mass), so '
     "the paper's 4.5\" is where the tubing hung, not the exact node",
 )
 def test_nodes_within_0p3_in_of_suspension_points(mode1):

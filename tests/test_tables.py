@@ -4,8 +4,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.tables import (column_units, concatenate_columns, read_columns, read_table, write_columns, write_json,
-                             write_table)
+from workflow.io.tables import (
+    column_units,
+    concatenate_columns,
+    read_columns,
+    read_table,
+    write_columns,
+    write_json,
+    write_table,
+)
 
 
 def test_units_round_trip_as_field_metadata(tmp_path):
@@ -20,7 +27,7 @@ def test_units_round_trip_as_field_metadata(tmp_path):
 
 def test_failed_write_leaves_no_file(tmp_path):
     path = tmp_path / "t.parquet"
-    with pytest.raises(Exception):
+    with pytest.raises(Exception):  # noqa: B017 - any failure of the write must leave no file
         write_table(pd.DataFrame({"x": [object()]}), path)
     assert list(tmp_path.iterdir()) == []
 
@@ -33,9 +40,13 @@ def test_json_rejects_nan(tmp_path):
 
 
 def test_columns_round_trip_in_order_with_their_types(tmp_path):
-    columns = {"run": np.array(["run01", "run10"]), "zeta": np.array([0.01, np.nan]),
-               "kept": np.array([True, False]), "reason": np.array(["", "noise_floor"]),
-               "empty": np.array([], dtype=float)}
+    columns = {
+        "run": np.array(["run01", "run10"]),
+        "zeta": np.array([0.01, np.nan]),
+        "kept": np.array([True, False]),
+        "reason": np.array(["", "noise_floor"]),
+        "empty": np.array([], dtype=float),
+    }
     path = tmp_path / "c.npz"
     write_columns(path, columns)
     back = read_columns(path)
@@ -47,8 +58,16 @@ def test_columns_round_trip_in_order_with_their_types(tmp_path):
 
 
 def test_concatenated_columns_stack_rows_and_keep_types():
-    first = {"run": np.array(["run01", "run01"]), "zeta": np.array([0.01, 0.02]), "kept": np.array([True, False])}
-    empty = {"run": np.array([], dtype=str), "zeta": np.array([], dtype=float), "kept": np.array([], dtype=bool)}
+    first = {
+        "run": np.array(["run01", "run01"]),
+        "zeta": np.array([0.01, 0.02]),
+        "kept": np.array([True, False]),
+    }
+    empty = {
+        "run": np.array([], dtype=str),
+        "zeta": np.array([], dtype=float),
+        "kept": np.array([], dtype=bool),
+    }
     second = {"run": np.array(["run10"]), "zeta": np.array([0.03]), "kept": np.array([True])}
     stacked = concatenate_columns([first, empty, second])
     assert list(stacked) == ["run", "zeta", "kept"]

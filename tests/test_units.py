@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from workflow import units
+from workflow.io import units
 
 
 def test_standard_gravity_is_exact_in_inches():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
-from workflow import virtual_lab as vl
+from workflow.lab import virtual_lab as vl
 
 SETTINGS = vl.LabSettings()
 
@@ -48,8 +48,11 @@ def test_campaign_layout_and_truth_beside(demo):
 def test_run_file_format_trigger_and_quantisation(demo):
     out, _ = demo
     header, data = _read(out / "no_washer" / "run01.txt")
-    assert header[1:] == ["Sample rate: 2560 Hz", "Pre-trigger: 25 samples",
-                          "Time (s)\tForce (lbf)\tAcceleration (g)"]
+    assert header[1:] == [
+        "Sample rate: 2560 Hz",
+        "Pre-trigger: 25 samples",
+        "Time (s)\tForce (lbf)\tAcceleration (g)",
+    ]
     assert data.shape == (8192, 3)
     assert np.allclose(np.diff(data[:, 0]), 1 / 2560, atol=1e-6)  # 6 printed decimals
     force, acc = data[:, 1], data[:, 2]
@@ -62,7 +65,7 @@ def test_run_file_format_trigger_and_quantisation(demo):
 
 
 def test_campaign_reader_accepts_it(demo):
-    campaign = pytest.importorskip("workflow.campaign")
+    campaign = pytest.importorskip("workflow.io.campaign")
     out, _ = demo
     meta = campaign.load_campaign(out)
     runs = campaign.list_runs(out, meta)
@@ -106,9 +109,9 @@ def test_slow_flow_matches_direct_integration(no_washer):
     a0 = 3.0 / (abs(jm.mode.accelerometer_participation) * w0)  # 3 in/s
     dt = 2 * np.pi / w0 / 200
     n = int(0.4 / dt)
-    xi = vl.integrate_patch_ringdown(a0, w0, SETTINGS.zeta0, jm.slip_per_xi,
-                                     jm.patches.stiffness_lbf_in, jm.patches.slip_force_lbf,
-                                     dt, n)
+    xi = vl.integrate_patch_ringdown(
+        a0, w0, SETTINGS.zeta0, jm.slip_per_xi, jm.patches.stiffness_lbf_in, jm.patches.slip_force_lbf, dt, n
+    )
     t = np.arange(n) * dt
     peaks = np.flatnonzero((xi[1:-1] > xi[:-2]) & (xi[1:-1] >= xi[2:])) + 1
     # parabolic refinement of each peak
@@ -134,8 +137,9 @@ def test_quadratic_damping_raises_damping_not_frequency(no_washer, size):
     setup, curves = no_washer
     v = np.logspace(-1, 1, 21)
     base = vl.truth_curves(setup, vl.mode_table(setup, curves, SETTINGS, "dahl", None, None), v)
-    quad = vl.truth_curves(setup, vl.mode_table(setup, curves, SETTINGS, "dahl",
-                                                "quadratic_damping", size), v)
+    quad = vl.truth_curves(
+        setup, vl.mode_table(setup, curves, SETTINGS, "dahl", "quadratic_damping", size), v
+    )
     added = quad[0] - base[0]
     # zeta added grows linearly with amplitude: size at the reference velocity
     # (2 %: the modal amplitude of a velocity differs by the ~1 % frequency shift)
@@ -151,8 +155,9 @@ def test_stiffness_nonlinearity_shifts_frequency_only(no_washer, size):
     setup, curves = no_washer
     v = np.logspace(-1, 1, 21)
     base = vl.truth_curves(setup, vl.mode_table(setup, curves, SETTINGS, "dahl", None, None), v)
-    soft = vl.truth_curves(setup, vl.mode_table(setup, curves, SETTINGS, "dahl",
-                                                "stiffness_nonlinearity", size), v)
+    soft = vl.truth_curves(
+        setup, vl.mode_table(setup, curves, SETTINGS, "dahl", "stiffness_nonlinearity", size), v
+    )
     ratio = np.interp(np.log(vl.REFERENCE_VELOCITY_IN_S), np.log(v), soft[1] / base[1])
     assert ratio == pytest.approx(1 - size, abs=0.1 * size)
     assert np.all(np.diff(soft[1] / base[1]) < 0)
@@ -161,9 +166,14 @@ def test_stiffness_nonlinearity_shifts_frequency_only(no_washer, size):
 
 
 def test_run_drift_shifts_damping_with_run_order(tmp_path):
-    truth = vl.generate_campaign(tmp_path / "drift", joint="dahl", effect="run_drift",
-                                 effect_size=0.3, runs_per_configuration=4,
-                                 configurations={"no_washer": 1.36})
+    truth = vl.generate_campaign(
+        tmp_path / "drift",
+        joint="dahl",
+        effect="run_drift",
+        effect_size=0.3,
+        runs_per_configuration=4,
+        configurations={"no_washer": 1.36},
+    )
     assert truth["expected_cause"] == "run_drift"
     v = np.array(truth["velocity_amplitude_in_s"])
     sel = (v > 0.1) & (v < 3)
@@ -175,9 +185,14 @@ def test_run_drift_shifts_damping_with_run_order(tmp_path):
 
 
 def test_second_mode_appears_in_band(tmp_path):
-    truth = vl.generate_campaign(tmp_path / "two", joint="dahl", effect="second_mode",
-                                 effect_size=0.6, runs_per_configuration=1,
-                                 configurations={"no_washer": 1.36})
+    truth = vl.generate_campaign(
+        tmp_path / "two",
+        joint="dahl",
+        effect="second_mode",
+        effect_size=0.6,
+        runs_per_configuration=1,
+        configurations={"no_washer": 1.36},
+    )
     assert truth["expected_cause"] == "unknown"
     _, data = _read(tmp_path / "two" / "no_washer" / "run01.txt")
     spectrum = np.abs(np.fft.rfft(data[:, 2] * np.hanning(8192)))

@@ -5,10 +5,10 @@ import re
 
 import pandas as pd
 import pytest
-
-from workflow.tables import column_units
-from workflow.virtual_lab import generate_campaign
 from helpers import checksums, run_snakemake, write_run_with_bad_cell
+
+from workflow.io.tables import column_units
+from workflow.lab.virtual_lab import generate_campaign
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 
@@ -25,8 +25,6 @@ def job_counts(dry_run_output: str) -> dict[str, int]:
     return counts
 
 
-
-
 # Two runs per analyse_runs job, so that a configuration has several jobs and the
 # corrupted run04 shares its job with the good run03.
 GROUPED = "runs_per_job=2"
@@ -37,8 +35,9 @@ def finished_run(tmp_path_factory):
     """A 2-configuration x 3-run virtual-lab campaign with one corrupted run, analysed."""
     root = tmp_path_factory.mktemp("study")
     campaign = root / "campaign"
-    generate_campaign(campaign, seed=7, runs_per_configuration=3,
-                      configurations={"no_washer": 1.36, "small_washer": 0.17})
+    generate_campaign(
+        campaign, seed=7, runs_per_configuration=3, configurations={"no_washer": 1.36, "small_washer": 0.17}
+    )
     # line 40 of the file: a cell that is not a number
     write_run_with_bad_cell(campaign / "no_washer" / "run03.txt", campaign / "no_washer" / "run04.txt")
     before = checksums(campaign)
@@ -53,8 +52,15 @@ def test_segments_table_follows_the_contract(finished_run):
     _, workdir, _ = finished_run
     path = workdir / "results/tables/segments.parquet"
     segments = pd.read_parquet(path)
-    for column in ["configuration", "run", "t_s", "response_amplitude",
-                   "velocity_amplitude_in_s", "frequency_hz", "zeta"]:
+    for column in [
+        "configuration",
+        "run",
+        "t_s",
+        "response_amplitude",
+        "velocity_amplitude_in_s",
+        "frequency_hz",
+        "zeta",
+    ]:
         assert column in segments.columns
     units = column_units(path)
     assert units["velocity_amplitude_in_s"] == "in/s"
@@ -80,7 +86,9 @@ def test_bad_run_is_listed_with_file_and_line_and_others_complete(finished_run):
     assert len(used) == 6
     assert (used["reason"] == "").all()
     segments = pd.read_parquet(workdir / "results/tables/segments.parquet")
-    assert set(zip(segments["configuration"], segments["run"])) == set(zip(used["configuration"], used["run"]))
+    assert set(zip(segments["configuration"], segments["run"])) == set(
+        zip(used["configuration"], used["run"])
+    )
 
 
 def test_tables_do_not_depend_on_how_runs_are_grouped_into_jobs(finished_run, tmp_path):
@@ -91,8 +99,10 @@ def test_tables_do_not_depend_on_how_runs_are_grouped_into_jobs(finished_run, tm
     assert result.returncode == 0, result.stderr[-4000:]
     assert len(list((tmp_path / "results/benchmarks/analyse_runs").rglob("*.tsv"))) == 7  # a job per run
     for name in tables:
-        pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / f"results/tables/{name}.parquet"),
-                                      pd.read_parquet(workdir / f"results/tables/{name}.parquet"))
+        pd.testing.assert_frame_equal(
+            pd.read_parquet(tmp_path / f"results/tables/{name}.parquet"),
+            pd.read_parquet(workdir / f"results/tables/{name}.parquet"),
+        )
 
 
 def test_raw_files_are_never_modified(finished_run):
@@ -103,9 +113,14 @@ def test_raw_files_are_never_modified(finished_run):
 def test_figures_and_fit_tables_exist(finished_run):
     _, workdir, _ = finished_run
     figures = workdir / "results/figures"
-    for name in ["fig09_time_history.png", "fig10_damping_no_washer.png",
-                 "fig11_damping_small_washer.png", "fig13_area_fits.png",
-                 "backbone_no_washer.png", "backbone_small_washer.png"]:
+    for name in [
+        "fig09_time_history.png",
+        "fig10_damping_no_washer.png",
+        "fig11_damping_small_washer.png",
+        "fig13_area_fits.png",
+        "backbone_no_washer.png",
+        "backbone_small_washer.png",
+    ]:
         assert (figures / name).stat().st_size > 10_000, name
     hypotheses = pd.read_parquet(workdir / "results/tables/hypotheses.parquet")
     assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive"}
@@ -120,8 +135,16 @@ def test_nothing_to_do_after_a_complete_run(finished_run):
 
 def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
     campaign, workdir, _ = finished_run
-    result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}", GROUPED,
-                       "analysis={segment_cycles: 8}")
+    result = snakemake(
+        workdir,
+        "-n",
+        "-c2",
+        "measured",
+        "--config",
+        f"campaign={campaign}",
+        GROUPED,
+        "analysis={segment_cycles: 8}",
+    )
     assert result.returncode == 0, result.stderr[-2000:]
     counts = job_counts(result.stdout)
     assert counts["analyse_runs"] == 4  # 4 + 3 runs, two per job

@@ -20,7 +20,7 @@ Integrator (why it is fast and what it does about stiffness)
   nonlinearity rather than with ``(omega h)^4`` alone, so ~20 steps per period give
   envelope errors far below 1e-3 (``bench/bench_integrator.py``).
 * **Dahl without stiffness.** Dahl is rate independent; between velocity reversals its
-  state is an exact function of slip (:func:`workflow.friction.dahl_branch_z`). The
+  state is an exact function of slip (:func:`workflow.models.friction.dahl_branch_z`). The
   integrator keeps the last reversal and the direction as per-set memory, and evaluates
   the joint force algebraically at every stage. The stiff rate ``sigma |v| / Fc`` (which
   may exceed omega by orders of magnitude in deep sliding) never enters a stability
@@ -46,7 +46,7 @@ Integrator (why it is fast and what it does about stiffness)
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from collections.abc import Mapping
 
 import numba
 import numpy as np
@@ -54,7 +54,7 @@ from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 from scipy.signal import hilbert
 
-from workflow import friction
+from workflow.models import friction
 
 __all__ = [
     "JOINT_PARAMETERS",
@@ -98,8 +98,7 @@ def _propagator(k: float, c: float, t: float) -> tuple[float, float, float, floa
     else:
         cos, sinc = 1.0, t
     decay = math.exp(-mu * t)
-    return (decay * (cos + mu * sinc), decay * sinc, -k * decay * sinc,
-            decay * (cos - mu * sinc))
+    return (decay * (cos + mu * sinc), decay * sinc, -k * decay * sinc, decay * (cos - mu * sinc))
 
 
 @_jit
@@ -111,8 +110,9 @@ def _propagator_batch(k, c, t):
     return out
 
 
-def oscillator_propagator(stiffness_per_s2: ArrayLike, damping_per_s: ArrayLike, t_s: float
-                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def oscillator_propagator(
+    stiffness_per_s2: ArrayLike, damping_per_s: ArrayLike, t_s: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Exact flow ``exp(L t)`` of ``x'' + C x' + K x = 0`` for state ``(x, x')``.
 
     Parameters
@@ -129,17 +129,15 @@ def oscillator_propagator(stiffness_per_s2: ArrayLike, damping_per_s: ArrayLike,
     e00, e01, e10, e11 : numpy.ndarray
         Matrix entries; ``e01`` in s, ``e10`` in 1/s.
     """
-    k, c = np.broadcast_arrays(np.asarray(stiffness_per_s2, float),
-                               np.asarray(damping_per_s, float))
-    out = _propagator_batch(np.ascontiguousarray(k).ravel(), np.ascontiguousarray(c).ravel(),
-                            float(t_s))
+    k, c = np.broadcast_arrays(np.asarray(stiffness_per_s2, float), np.asarray(damping_per_s, float))
+    out = _propagator_batch(np.ascontiguousarray(k).ravel(), np.ascontiguousarray(c).ravel(), float(t_s))
     return tuple(row.reshape(k.shape) for row in out)
 
 
 # ------------------------------------------------------------------------------ kernel
 @_jit
 def _lugre_rate_coeff(v, sigma0, alpha0, alpha1, v0):
-    return sigma0 / (alpha0 + alpha1 * math.exp(-(v / v0) ** 2))
+    return sigma0 / (alpha0 + alpha1 * math.exp(-((v / v0) ** 2)))
 
 
 @_jit
@@ -151,14 +149,27 @@ def _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0, xi, eta, z):
     if kind == 2:
         v = phi * eta
         z_dot = v - _lugre_rate_coeff(v, p[0], p[2], p[3], p[5]) * abs(v) * z
-        f = p[0] * z + p[1] * math.exp(-(v / p[6]) ** 2) * z_dot + p[4] * v
+        f = p[0] * z + p[1] * math.exp(-((v / p[6]) ** 2)) * z_dot + p[4] * v
         return -phi * (f - k_joint * phi * xi - c_joint * v), z_dot
     return 0.0, 0.0
 
 
 @_jit
-def _ringdown_kernel(kind, params, phi_all, k_lin_all, c_lin_all, k_joint_all, c_joint_all,
-                     v_init_all, substeps, dt_out, disp, vel, acc):
+def _ringdown_kernel(
+    kind,
+    params,
+    phi_all,
+    k_lin_all,
+    c_lin_all,
+    k_joint_all,
+    c_joint_all,
+    v_init_all,
+    substeps,
+    dt_out,
+    disp,
+    vel,
+    acc,
+):
     """Lawson RK4 ring-down of every set; writes rows of disp, vel, acc (modal units)."""
     n_out = disp.shape[1]
     for i in range(disp.shape[0]):
@@ -194,16 +205,28 @@ def _ringdown_kernel(kind, params, phi_all, k_lin_all, c_lin_all, k_joint_all, c
                     ez = math.exp(-a * hh)
                     d1 += a * z
                 w2 = ez * (z + hh * d1)
-                n2, d2 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0,
-                                    exi + hh * e01 * n1, eeta + hh * e11 * n1, w2)
+                n2, d2 = _remainder(
+                    kind,
+                    p,
+                    phi,
+                    k_joint,
+                    c_joint,
+                    a0,
+                    a1,
+                    b,
+                    b0,
+                    exi + hh * e01 * n1,
+                    eeta + hh * e11 * n1,
+                    w2,
+                )
                 d2 += a * w2
                 w3 = ez * z + hh * d2
-                n3, d3 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0,
-                                    exi, eeta + hh * n2, w3)
+                n3, d3 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0, exi, eeta + hh * n2, w3)
                 d3 += a * w3
                 w4 = ez * ez * z + h * ez * d3
-                n4, d4 = _remainder(kind, p, phi, k_joint, c_joint, a0, a1, b, b0,
-                                    pxi + h * e01 * n3, peta + h * e11 * n3, w4)
+                n4, d4 = _remainder(
+                    kind, p, phi, k_joint, c_joint, a0, a1, b, b0, pxi + h * e01 * n3, peta + h * e11 * n3, w4
+                )
                 d4 += a * w4
                 n23 = n2 + n3
                 xi_new = pxi + h / 6.0 * p01 * n1 + h / 3.0 * e01 * n23
@@ -264,10 +287,18 @@ def _joint_linearisation(model: str, p: np.ndarray) -> tuple[np.ndarray, np.ndar
     return zero, zero, zero
 
 
-def simulate_ringdown(model: str, params: Mapping[str, ArrayLike], *,
-                      omega_rad_s: ArrayLike, zeta0: ArrayLike, slip_per_modal: ArrayLike = 1.0,
-                      initial_velocity: ArrayLike, fs_out_hz: float, duration_s: float,
-                      steps_per_period: int = 64) -> dict[str, np.ndarray | float]:
+def simulate_ringdown(
+    model: str,
+    params: Mapping[str, ArrayLike],
+    *,
+    omega_rad_s: ArrayLike,
+    zeta0: ArrayLike,
+    slip_per_modal: ArrayLike = 1.0,
+    initial_velocity: ArrayLike,
+    fs_out_hz: float,
+    duration_s: float,
+    steps_per_period: int = 64,
+) -> dict[str, np.ndarray | float]:
     """Batched ring-down of eq. 9 by exponential (Lawson) RK4 with a fixed step per set.
 
     Parameters
@@ -275,7 +306,7 @@ def simulate_ringdown(model: str, params: Mapping[str, ArrayLike], *,
     model : {"dahl", "lugre", "none"}
         Joint force model (``none``: the linear damped oscillator).
     params : mapping of array_like
-        Joint parameters (:data:`JOINT_PARAMETERS`; units in :mod:`workflow.friction`),
+        Joint parameters (:data:`JOINT_PARAMETERS`; units in :mod:`workflow.models.friction`),
         each broadcastable to the batch.
     omega_rad_s : array_like
         Natural frequency of the linear mode without the joint, rad/s.
@@ -305,8 +336,9 @@ def simulate_ringdown(model: str, params: Mapping[str, ArrayLike], *,
     missing = set(names) - set(params)
     if missing:
         raise ValueError(f"{model} needs parameters {sorted(missing)}")
-    batch = _broadcast_batch(omega_rad_s, zeta0, slip_per_modal, initial_velocity,
-                             *[params[k] for k in names])
+    batch = _broadcast_batch(
+        omega_rad_s, zeta0, slip_per_modal, initial_velocity, *[params[k] for k in names]
+    )
     col = lambda a: np.ascontiguousarray(np.broadcast_to(np.asarray(a, float), (batch,)))  # noqa: E731
     p = np.stack([col(params[k]) for k in names], axis=1) if names else np.zeros((batch, 0))
     omega, zeta, phi, v_init = col(omega_rad_s), col(zeta0), col(slip_per_modal), col(initial_velocity)
@@ -325,8 +357,7 @@ def simulate_ringdown(model: str, params: Mapping[str, ArrayLike], *,
     disp = np.empty((batch, n_out))
     vel = np.empty((batch, n_out))
     acc = np.empty((batch, n_out))
-    _ringdown_kernel(_KIND[model], p, phi, k_lin, c_lin, k_joint, c_joint, v_init, m, dt_out,
-                     disp, vel, acc)
+    _ringdown_kernel(_KIND[model], p, phi, k_lin, c_lin, k_joint, c_joint, v_init, m, dt_out, disp, vel, acc)
     return {
         "t_s": np.arange(n_out) * dt_out,
         "displacement": disp,
@@ -338,10 +369,19 @@ def simulate_ringdown(model: str, params: Mapping[str, ArrayLike], *,
 
 
 # ---------------------------------------------------------------------------- reference
-def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: float,
-                       zeta0: float, slip_per_modal: float = 1.0, initial_velocity: float,
-                       fs_out_hz: float, duration_s: float, method: str = "LSODA",
-                       rtol: float = 1e-10) -> dict[str, np.ndarray]:
+def reference_ringdown(
+    model: str,
+    params: Mapping[str, float],
+    *,
+    omega_rad_s: float,
+    zeta0: float,
+    slip_per_modal: float = 1.0,
+    initial_velocity: float,
+    fs_out_hz: float,
+    duration_s: float,
+    method: str = "LSODA",
+    rtol: float = 1e-10,
+) -> dict[str, np.ndarray]:
     """One ring-down by ``scipy.integrate.solve_ivp`` on the paper's ODE form.
 
     The state is ``(xi, xi', z)`` with ``z`` obeying eq. 4a (Dahl) or 5a (LuGre)
@@ -373,10 +413,11 @@ def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: 
         z_scale = p["fc"] / p["sigma"]
     elif model == "lugre":
         rate = lambda z, v: friction.lugre_z_rate(  # noqa: E731
-            z, v, p["sigma0"], p["alpha0"], p["alpha1"], p["v0"])
+            z, v, p["sigma0"], p["alpha0"], p["alpha1"], p["v0"]
+        )
         force = lambda z, v: friction.lugre_force(  # noqa: E731
-            z, v, p["sigma0"], p["sigma1"], p["alpha0"], p["alpha1"], p["alpha2"],
-            p["v0"], p["vd"])
+            z, v, p["sigma0"], p["sigma1"], p["alpha0"], p["alpha1"], p["alpha2"], p["v0"], p["vd"]
+        )
         z_scale = min(p["alpha0"], p["alpha0"] + p["alpha1"]) / p["sigma0"]
     elif model == "none":
         rate = lambda z, v: 0.0 * z  # noqa: E731
@@ -396,18 +437,24 @@ def reference_ringdown(model: str, params: Mapping[str, float], *, omega_rad_s: 
     t = np.arange(n_out) / fs_out_hz
     x_scale = abs(initial_velocity) / omega_rad_s
     atol = rtol * np.array([x_scale, abs(initial_velocity), min(z_scale, abs(phi) * x_scale)])
-    sol = solve_ivp(rhs, (0.0, t[-1]), [0.0, float(initial_velocity), 0.0], method=method,
-                    t_eval=t, rtol=rtol, atol=atol)
+    sol = solve_ivp(
+        rhs, (0.0, t[-1]), [0.0, float(initial_velocity), 0.0], method=method, t_eval=t, rtol=rtol, atol=atol
+    )
     if not sol.success:
         raise RuntimeError(f"reference integration failed: {sol.message}")
     xi, eta, z = sol.y
-    return {"t_s": t, "displacement": xi, "velocity": eta,
-            "acceleration": np.array([accel(a, b, c) for a, b, c in zip(xi, eta, z)]),
-            "nfev": sol.nfev}
+    return {
+        "t_s": t,
+        "displacement": xi,
+        "velocity": eta,
+        "acceleration": np.array([accel(a, b, c) for a, b, c in zip(xi, eta, z)]),
+        "nfev": sol.nfev,
+    }
 
 
-def envelope_relative_error(signal: ArrayLike, reference: ArrayLike, *, trim_fraction: float = 0.05,
-                            floor_fraction: float = 1e-3) -> np.ndarray:
+def envelope_relative_error(
+    signal: ArrayLike, reference: ArrayLike, *, trim_fraction: float = 0.05, floor_fraction: float = 1e-3
+) -> np.ndarray:
     """Largest relative difference of Hilbert envelopes, ``max |e_s - e_r| / e_r``.
 
     The first and last ``trim_fraction`` of the record are skipped (the discrete

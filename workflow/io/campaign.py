@@ -49,8 +49,14 @@ import numpy as np
 from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
 
-from workflow import units
-from workflow.validation import FORBID_UNKNOWN_KEYS, MISSING_KEY_ERRORS, UNKNOWN_KEY_ERRORS, After, validate
+from workflow.io import units
+from workflow.io.validation import (
+    FORBID_UNKNOWN_KEYS,
+    MISSING_KEY_ERRORS,
+    UNKNOWN_KEY_ERRORS,
+    After,
+    validate,
+)
 
 if TYPE_CHECKING:
     import yaml
@@ -142,7 +148,7 @@ def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | Non
     return band
 
 
-# Settings dataclasses (workflow/validation.py): load_campaign validates campaign.yaml
+# Settings dataclasses (workflow/io/validation.py): load_campaign validates campaign.yaml
 # into them; jobs that read the validated copy (campaign_to_dict / campaign_from_dict)
 # never import pydantic or PyYAML.
 _CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True}
@@ -163,8 +169,7 @@ class ResponseSpec:
         allowed = units.known_units(self.quantity)
         if canonical not in allowed:
             raise ValueError(
-                f"unit {self.unit!r} is not a unit of {self.quantity}; "
-                f"expected one of {', '.join(allowed)}"
+                f"unit {self.unit!r} is not a unit of {self.quantity}; expected one of {', '.join(allowed)}"
             )
         object.__setattr__(self, "unit", canonical)
 
@@ -226,8 +231,11 @@ def campaign_from_dict(data: dict[str, Any]) -> Campaign:
         name=data["name"],
         response=ResponseSpec(**data["response"]),
         configurations={
-            name: ConfigurationSpec(files=spec["files"], bearing_area_in2=spec["bearing_area_in2"],
-                                    window_s=pair(spec["window_s"]))
+            name: ConfigurationSpec(
+                files=spec["files"],
+                bearing_area_in2=spec["bearing_area_in2"],
+                window_s=pair(spec["window_s"]),
+            )
             for name, spec in data["configurations"].items()
         },
         sample_rate_hz=data["sample_rate_hz"],
@@ -274,9 +282,7 @@ def _node_line(root: yaml.Node | None, loc: tuple[Any, ...]) -> int | None:
     node, line = root, None
     for part in loc:
         if isinstance(node, yaml.MappingNode):
-            match = next(
-                ((key, value) for key, value in node.value if str(key.value) == str(part)), None
-            )
+            match = next(((key, value) for key, value in node.value if str(key.value) == str(part)), None)
             if match is None:
                 return line  # a missing key: the line of its parent (None at top level)
             line = match[0].start_mark.line + 1
@@ -510,10 +516,7 @@ def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) ->
             )
     cells = _split_row(stripped, delimiter)
     if delimiter != _SPACES and any(re.search(r"\s", cell) for cell in cells):
-        return (
-            f"mixed delimiters: spaces inside a cell of a row separated by "
-            f"{_DELIMITER_NAMES[delimiter]}"
-        )
+        return f"mixed delimiters: spaces inside a cell of a row separated by {_DELIMITER_NAMES[delimiter]}"
     if len(cells) != n_columns:
         return (
             f"ragged row: {len(cells)} value{'s' if len(cells) != 1 else ''}, expected "
@@ -542,10 +545,10 @@ def _parse_block_careful(
     """Parse that names the first bad line (chunked; line by line where needed)."""
     values = np.empty((len(rows), n_columns))
     for start in range(0, len(rows), CAREFUL_CHUNK_ROWS):
-        chunk = rows[start:start + CAREFUL_CHUNK_ROWS]
+        chunk = rows[start : start + CAREFUL_CHUNK_ROWS]
         fast = _parse_block_fast("\n".join(chunk), delimiter, len(chunk), n_columns)
         if fast is not None:
-            values[start:start + len(chunk)] = fast
+            values[start : start + len(chunk)] = fast
             continue
         for index, row in enumerate(chunk, start=start):
             problem = _row_problem(row, delimiter, n_columns, first_line)
@@ -559,13 +562,21 @@ def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -
     """C-parser read of the numeric block; None whenever the careful pass must decide."""
     if _FOREIGN[delimiter].search(block):
         return None
-    if delimiter != _SPACES and block.count(delimiter + "\n") == n_rows - 1 and \
-            block.rstrip().endswith(delimiter):
+    if (
+        delimiter != _SPACES
+        and block.count(delimiter + "\n") == n_rows - 1
+        and block.rstrip().endswith(delimiter)
+    ):
         block = block.replace(delimiter + "\n", "\n").rstrip()[:-1]  # one trailing delimiter per row
     try:
         # NumPy's C reader (not pandas): the run-analysis jobs then start without pandas.
-        values = np.loadtxt(io.StringIO(block), delimiter=None if delimiter == _SPACES else delimiter,
-                            comments=None, ndmin=2, dtype=np.float64)
+        values = np.loadtxt(
+            io.StringIO(block),
+            delimiter=None if delimiter == _SPACES else delimiter,
+            comments=None,
+            ndmin=2,
+            dtype=np.float64,
+        )
     except ValueError:
         return None
     if values.shape != (n_rows, n_columns) or not np.isfinite(values).all():
@@ -668,12 +679,21 @@ def _canonical_header_key(key: str) -> tuple[str, str | None]:
 
 
 _SAMPLE_RATE_KEYS = {
-    "sample rate", "sampling rate", "sample frequency", "sampling frequency",
-    "sampling freq", "sample freq", "fs",
+    "sample rate",
+    "sampling rate",
+    "sample frequency",
+    "sampling frequency",
+    "sampling freq",
+    "sample freq",
+    "fs",
 }
 _PRETRIGGER_KEYS = {
-    "pre trigger", "pretrigger", "pre trigger samples", "pretrigger samples",
-    "pre trigger length", "pretrigger length",
+    "pre trigger",
+    "pretrigger",
+    "pre trigger samples",
+    "pretrigger samples",
+    "pre trigger length",
+    "pretrigger length",
 }
 _RATE_FACTORS_HZ = {"": 1.0, "hz": 1.0, "khz": 1e3, "sps": 1.0, "samples/s": 1.0, "s/s": 1.0}
 _PRETRIGGER_SAMPLE_UNITS = {"", "samples", "sample", "points", "pts"}
@@ -719,7 +739,8 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
                 pre_s, pre_line = amount * _PRETRIGGER_TIME_UNITS_S[unit], number
             else:
                 raise CampaignFormatError(
-                    path, number,
+                    path,
+                    number,
                     f"cannot read the pre-trigger from {line.strip()!r} "
                     "(expected a whole number of samples, e.g. 'Pre-trigger: 25 samples')",
                 )
@@ -830,13 +851,16 @@ def _majority(items: list[Any], fallback: Any) -> Any:
 
 
 def _find_columns(
-    header: list[tuple[int, str]], first_line: int, delimiter: str, n_columns: int,
-    campaign: Campaign, path: str,
+    header: list[tuple[int, str]],
+    first_line: int,
+    delimiter: str,
+    n_columns: int,
+    campaign: Campaign,
+    path: str,
 ) -> _Columns:
     """Column roles and units from the line of names, or the positional rules."""
     text_lines = [
-        (number, line) for number, line in header
-        if line.strip() and not _KEY_VALUE.fullmatch(line)
+        (number, line) for number, line in header if line.strip() and not _KEY_VALUE.fullmatch(line)
     ]
     # A first data row with a bad cell is not numeric and so lands in the header:
     # recognise it by its shape so that it is reported instead of silently dropped.
@@ -862,7 +886,8 @@ def _find_columns(
                 units_cells = _is_units_row(last_line, delimiter, n_columns)
                 if units_cells is None:
                     raise CampaignFormatError(
-                        path, last_number,
+                        path,
+                        last_number,
                         f"unexpected text {last_line.strip()!r} between the column names "
                         f"(line {above_number}) and the numbers",
                     )
@@ -871,7 +896,8 @@ def _find_columns(
             roles_in_line = {_column_role(t) for t in _merge_unit_tokens(last_line.split())} - {None}
             if len(roles_in_line) >= 2:
                 raise CampaignFormatError(
-                    path, last_number,
+                    path,
+                    last_number,
                     f"the column names do not match the {n_columns} column(s) of numbers",
                 )
 
@@ -884,7 +910,8 @@ def _find_columns(
             order = ("response",)
         else:
             raise CampaignFormatError(
-                path, first_line,
+                path,
+                first_line,
                 f"{n_columns} columns and no line of column names: cannot tell which is "
                 "the response (name the columns, e.g. 'Time (s)  Force (lbf)  Acceleration (g)')",
             )
@@ -898,7 +925,8 @@ def _find_columns(
             continue  # columns with other names (extra channels) are not used
         if role in roles:
             raise CampaignFormatError(
-                path, names_line,
+                path,
+                names_line,
                 f"two {role} columns: {names[roles[role]]!r} and {name!r}",
             )
         roles[role] = index
@@ -908,15 +936,16 @@ def _find_columns(
         column_units[role] = unit
     if "response" not in roles:
         raise CampaignFormatError(
-            path, names_line,
-            f"no response column among {names} (a response column's name contains "
-            "acc, vel, resp or disp)",
+            path,
+            names_line,
+            f"no response column among {names} (a response column's name contains acc, vel, resp or disp)",
         )
     response_name = _split_name_unit(names[roles["response"]])[0].lower()
     for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
         if word in response_name and quantity != campaign.response.quantity:
             raise CampaignFormatError(
-                path, names_line,
+                path,
+                names_line,
                 f"response column {names[roles['response']]!r} is {quantity} but "
                 f"campaign.yaml says response quantity {campaign.response.quantity}",
             )
@@ -935,7 +964,8 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     response_unit = columns.units.get("response")
     if response_unit and units.normalize_unit(response_unit) != campaign.response.unit:
         raise CampaignFormatError(
-            path, line,
+            path,
+            line,
             f"response column unit {response_unit!r} disagrees with campaign.yaml "
             f"response unit {campaign.response.unit!r}",
         )
@@ -949,7 +979,8 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
                 raise CampaignFormatError(path, line, f"force column unit {file_unit!r}: expected lbf or N")
             if yaml_unit is not None and canonical != yaml_unit:
                 raise CampaignFormatError(
-                    path, line,
+                    path,
+                    line,
                     f"force column unit {file_unit!r} disagrees with campaign.yaml force unit {yaml_unit!r}",
                 )
         # The column's own unit first; else campaign.yaml's; else the original lab's lbf.
@@ -958,16 +989,15 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     return time_factor_s, force_factor_lbf
 
 
-def _check_time(
-    time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str
-) -> float:
+def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str) -> float:
     """Sample rate (Hz) from a time column that must increase in uniform steps."""
     steps = np.diff(time_s)
     backwards = np.flatnonzero(steps <= 0.0)
     if backwards.size:
         i = int(backwards[0])
         raise CampaignFormatError(
-            path, first_line + i + 1,
+            path,
+            first_line + i + 1,
             f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s",
         )
     mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
@@ -976,7 +1006,8 @@ def _check_time(
     if uneven.size:
         i = int(uneven[0])
         raise CampaignFormatError(
-            path, first_line + i + 1,
+            path,
+            first_line + i + 1,
             f"time column not uniform: step {steps[i]:.6g} s differs from the mean step "
             f"{mean_step_s:.6g} s by {100 * abs(steps[i] / mean_step_s - 1):.3g} % "
             f"(tolerance {100 * tolerance_s / mean_step_s:.3g} %)",
@@ -1031,7 +1062,8 @@ def read_run(
     if offset < 0:
         last_line = len(text.rstrip("\n").split("\n"))
         raise CampaignFormatError(
-            shown, last_line,
+            shown,
+            last_line,
             f"no numeric rows: all {last_line} line(s) are header text (expected numbers "
             "after the header, one sample per line)",
         )
@@ -1053,7 +1085,8 @@ def read_run(
     last_data_line = first_line + n_rows - 1
     if n_rows < MIN_SAMPLES:
         raise CampaignFormatError(
-            shown, last_data_line,
+            shown,
+            last_data_line,
             f"only {n_rows} samples; a run needs at least {MIN_SAMPLES}",
         )
 
@@ -1076,15 +1109,17 @@ def read_run(
         sources.append(("time column", rate_hz, first_line, 2.0 * resolution_s / duration_s))
     if not sources:
         raise CampaignFormatError(
-            shown, None,
+            shown,
+            None,
             "sample rate missing: no time column, no 'Sample rate: ... Hz' header line "
             "and no sample_rate_hz in campaign.yaml",
         )
     for i, (name_a, rate_a, line_a, slack_a) in enumerate(sources):
-        for name_b, rate_b, line_b, slack_b in sources[i + 1:]:
+        for name_b, rate_b, line_b, slack_b in sources[i + 1 :]:
             if not _rates_agree(rate_a, rate_b, slack_a + slack_b):
                 raise CampaignFormatError(
-                    shown, line_b if line_b is not None else line_a,
+                    shown,
+                    line_b if line_b is not None else line_a,
                     f"sample rate {rate_b:.9g} Hz from the {name_b} disagrees with "
                     f"{rate_a:.9g} Hz from the {name_a}",
                 )
@@ -1098,7 +1133,8 @@ def read_run(
             header_pre = int(round(header_values.pretrigger_s * sample_rate_hz))
         if campaign.pretrigger_given and header_pre != campaign.pretrigger_samples:
             raise CampaignFormatError(
-                shown, header_values.pretrigger_line,
+                shown,
+                header_values.pretrigger_line,
                 f"pre-trigger {header_pre} samples in the header disagrees with "
                 f"campaign.yaml pretrigger_samples {campaign.pretrigger_samples}",
             )
@@ -1107,7 +1143,8 @@ def read_run(
         pretrigger_source = "campaign.yaml"
     if pretrigger_samples >= n_rows:
         raise CampaignFormatError(
-            shown, header_values.pretrigger_line,
+            shown,
+            header_values.pretrigger_line,
             f"pre-trigger of {pretrigger_samples} samples is not shorter than the record ({n_rows} samples)",
         )
 

@@ -2,9 +2,9 @@
 
 A configuration's measured segments (all runs) give damping ratio and frequency versus
 velocity amplitude. A candidate parameter set is judged by simulating a ring-down
-(:mod:`workflow.modal_sim`) and passing the simulated response through the *same* chain
+(:mod:`workflow.models.ringdown`) and passing the simulated response through the *same* chain
 as the measurements (band-pass, envelope of the analytic signal, segmented log
-decrement; :mod:`workflow.decay`), so any bias of that chain affects both alike.
+decrement; :mod:`workflow.measured.decay`), so any bias of that chain affects both alike.
 
 One simulated ring-down per parameter set
 -----------------------------------------
@@ -47,17 +47,25 @@ delta method. It does not include model error beyond what ``s^2`` absorbs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from scipy.stats import qmc
 
-from workflow import decay
-from workflow.modal_sim import simulate_ringdown
+from workflow.measured import decay
+from workflow.models.ringdown import simulate_ringdown
 
-__all__ = ["FitContext", "FitResult", "ModelSpace", "model_space", "analyse_batch",
-           "model_curves", "fit_friction_model", "measurement_scatter"]
+__all__ = [
+    "FitContext",
+    "FitResult",
+    "ModelSpace",
+    "model_space",
+    "analyse_batch",
+    "model_curves",
+    "fit_friction_model",
+    "measurement_scatter",
+]
 
 
 @dataclass(frozen=True)
@@ -79,7 +87,7 @@ class FitContext:
     response : {"acceleration", "velocity", "displacement"}
         Measured quantity, so the simulated one is analysed in the same form.
     filter_order, segment_cycles, segment_overlap, edge_time_constants
-        As :func:`workflow.decay.analyse_decay`.
+        As :func:`workflow.measured.decay.analyse_decay`.
     steps_per_period : int
         Simulator steps per period (minimum; see :func:`simulate_ringdown`).
     """
@@ -148,8 +156,13 @@ class ModelSpace:
     to_physical: Callable[[np.ndarray], dict[str, np.ndarray]]
 
 
-def model_space(model: str, velocity_amplitude_in_s: np.ndarray, zeta: np.ndarray,
-                frequency_hz: np.ndarray, ctx: FitContext) -> ModelSpace:
+def model_space(
+    model: str,
+    velocity_amplitude_in_s: np.ndarray,
+    zeta: np.ndarray,
+    frequency_hz: np.ndarray,
+    ctx: FitContext,
+) -> ModelSpace:
     """Search box derived from the measured ranges and the physical parameter map.
 
     Search coordinates (Dahl): ``f0_hz``, ``log10 r``, ``log10 v_knee_in_s``,
@@ -181,12 +194,19 @@ def model_space(model: str, velocity_amplitude_in_s: np.ndarray, zeta: np.ndarra
         def to_physical(theta):
             omega0, r, stiff, force, zeta0 = base(theta)
             omega = omega0 * np.sqrt(1.0 - r)
-            return {"sigma": stiff, "fc": force, "zeta0": zeta0 * omega0 / omega,
-                    "omega_rad_s": omega}
+            return {"sigma": stiff, "fc": force, "zeta0": zeta0 * omega0 / omega, "omega_rad_s": omega}
     elif model == "lugre":
-        names = ("f0_hz", "log10_r", "log10_v_knee_in_s", "log10_zeta0",
-                 "log10_alpha1_over_alpha0", "log10_v0_in_s", "log10_vd_in_s",
-                 "zeta_sigma1", "zeta_alpha2")
+        names = (
+            "f0_hz",
+            "log10_r",
+            "log10_v_knee_in_s",
+            "log10_zeta0",
+            "log10_alpha1_over_alpha0",
+            "log10_v0_in_s",
+            "log10_vd_in_s",
+            "zeta_sigma1",
+            "zeta_alpha2",
+        )
         lower += [-3.0, v_lo, v_lo, -z_hi, 0.0]
         upper += [1.0, v_hi, v_hi, z_hi, z_hi]
 
@@ -195,11 +215,17 @@ def model_space(model: str, velocity_amplitude_in_s: np.ndarray, zeta: np.ndarra
             omega0, r, stiff, force, zeta0 = base(theta)
             omega = omega0 * np.sqrt(1.0 - r)
             slip_vel = phi / resp  # response velocity -> slip velocity
-            return {"sigma0": stiff, "alpha0": force, "alpha1": force * 10.0 ** theta[:, 4],
-                    "v0": 10.0 ** theta[:, 5] * slip_vel, "vd": 10.0 ** theta[:, 6] * slip_vel,
-                    "sigma1": 2.0 * omega0 * theta[:, 7] / phi**2,
-                    "alpha2": 2.0 * omega0 * theta[:, 8] / phi**2,
-                    "zeta0": zeta0 * omega0 / omega, "omega_rad_s": omega}
+            return {
+                "sigma0": stiff,
+                "alpha0": force,
+                "alpha1": force * 10.0 ** theta[:, 4],
+                "v0": 10.0 ** theta[:, 5] * slip_vel,
+                "vd": 10.0 ** theta[:, 6] * slip_vel,
+                "sigma1": 2.0 * omega0 * theta[:, 7] / phi**2,
+                "alpha2": 2.0 * omega0 * theta[:, 8] / phi**2,
+                "zeta0": zeta0 * omega0 / omega,
+                "omega_rad_s": omega,
+            }
     else:
         raise ValueError(f"unknown model {model!r}; expected 'dahl' or 'lugre'")
     return ModelSpace(model, names, np.array(lower), np.array(upper), to_physical)
@@ -207,7 +233,7 @@ def model_space(model: str, velocity_amplitude_in_s: np.ndarray, zeta: np.ndarra
 
 # ------------------------------------------------------------------------- analysis
 def analyse_batch(responses: np.ndarray, ctx: FitContext) -> list[dict[str, np.ndarray]]:
-    """Segmented log decrement of simulated records, chain of :mod:`workflow.decay`.
+    """Segmented log decrement of simulated records, chain of :mod:`workflow.measured.decay`.
 
     Same band-pass (analytic signal first), envelope and segments as the measurements;
     the decay starts at the envelope maximum and segments within ``edge_time_constants``
@@ -237,23 +263,27 @@ def analyse_batch(responses: np.ndarray, ctx: FitContext) -> list[dict[str, np.n
         if not np.isfinite(mode_hz) or mode_hz <= 0:
             out.append(empty)
             continue
-        starts, stops = decay.segment_bounds(start + edge, n - edge, ctx.fs_hz, mode_hz,
-                                             ctx.segment_cycles, ctx.segment_overlap)
+        starts, stops = decay.segment_bounds(
+            start + edge, n - edge, ctx.fs_hz, mode_hz, ctx.segment_cycles, ctx.segment_overlap
+        )
         seg = decay.log_decrement_segments(env, phase, ctx.fs_hz, starts, stops)
         amp, zeta, freq = seg["amplitude"], seg["zeta"], seg["frequency_hz"]
         ok = np.isfinite(zeta) & np.isfinite(freq) & (amp > 0) & (freq > 0)
         amp, zeta, freq = amp[ok], zeta[ok], freq[ok]
-        scale = {"acceleration": 1.0 / (2 * np.pi * freq), "velocity": np.ones_like(freq),
-                 "displacement": 2 * np.pi * freq}[ctx.response]
+        scale = {
+            "acceleration": 1.0 / (2 * np.pi * freq),
+            "velocity": np.ones_like(freq),
+            "displacement": 2 * np.pi * freq,
+        }[ctx.response]
         vel = amp * scale
         order = np.argsort(vel)
-        out.append({"velocity_amplitude_in_s": vel[order], "zeta": zeta[order],
-                    "frequency_hz": freq[order]})
+        out.append({"velocity_amplitude_in_s": vel[order], "zeta": zeta[order], "frequency_hz": freq[order]})
     return out
 
 
-def model_curves(model: str, phys: dict[str, np.ndarray], ctx: FitContext, *,
-                 start_velocity_in_s: float, duration_s: float) -> list[dict[str, np.ndarray]]:
+def model_curves(
+    model: str, phys: dict[str, np.ndarray], ctx: FitContext, *, start_velocity_in_s: float, duration_s: float
+) -> list[dict[str, np.ndarray]]:
     """Simulate a batch of ring-downs and analyse them like the measurements.
 
     Parameters
@@ -270,16 +300,23 @@ def model_curves(model: str, phys: dict[str, np.ndarray], ctx: FitContext, *,
     joint = {k: v for k, v in phys.items() if k not in ("omega_rad_s", "zeta0")}
     with np.errstate(all="ignore"):
         sim = simulate_ringdown(
-            model, joint, omega_rad_s=phys["omega_rad_s"], zeta0=phys["zeta0"],
+            model,
+            joint,
+            omega_rad_s=phys["omega_rad_s"],
+            zeta0=phys["zeta0"],
             slip_per_modal=ctx.slip_per_modal,
             initial_velocity=start_velocity_in_s / ctx.response_per_modal,
-            fs_out_hz=ctx.fs_hz, duration_s=duration_s, steps_per_period=ctx.steps_per_period)
+            fs_out_hz=ctx.fs_hz,
+            duration_s=duration_s,
+            steps_per_period=ctx.steps_per_period,
+        )
         response = ctx.response_per_modal * sim[ctx.response]
     return analyse_batch(response, ctx)
 
 
-def measurement_scatter(velocity_amplitude_in_s, zeta, frequency_hz, degree: int = 3,
-                        bins: int = 8, min_per_bin: int = 8) -> tuple[np.ndarray, np.ndarray]:
+def measurement_scatter(
+    velocity_amplitude_in_s, zeta, frequency_hz, degree: int = 3, bins: int = 8, min_per_bin: int = 8
+) -> tuple[np.ndarray, np.ndarray]:
     """Local scatter of ``ln zeta`` and of relative frequency about smooth trends.
 
     The trends are polynomials of ``degree`` in ``ln v`` (all runs pooled). The scatter
@@ -333,10 +370,22 @@ def _residuals(curves, v, ln_zeta, freq, s_z, s_f):
 
 
 # ---------------------------------------------------------------------------- fit
-def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, run,
-                       start_velocity_in_s, ctx: FitContext, *, global_samples: int = 256,
-                       local_starts: int = 4, max_iterations: int = 12, seed: int = 1976,
-                       start_margin: float = 1.3, initial_points=None) -> FitResult:
+def fit_friction_model(
+    model: str,
+    velocity_amplitude_in_s,
+    zeta,
+    frequency_hz,
+    run,
+    start_velocity_in_s,
+    ctx: FitContext,
+    *,
+    global_samples: int = 256,
+    local_starts: int = 4,
+    max_iterations: int = 12,
+    seed: int = 1976,
+    start_margin: float = 1.3,
+    initial_points=None,
+) -> FitResult:
     """Fit Dahl or LuGre (plus zeta0 and the linear frequency) to measured curves.
 
     Parameters
@@ -387,8 +436,9 @@ def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, 
     def evaluate(theta):
         nonlocal n_sim
         theta = np.clip(np.atleast_2d(theta), space.lower, space.upper)
-        curves = model_curves(model, space.to_physical(theta), ctx,
-                              start_velocity_in_s=v_start, duration_s=duration)
+        curves = model_curves(
+            model, space.to_physical(theta), ctx, start_velocity_in_s=v_start, duration_s=duration
+        )
         n_sim += theta.shape[0]
         return _residuals(curves, v, ln_z, f, s_z, s_f), curves
 
@@ -428,12 +478,14 @@ def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, 
                 trials.append(np.clip(theta[k] + step, space.lower, space.upper))
         trials = np.array(trials)
         # Trial points and their Jacobians in one batched simulation.
-        pts = np.concatenate([trials, np.repeat(trials, p, axis=0)
-                              + np.tile(np.diag(dstep), (trials.shape[0], 1))])
+        pts = np.concatenate(
+            [trials, np.repeat(trials, p, axis=0) + np.tile(np.diag(dstep), (trials.shape[0], 1))]
+        )
         r_all, _ = evaluate(pts)
-        r_trial = r_all[:trials.shape[0]]
-        j_trial = ((r_all[trials.shape[0]:].reshape(trials.shape[0], p, -1)
-                    - r_trial[:, None, :]).transpose(0, 2, 1) / dstep)
+        r_trial = r_all[: trials.shape[0]]
+        j_trial = (r_all[trials.shape[0] :].reshape(trials.shape[0], p, -1) - r_trial[:, None, :]).transpose(
+            0, 2, 1
+        ) / dstep
         c_trial = 0.5 * np.sum(r_trial**2, axis=1)
         improved = False
         for k in range(theta.shape[0]):
@@ -470,9 +522,15 @@ def fit_friction_model(model: str, velocity_amplitude_in_s, zeta, frequency_hz, 
     curve = curves[0]
     zm, fm = _interp_log(v, curve, "zeta"), _interp_log(v, curve, "frequency_hz")
     return FitResult(
-        model=model, params=phys, uncertainties=unc, cost=float(cost[k]),
+        model=model,
+        params=phys,
+        uncertainties=unc,
+        cost=float(cost[k]),
         rms_log_zeta=float(np.sqrt(np.mean((ln_z - np.log(zm)) ** 2))),
         rms_rel_frequency=float(np.sqrt(np.mean(((f - fm) / f) ** 2))),
-        curves=curve, predicted={"velocity_amplitude_in_s": v, "zeta": zm, "frequency_hz": fm},
-        search_point=theta_best, n_simulations=n_sim,
-        scatter={"log_zeta": float(np.median(s_z)), "rel_frequency": float(np.median(s_f))})
+        curves=curve,
+        predicted={"velocity_amplitude_in_s": v, "zeta": zm, "frequency_hz": fm},
+        search_point=theta_best,
+        n_simulations=n_sim,
+        scatter={"log_zeta": float(np.median(s_z)), "rel_frequency": float(np.median(s_f))},
+    )

@@ -12,7 +12,7 @@ Steps (docs/discovery.md states the rule with its numbers):
    quadrature with the averaged models' accuracy (:data:`TOL_LN_ZETA`,
    :data:`TOL_REL_F`) gives every segment's standard uncertainty in ``ln zeta`` and in
    relative frequency. Residuals divided by it are the *normalised residuals*.
-2. **Fits.** Every model of :mod:`workflow.describing` is fitted by weighted least
+2. **Fits.** Every model of :mod:`workflow.models.averaged` is fitted by weighted least
    squares on both curves at once: a quasi-random (Sobol) global stage over the
    parameter box (log coordinates for scale parameters), then
    ``scipy.optimize.least_squares`` from the best distinct global points.
@@ -32,16 +32,16 @@ Steps (docs/discovery.md states the rule with its numbers):
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
 from scipy import optimize, stats
 from scipy.stats import qmc
 
-from workflow.config import DiscoverySettings
-from workflow.describing import MODELS, RESPONSE_ORDER, AveragedModel, CurveGrid
+from workflow.io.settings import DiscoverySettings
+from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel, CurveGrid
 
 __all__ = [
     "CAUSE_MODELS",
@@ -108,10 +108,14 @@ HELD_OUT_SCALE = "noise"
 scatter combined with the model accuracy used as fit weights ("norm")."""
 
 NESTED_DAHL = {
-    "lugre": lambda d: {"stiction_ratio": 1e-3, "micro_damping_ratio": 0.0,
-                        "stribeck_velocity_in_s": float(np.median(d.velocity_in_s))},
-    "dahl_quadratic": lambda d: {"quadratic_zeta_per_in_s":
-                                 2e-3 * float(np.min(d.zeta)) / float(np.max(d.velocity_in_s))},
+    "lugre": lambda d: {
+        "stiction_ratio": 1e-3,
+        "micro_damping_ratio": 0.0,
+        "stribeck_velocity_in_s": float(np.median(d.velocity_in_s)),
+    },
+    "dahl_quadratic": lambda d: {
+        "quadratic_zeta_per_in_s": 2e-3 * float(np.min(d.zeta)) / float(np.max(d.velocity_in_s))
+    },
     "dahl_stiffness": lambda d: {"stiffness_shift": 0.0, "stiffness_exponent": 2.0},
     "dahl_drift": lambda d: {"drift": 0.0},
 }
@@ -121,7 +125,7 @@ NESTED_DAHL = {
 @dataclass(frozen=True)
 class FitSettings:
     """Optimiser settings: the ``discovery`` section of config.yaml (its defaults are
-    :class:`workflow.config.DiscoverySettings`'), then the refinement budgets."""
+    :class:`workflow.io.settings.DiscoverySettings`'), then the refinement budgets."""
 
     global_samples: int = DiscoverySettings.global_samples
     local_starts: int = DiscoverySettings.local_starts
@@ -186,8 +190,7 @@ class ConfigurationData:
         return float(np.median(self.frequency_hz))
 
 
-def prepare_configuration(frame: pd.DataFrame, name: str, response_order: int = 2
-                          ) -> ConfigurationData:
+def prepare_configuration(frame: pd.DataFrame, name: str, response_order: int = 2) -> ConfigurationData:
     """Arrays of one configuration from the segments table.
 
     Rows with non-finite values or ``zeta <= 0`` (a growing envelope) cannot enter a
@@ -213,10 +216,17 @@ def prepare_configuration(frame: pd.DataFrame, name: str, response_order: int = 
         if np.all(np.isfinite(rms) & (rms > 0) & np.isfinite(amp) & (amp > 0)):
             extra = {"fit_rms": rms, "response_amplitude": amp}
     return ConfigurationData(
-        name=name, velocity_in_s=v[ok], zeta=z[ok], frequency_hz=f[ok],
-        run_index=np.array([index[r] for r in runs[ok]], dtype=int), run_names=run_names,
-        bearing_area_in2=area, response_order=response_order, n_dropped=int((~ok).sum()),
-        **extra)
+        name=name,
+        velocity_in_s=v[ok],
+        zeta=z[ok],
+        frequency_hz=f[ok],
+        run_index=np.array([index[r] for r in runs[ok]], dtype=int),
+        run_names=run_names,
+        bearing_area_in2=area,
+        response_order=response_order,
+        n_dropped=int((~ok).sum()),
+        **extra,
+    )
 
 
 # ---------------------------------------------------------------------- scatter
@@ -239,8 +249,7 @@ class Scatter:
     noise_rel_f: np.ndarray
 
 
-def _robust_trend(x: np.ndarray, y: np.ndarray, degree: int,
-                  groups: np.ndarray | None = None) -> np.ndarray:
+def _robust_trend(x: np.ndarray, y: np.ndarray, degree: int, groups: np.ndarray | None = None) -> np.ndarray:
     """Robust (soft-L1) polynomial trend of ``y`` in ``x``; returns fitted values.
 
     With ``groups`` (integer labels), each group gets its own constant level on top
@@ -259,8 +268,14 @@ def _robust_trend(x: np.ndarray, y: np.ndarray, degree: int,
     return design @ fit.x
 
 
-def estimate_scatter(velocity_in_s: np.ndarray, values: np.ndarray, *, degree: int = 3,
-                     min_bin: int = 12, runs: np.ndarray | None = None) -> np.ndarray:
+def estimate_scatter(
+    velocity_in_s: np.ndarray,
+    values: np.ndarray,
+    *,
+    degree: int = 3,
+    min_bin: int = 12,
+    runs: np.ndarray | None = None,
+) -> np.ndarray:
     """Robust scatter of a curve around its smooth trend, per segment.
 
     Parameters
@@ -304,8 +319,7 @@ def estimate_scatter(velocity_in_s: np.ndarray, values: np.ndarray, *, degree: i
 def scatter_of(data: ConfigurationData) -> Scatter:
     """:class:`Scatter` of a configuration's two curves."""
     noise_z = estimate_scatter(data.velocity_in_s, np.log(data.zeta), runs=data.run_index)
-    noise_f = estimate_scatter(data.velocity_in_s, data.frequency_hz / data.f_ref - 1.0,
-                               runs=data.run_index)
+    noise_f = estimate_scatter(data.velocity_in_s, data.frequency_hz / data.f_ref - 1.0, runs=data.run_index)
     return Scatter(np.hypot(noise_z, TOL_LN_ZETA), np.hypot(noise_f, TOL_REL_F), noise_z, noise_f)
 
 
@@ -317,8 +331,7 @@ class FitContext:
     reference_velocity_in_s: float
 
 
-def parameter_box(model: AveragedModel, data: ConfigurationData
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def parameter_box(model: AveragedModel, data: ConfigurationData) -> tuple[np.ndarray, np.ndarray]:
     """Bounds of the fit coordinates (ln value for log parameters) from the data.
 
     Scales follow the data: frequencies around the measured ones, damping around the
@@ -353,15 +366,16 @@ def to_physical(model: AveragedModel, coords: np.ndarray) -> dict[str, np.ndarra
     coords = np.atleast_2d(coords)
     out = {}
     for i, p in enumerate(model.params):
-        c = coords[:, i:i + 1]
+        c = coords[:, i : i + 1]
         out[p.name] = np.exp(c) if p.scale == "log" else c
     return out
 
 
 def to_coords(model: AveragedModel, params: Mapping[str, float]) -> np.ndarray:
     """Physical parameters -> fit coordinates."""
-    return np.array([np.log(params[p.name]) if p.scale == "log" else float(params[p.name])
-                     for p in model.params])
+    return np.array(
+        [np.log(params[p.name]) if p.scale == "log" else float(params[p.name]) for p in model.params]
+    )
 
 
 @dataclass
@@ -388,14 +402,23 @@ class FitResult:
 class _Problem:
     """Normalised-residual function of one model on a subset of segments."""
 
-    def __init__(self, model: AveragedModel, data: ConfigurationData, scatter: Scatter,
-                 mask: np.ndarray, context: FitContext):
+    def __init__(
+        self,
+        model: AveragedModel,
+        data: ConfigurationData,
+        scatter: Scatter,
+        mask: np.ndarray,
+        context: FitContext,
+    ):
         self.model = model
         self.mask = mask
-        self.grid = CurveGrid(data.velocity_in_s[mask], run_index=data.run_index[mask],
-                              n_runs=max(data.n_runs, 1), response_order=data.response_order,
-                              grid_range=(float(data.velocity_in_s.min()),
-                                          float(data.velocity_in_s.max())))
+        self.grid = CurveGrid(
+            data.velocity_in_s[mask],
+            run_index=data.run_index[mask],
+            n_runs=max(data.n_runs, 1),
+            response_order=data.response_order,
+            grid_range=(float(data.velocity_in_s.min()), float(data.velocity_in_s.max())),
+        )
         self.ln_zeta = np.log(data.zeta[mask])
         self.freq = data.frequency_hz[mask]
         self.s_z = scatter.ln_zeta[mask]
@@ -430,16 +453,28 @@ class _Problem:
 
 def _local_fit(problem: _Problem, start: np.ndarray, max_nfev: int) -> tuple[np.ndarray, float]:
     res = optimize.least_squares(
-        lambda u: problem.residuals(u)[0], np.clip(start, 1e-6, 1 - 1e-6),
-        jac=problem.jacobian, bounds=(0.0, 1.0), method="trf", max_nfev=max_nfev,
-        x_scale=1.0)
+        lambda u: problem.residuals(u)[0],
+        np.clip(start, 1e-6, 1 - 1e-6),
+        jac=problem.jacobian,
+        bounds=(0.0, 1.0),
+        method="trf",
+        max_nfev=max_nfev,
+        x_scale=1.0,
+    )
     return res.x, float(np.mean(res.fun**2))
 
 
-def fit_model(model: AveragedModel | str, data: ConfigurationData, scatter: Scatter,
-              context: FitContext, *, settings: FitSettings = FitSettings(),
-              mask: np.ndarray | None = None, warm_start: np.ndarray | None = None,
-              nested_start: Mapping[str, float] | None = None) -> FitResult:
+def fit_model(
+    model: AveragedModel | str,
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    *,
+    settings: FitSettings = FitSettings(),
+    mask: np.ndarray | None = None,
+    warm_start: np.ndarray | None = None,
+    nested_start: Mapping[str, float] | None = None,
+) -> FitResult:
     """Weighted least-squares fit of a model to both curves of (part of) a configuration.
 
     Parameters
@@ -506,8 +541,9 @@ def fit_model(model: AveragedModel | str, data: ConfigurationData, scatter: Scat
     return FitResult(model.name, coords, params, best_cost)
 
 
-def model_residuals(fit: FitResult, data: ConfigurationData, scatter: Scatter,
-                    context: FitContext) -> dict[str, np.ndarray]:
+def model_residuals(
+    fit: FitResult, data: ConfigurationData, scatter: Scatter, context: FitContext
+) -> dict[str, np.ndarray]:
     """Raw and normalised residuals of a fit on all segments of a configuration.
 
     Returns ``ln_zeta`` (``ln zeta - ln zeta_model``), ``rel_f`` (``f / f_model - 1``),
@@ -518,9 +554,16 @@ def model_residuals(fit: FitResult, data: ConfigurationData, scatter: Scatter,
     zeta, freq = problem.grid(model, {k: np.array(v) for k, v in fit.params.items()})
     ln_res = np.log(data.zeta) - np.log(np.maximum(zeta, 1e-12))
     f_res = data.frequency_hz / freq - 1.0
-    return {"ln_zeta": ln_res, "rel_f": f_res, "z_norm": ln_res / scatter.ln_zeta,
-            "f_norm": f_res / scatter.rel_f, "z_noise": ln_res / scatter.noise_ln_zeta,
-            "f_noise": f_res / scatter.noise_rel_f, "zeta_model": zeta, "f_model": freq}
+    return {
+        "ln_zeta": ln_res,
+        "rel_f": f_res,
+        "z_norm": ln_res / scatter.ln_zeta,
+        "f_norm": f_res / scatter.rel_f,
+        "z_noise": ln_res / scatter.noise_ln_zeta,
+        "f_noise": f_res / scatter.noise_rel_f,
+        "zeta_model": zeta,
+        "f_model": freq,
+    }
 
 
 # ----------------------------------------------------------------- validation
@@ -579,9 +622,15 @@ def _weighted_rms(squares: np.ndarray, weights: np.ndarray) -> float:
     return float(np.sqrt(np.sum(weights * squares) / max(np.sum(weights), 1e-300)))
 
 
-def cross_validate(model: AveragedModel | str, data: ConfigurationData, scatter: Scatter,
-                   context: FitContext, full_fit: FitResult, *,
-                   settings: FitSettings = FitSettings()) -> dict:
+def cross_validate(
+    model: AveragedModel | str,
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    full_fit: FitResult,
+    *,
+    settings: FitSettings = FitSettings(),
+) -> dict:
     """Held-out error of a model: refit without each fold, predict the fold.
 
     Returns
@@ -596,16 +645,21 @@ def cross_validate(model: AveragedModel | str, data: ConfigurationData, scatter:
     sq_z, sq_f, fold_errors = np.zeros(data.n), np.zeros(data.n), []
     w = amplitude_weights(data.velocity_in_s)
     for held in folds_of(data, settings.folds):
-        fit = fit_model(model, data, scatter, context, settings=settings, mask=~held,
-                        warm_start=full_fit.coords)
+        fit = fit_model(
+            model, data, scatter, context, settings=settings, mask=~held, warm_start=full_fit.coords
+        )
         res = model_residuals(fit, data, scatter, context)
         sq_z[held] = res[f"z_{HELD_OUT_SCALE}"][held] ** 2
         sq_f[held] = res[f"f_{HELD_OUT_SCALE}"][held] ** 2
         fold_errors.append(_weighted_rms(0.5 * (sq_z[held] + sq_f[held]), w[held]))
-    return {"error": _weighted_rms(0.5 * (sq_z + sq_f), w),
-            "error_zeta": _weighted_rms(sq_z, w),
-            "error_frequency": _weighted_rms(sq_f, w),
-            "fold_errors": fold_errors, "squared_zeta": sq_z, "squared_frequency": sq_f}
+    return {
+        "error": _weighted_rms(0.5 * (sq_z + sq_f), w),
+        "error_zeta": _weighted_rms(sq_z, w),
+        "error_frequency": _weighted_rms(sq_f, w),
+        "fold_errors": fold_errors,
+        "squared_zeta": sq_z,
+        "squared_frequency": sq_f,
+    }
 
 
 def effective_observations(data: ConfigurationData) -> int:
@@ -615,8 +669,9 @@ def effective_observations(data: ConfigurationData) -> int:
     hit), so the count is the number of occupied (run, half-decade of amplitude)
     cells, times two curves.
     """
-    cells = set(zip(data.run_index.tolist(),
-                    np.floor(2.0 * np.log10(data.velocity_in_s)).astype(int).tolist()))
+    cells = set(
+        zip(data.run_index.tolist(), np.floor(2.0 * np.log10(data.velocity_in_s)).astype(int).tolist())
+    )
     return 2 * max(len(cells), 2)
 
 
@@ -642,8 +697,9 @@ def _lag1_effective(r: np.ndarray) -> float:
     return max(1.0, n * (1.0 - rho) / (1.0 + rho))
 
 
-def binned_discrepancy(data: ConfigurationData, residuals: Mapping[str, np.ndarray], *,
-                       alpha: float = ALPHA) -> list[dict]:
+def binned_discrepancy(
+    data: ConfigurationData, residuals: Mapping[str, np.ndarray], *, alpha: float = ALPHA
+) -> list[dict]:
     """Mean residual per half decade of amplitude and per curve, with its significance.
 
     For each bin and curve, each run's mean residual in the bin is one
@@ -663,8 +719,7 @@ def binned_discrepancy(data: ConfigurationData, residuals: Mapping[str, np.ndarr
     """
     code = np.floor(2.0 * np.log10(data.velocity_in_s)).astype(int)
     rows = []
-    for curve, key, tol in (("damping", "ln_zeta", TOL_LN_ZETA),
-                            ("frequency", "rel_f", TOL_REL_F)):
+    for curve, key, tol in (("damping", "ln_zeta", TOL_LN_ZETA), ("frequency", "rel_f", TOL_REL_F)):
         r = residuals[key]
         for b in np.unique(code):
             in_bin = code == b
@@ -685,20 +740,30 @@ def binned_discrepancy(data: ConfigurationData, residuals: Mapping[str, np.ndarr
                 se = float(seg.std(ddof=1) / np.sqrt(n_eff))
                 dof = max(n_eff - 1.0, 1.0)
             t = m / max(se, 1e-300)
-            rows.append({"curve": curve, "v_low_in_s": float(10 ** (b / 2.0)),
-                         "v_high_in_s": float(10 ** ((b + 1) / 2.0)), "mean": m,
-                         "standard_error": se, "t": float(t),
-                         "p": float(2.0 * stats.t.sf(abs(t), dof)), "n_runs": int(runs.size),
-                         "n_segments": int(in_bin.sum()), "tolerance": tol,
-                         "significant": False})
+            rows.append(
+                {
+                    "curve": curve,
+                    "v_low_in_s": float(10 ** (b / 2.0)),
+                    "v_high_in_s": float(10 ** ((b + 1) / 2.0)),
+                    "mean": m,
+                    "standard_error": se,
+                    "t": float(t),
+                    "p": float(2.0 * stats.t.sf(abs(t), dof)),
+                    "n_runs": int(runs.size),
+                    "n_segments": int(in_bin.sum()),
+                    "tolerance": tol,
+                    "significant": False,
+                }
+            )
     n_tests = max(len(rows), 1) + 1
     for row in rows:
         row["significant"] = bool(row["p"] < alpha / n_tests and abs(row["mean"]) > row["tolerance"])
     return rows
 
 
-def run_order_trend(data: ConfigurationData, residuals: Mapping[str, np.ndarray], *,
-                    n_tests: int, alpha: float = ALPHA) -> dict | None:
+def run_order_trend(
+    data: ConfigurationData, residuals: Mapping[str, np.ndarray], *, n_tests: int, alpha: float = ALPHA
+) -> dict | None:
     """Linear trend of the runs' mean damping residual with run order.
 
     Returns None with fewer than 4 runs; else ``slope_per_run`` (ln zeta per run),
@@ -713,9 +778,13 @@ def run_order_trend(data: ConfigurationData, residuals: Mapping[str, np.ndarray]
     fit = stats.linregress(x, means)
     change = float(fit.slope * (data.n_runs - 1))
     t = float(fit.slope / max(fit.stderr, 1e-300))
-    return {"slope_per_run": float(fit.slope), "change_over_sequence": change, "t": t,
-            "p": float(fit.pvalue),
-            "significant": bool(fit.pvalue < alpha / n_tests and abs(change) > TOL_LN_ZETA)}
+    return {
+        "slope_per_run": float(fit.slope),
+        "change_over_sequence": change,
+        "t": t,
+        "p": float(fit.pvalue),
+        "significant": bool(fit.pvalue < alpha / n_tests and abs(change) > TOL_LN_ZETA),
+    }
 
 
 ENVELOPE_DEPARTURE_LIMIT = 0.05
@@ -761,25 +830,28 @@ def envelope_structure(data: ConfigurationData, *, segment_cycles: float = 10.0)
         m = np.flatnonzero(data.run_index == j)
         if m.size < 3:
             continue
-        top = m[np.argsort(data.velocity_in_s[m])[::-1][:max(2, m.size // 3)]]
+        top = m[np.argsort(data.velocity_in_s[m])[::-1][: max(2, m.size // 3)]]
         per_run.append(float(np.median(ratio[top])))
     if not per_run:
         return None
     per_run = np.array(per_run)
     over = int(np.sum(per_run > ENVELOPE_DEPARTURE_LIMIT))
-    return {"departure_ratio": float(np.median(per_run)), "runs_over_limit": over,
-            "runs_tested": int(per_run.size), "limit": ENVELOPE_DEPARTURE_LIMIT,
-            "segment_cycles": float(segment_cycles),
-            "median_fit_rms": float(np.median(data.fit_rms)),
-            "significant": bool(over >= max(1, int(np.ceil(per_run.size / 2))))}
+    return {
+        "departure_ratio": float(np.median(per_run)),
+        "runs_over_limit": over,
+        "runs_tested": int(per_run.size),
+        "limit": ENVELOPE_DEPARTURE_LIMIT,
+        "segment_cycles": float(segment_cycles),
+        "median_fit_rms": float(np.median(data.fit_rms)),
+        "significant": bool(over >= max(1, int(np.ceil(per_run.size / 2)))),
+    }
 
 
 def _fmt_v(v: float) -> str:
     return f"{v:.3g}"
 
 
-def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None,
-                         n_runs: int) -> str:
+def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, n_runs: int) -> str:
     """Plain sentence: where and by how much the model is wrong (or that it is not)."""
     sig = [b for b in bins if b["significant"]]
     parts = []
@@ -794,34 +866,45 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None,
             size = f"{100 * (np.exp(worst['mean']) - 1):+.1f} %"
         else:
             size = f"{100 * worst['mean']:+.3f} %"
-        parts.append(f"the measured {curve} differs from the {model_name} fit between "
-                     f"{_fmt_v(lo)} and {_fmt_v(hi)} in/s, by up to {size} "
-                     f"(|t| = {abs(worst['t']):.1f} over {worst['n_runs']} runs) at "
-                     f"{_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s")
+        parts.append(
+            f"the measured {curve} differs from the {model_name} fit between "
+            f"{_fmt_v(lo)} and {_fmt_v(hi)} in/s, by up to {size} "
+            f"(|t| = {abs(worst['t']):.1f} over {worst['n_runs']} runs) at "
+            f"{_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s"
+        )
     if trend is not None and trend["significant"]:
-        parts.append(f"the runs' damping residual drifts with run order by "
-                     f"{100 * (np.exp(trend['change_over_sequence']) - 1):+.1f} % from the "
-                     f"first to the last run (t = {trend['t']:.1f})")
+        parts.append(
+            f"the runs' damping residual drifts with run order by "
+            f"{100 * (np.exp(trend['change_over_sequence']) - 1):+.1f} % from the "
+            f"first to the last run (t = {trend['t']:.1f})"
+        )
     if not parts:
         worst = max(bins, key=lambda b: abs(b["t"]), default=None)
         tail = ""
         if worst is not None:
-            size = (100 * (np.exp(worst["mean"]) - 1) if worst["curve"] == "damping"
-                    else 100 * worst["mean"])
-            tail = (f"; the largest binned misfit is {size:+.2f} % in {worst['curve']} "
-                    f"at {_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s "
-                    f"(|t| = {abs(worst['t']):.1f}, not significant after correction or "
-                    f"below the model accuracy)")
-        return (f"The {model_name} baseline fits damping and frequency within the run-to-run "
-                f"scatter at every amplitude ({n_runs} runs){tail}.")
+            size = 100 * (np.exp(worst["mean"]) - 1) if worst["curve"] == "damping" else 100 * worst["mean"]
+            tail = (
+                f"; the largest binned misfit is {size:+.2f} % in {worst['curve']} "
+                f"at {_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s "
+                f"(|t| = {abs(worst['t']):.1f}, not significant after correction or "
+                f"below the model accuracy)"
+            )
+        return (
+            f"The {model_name} baseline fits damping and frequency within the run-to-run "
+            f"scatter at every amplitude ({n_runs} runs){tail}."
+        )
     text = "; ".join(parts)
     return text[0].upper() + text[1:] + "."
 
 
 # ------------------------------------------------------------------ decision
-def decide(baseline_error: float, baseline_bic: float, baseline_fails: bool,
-           candidates: Mapping[str, dict], envelope_structure: bool = False
-           ) -> tuple[str, str]:
+def decide(
+    baseline_error: float,
+    baseline_bic: float,
+    baseline_fails: bool,
+    candidates: Mapping[str, dict],
+    envelope_structure: bool = False,
+) -> tuple[str, str]:
     """The decision rule.
 
     Parameters
@@ -855,31 +938,37 @@ def decide(baseline_error: float, baseline_bic: float, baseline_fails: bool,
       ``RESIDUAL_GAIN`` x the baseline's.
     """
     if envelope_structure:
-        return "unknown", ("even at the runs' highest amplitudes the segment envelopes depart from "
-                           "exponential decays by more than ENVELOPE_DEPARTURE_LIMIT of their decay: "
-                           "a disturbance outside every single-mode model (e.g. a second mode "
-                           "beating in the band)")
-    eligible = {c: v for c, v in candidates.items()
-                if v["heldout_error"] < baseline_error and v["bic"] < baseline_bic}
-    clear = {c: v for c, v in eligible.items()
-             if v["heldout_error"] < CLEAR_GAIN * baseline_error}
+        return "unknown", (
+            "even at the runs' highest amplitudes the segment envelopes depart from "
+            "exponential decays by more than ENVELOPE_DEPARTURE_LIMIT of their decay: "
+            "a disturbance outside every single-mode model (e.g. a second mode "
+            "beating in the band)"
+        )
+    eligible = {
+        c: v for c, v in candidates.items() if v["heldout_error"] < baseline_error and v["bic"] < baseline_bic
+    }
+    clear = {c: v for c, v in eligible.items() if v["heldout_error"] < CLEAR_GAIN * baseline_error}
     if not baseline_fails and not clear:
-        return "none", ("no significant misfit of the baseline and no candidate reduces the "
-                        f"held-out error below {CLEAR_GAIN} of the baseline's")
+        return "none", (
+            "no significant misfit of the baseline and no candidate reduces the "
+            f"held-out error below {CLEAR_GAIN} of the baseline's"
+        )
     if not eligible:
-        return "unknown", ("the baseline misfit is significant but no candidate lowers both the "
-                           "held-out error and the BIC")
+        return "unknown", (
+            "the baseline misfit is significant but no candidate lowers both the held-out error and the BIC"
+        )
     best_err = min(v["heldout_error"] for v in eligible.values())
     near = {c: v for c, v in eligible.items() if v["heldout_error"] <= 1.02 * best_err}
     best = min(near, key=lambda c: near[c]["bic"])
     v = eligible[best]
     if v["residual_significant"] and v["heldout_error"] >= RESIDUAL_GAIN * baseline_error:
-        return "unknown", (f"the best candidate ({best}) leaves a significant misfit and cuts the "
-                           f"held-out error only to {v['heldout_error'] / baseline_error:.2f} of "
-                           "the baseline's")
+        return "unknown", (
+            f"the best candidate ({best}) leaves a significant misfit and cuts the "
+            f"held-out error only to {v['heldout_error'] / baseline_error:.2f} of "
+            "the baseline's"
+        )
     why = "baseline misfit significant" if baseline_fails else "clear held-out gain"
-    return best, (f"{why}; {best} has the lowest held-out error among candidates that also "
-                  "lower the BIC")
+    return best, (f"{why}; {best} has the lowest held-out error among candidates that also lower the BIC")
 
 
 # -------------------------------------------------------------- configuration
@@ -916,9 +1005,13 @@ class ConfigurationDiagnosis:
     residuals: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
 
 
-def diagnose_configuration(data: ConfigurationData, context: FitContext, *,
-                           settings: FitSettings = FitSettings(),
-                           segment_cycles: float = 10.0) -> ConfigurationDiagnosis:
+def diagnose_configuration(
+    data: ConfigurationData,
+    context: FitContext,
+    *,
+    settings: FitSettings = FitSettings(),
+    segment_cycles: float = 10.0,
+) -> ConfigurationDiagnosis:
     """Baselines, discrepancy, candidates and verdict for one configuration."""
     scatter = scatter_of(data)
     n_eff = effective_observations(data)
@@ -930,23 +1023,26 @@ def diagnose_configuration(data: ConfigurationData, context: FitContext, *,
         nested = None
         if name != "dahl" and name in NESTED_DAHL and "dahl" in fits:
             nested = {**fits["dahl"].params, **NESTED_DAHL[name](data)}
-        fits[name] = fit_model(name, data, scatter, context, settings=settings,
-                               nested_start=nested)
+        fits[name] = fit_model(name, data, scatter, context, settings=settings, nested_start=nested)
         cv[name] = cross_validate(name, data, scatter, context, fits[name], settings=settings)
     residuals = {m: model_residuals(f, data, scatter, context) for m, f in fits.items()}
     weights = amplitude_weights(data.velocity_in_s)
     # in-sample cost per amplitude bin, like the held-out error and like n_eff (which
     # counts (run, amplitude) cells, not segments)
-    in_sample = {m: _weighted_rms(0.5 * (r[f"z_{HELD_OUT_SCALE}"] ** 2
-                                         + r[f"f_{HELD_OUT_SCALE}"] ** 2), weights) ** 2
-                 for m, r in residuals.items()}
+    in_sample = {
+        m: _weighted_rms(0.5 * (r[f"z_{HELD_OUT_SCALE}"] ** 2 + r[f"f_{HELD_OUT_SCALE}"] ** 2), weights) ** 2
+        for m, r in residuals.items()
+    }
     bic = {m: information_criterion(in_sample[m], len(MODELS[m].params), n_eff) for m in fits}
     base = min(BASELINE_MODELS, key=lambda m: cv[m]["error"])
     bins = binned_discrepancy(data, residuals[base])
     trend = run_order_trend(data, residuals[base], n_tests=len(bins) + 1)
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
-    baseline_fails = (any(b["significant"] for b in bins) or bool(trend and trend["significant"])
-                      or bool(envelope and envelope["significant"]))
+    baseline_fails = (
+        any(b["significant"] for b in bins)
+        or bool(trend and trend["significant"])
+        or bool(envelope and envelope["significant"])
+    )
     candidates = {}
     for cause, m in CAUSE_MODELS.items():
         if m not in fits:
@@ -954,19 +1050,27 @@ def diagnose_configuration(data: ConfigurationData, context: FitContext, *,
         cb = binned_discrepancy(data, residuals[m])
         ct = run_order_trend(data, residuals[m], n_tests=len(cb) + 1)
         candidates[cause] = {
-            "model": m, "heldout_error": cv[m]["error"],
+            "model": m,
+            "heldout_error": cv[m]["error"],
             "heldout_error_zeta": cv[m]["error_zeta"],
             "heldout_error_frequency": cv[m]["error_frequency"],
             "ratio_to_baseline": cv[m]["error"] / cv[base]["error"],
-            "in_sample_rms": float(np.sqrt(fits[m].cost)), "bic": bic[m],
+            "in_sample_rms": float(np.sqrt(fits[m].cost)),
+            "bic": bic[m],
             "delta_bic": bic[m] - bic[base],
-            "residual_significant": bool(any(b["significant"] for b in cb)
-                                         or (ct is not None and ct["significant"])),
+            "residual_significant": bool(
+                any(b["significant"] for b in cb) or (ct is not None and ct["significant"])
+            ),
             "significant_bins": int(sum(b["significant"] for b in cb)),
             "params": fits[m].params,
         }
-    cause, reason = decide(cv[base]["error"], bic[base], baseline_fails, candidates,
-                           envelope_structure=bool(envelope and envelope["significant"]))
+    cause, reason = decide(
+        cv[base]["error"],
+        bic[base],
+        baseline_fails,
+        candidates,
+        envelope_structure=bool(envelope and envelope["significant"]),
+    )
     ranking = [{"cause": "none", "score": cv[base]["error"]}]
     ranking += [{"cause": c, "score": v["heldout_error"]} for c, v in candidates.items()]
     ranking.sort(key=lambda r: r["score"])
@@ -980,30 +1084,43 @@ def diagnose_configuration(data: ConfigurationData, context: FitContext, *,
         ext_model, ext_err = CAUSE_MODELS[cause], cv[CAUSE_MODELS[cause]]["error"]
     sentence = discrepancy_sentence(base, bins, trend, data.n_runs)
     if envelope and envelope["significant"]:
-        sentence = (f"The ring-downs are not single-mode decays: even at each run's highest "
-                    f"amplitudes the envelope departs from an exponential within a segment by "
-                    f"{100 * envelope['departure_ratio']:.0f} % of its decay across the segment "
-                    f"(median over runs; limit {100 * envelope['limit']:.0f} %), which no {base} "
-                    f"fit or candidate can follow; {data.n_dropped} segments had zeta <= 0. "
-                    + sentence)
+        sentence = (
+            f"The ring-downs are not single-mode decays: even at each run's highest "
+            f"amplitudes the envelope departs from an exponential within a segment by "
+            f"{100 * envelope['departure_ratio']:.0f} % of its decay across the segment "
+            f"(median over runs; limit {100 * envelope['limit']:.0f} %), which no {base} "
+            f"fit or candidate can follow; {data.n_dropped} segments had zeta <= 0. " + sentence
+        )
     document = {
-        "baseline": {"model": base, "params": fits[base].params,
-                     "error": {"metric": HELD_OUT_METRIC, "value": cv[base]["error"]}},
+        "baseline": {
+            "model": base,
+            "params": fits[base].params,
+            "error": {"metric": HELD_OUT_METRIC, "value": cv[base]["error"]},
+        },
         "discrepancy": sentence,
         "cause": cause,
         "evidence": {
             "decision_rule": reason,
-            "n_runs": data.n_runs, "n_segments": data.n, "n_segments_dropped": data.n_dropped,
+            "n_runs": data.n_runs,
+            "n_segments": data.n,
+            "n_segments_dropped": data.n_dropped,
             "effective_observations": n_eff,
-            "scatter": {"ln_zeta_median": float(np.median(scatter.noise_ln_zeta)),
-                        "relative_frequency_median": float(np.median(scatter.noise_rel_f)),
-                        "model_tolerance_ln_zeta": TOL_LN_ZETA,
-                        "model_tolerance_relative_frequency": TOL_REL_F},
-            "baselines": {m: {"heldout_error": cv[m]["error"],
-                              "heldout_error_zeta": cv[m]["error_zeta"],
-                              "heldout_error_frequency": cv[m]["error_frequency"],
-                              "in_sample_rms": float(np.sqrt(fits[m].cost)), "bic": bic[m]}
-                          for m in BASELINE_MODELS},
+            "scatter": {
+                "ln_zeta_median": float(np.median(scatter.noise_ln_zeta)),
+                "relative_frequency_median": float(np.median(scatter.noise_rel_f)),
+                "model_tolerance_ln_zeta": TOL_LN_ZETA,
+                "model_tolerance_relative_frequency": TOL_REL_F,
+            },
+            "baselines": {
+                m: {
+                    "heldout_error": cv[m]["error"],
+                    "heldout_error_zeta": cv[m]["error_zeta"],
+                    "heldout_error_frequency": cv[m]["error_frequency"],
+                    "in_sample_rms": float(np.sqrt(fits[m].cost)),
+                    "bic": bic[m],
+                }
+                for m in BASELINE_MODELS
+            },
             "baseline_misfit_significant": baseline_fails,
             "binned_residuals": bins,
             "run_order_trend": trend,
@@ -1013,17 +1130,25 @@ def diagnose_configuration(data: ConfigurationData, context: FitContext, *,
             "residual_gain_threshold": RESIDUAL_GAIN,
         },
         "ranking": ranking,
-        "extended_model": {"model": ext_model, "params": fits[ext_model].params,
-                           "removes_misfit": cause not in ("unknown",)},
-        "gain": {"metric": HELD_OUT_METRIC, "baseline": cv[base]["error"], "extended": ext_err,
-                 "ratio": 1.0 if cause == "none" else ext_err / cv[base]["error"]},
+        "extended_model": {
+            "model": ext_model,
+            "params": fits[ext_model].params,
+            "removes_misfit": cause not in ("unknown",),
+        },
+        "gain": {
+            "metric": HELD_OUT_METRIC,
+            "baseline": cv[base]["error"],
+            "extended": ext_err,
+            "ratio": 1.0 if cause == "none" else ext_err / cv[base]["error"],
+        },
     }
     return ConfigurationDiagnosis(_clean(document), fits, data, scatter, residuals)
 
 
 # ------------------------------------------------------- across configurations
-def across_configurations(diagnoses: Mapping[str, ConfigurationDiagnosis], context: FitContext,
-                          extended_model: str | None) -> dict:
+def across_configurations(
+    diagnoses: Mapping[str, ConfigurationDiagnosis], context: FitContext, extended_model: str | None
+) -> dict:
     """Parameters as functions of bearing area; each configuration predicted from the rest.
 
     Every fit coordinate (ln value for scale parameters) of a model is taken as
@@ -1038,18 +1163,28 @@ def across_configurations(diagnoses: Mapping[str, ConfigurationDiagnosis], conte
         areas; else per configuration the baseline's and the extended model's
         prediction errors and their ratio, and their means.
     """
-    with_area = {n: d for n, d in diagnoses.items()
-                 if d.data.bearing_area_in2 is not None and d.data.bearing_area_in2 > 0}
+    with_area = {
+        n: d
+        for n, d in diagnoses.items()
+        if d.data.bearing_area_in2 is not None and d.data.bearing_area_in2 > 0
+    }
     if len(with_area) < 3:
-        return {"applicable": False,
-                "reason": f"{len(with_area)} configuration(s) with a bearing area; 3 are needed"}
+        return {
+            "applicable": False,
+            "reason": f"{len(with_area)} configuration(s) with a bearing area; 3 are needed",
+        }
     baselines = {d.document["baseline"]["model"] for d in with_area.values()}
     base_model = "dahl" if "dahl" in baselines or len(baselines) != 1 else baselines.pop()
     models = {"baseline": base_model}
     if extended_model and extended_model != base_model:
         models["extended"] = extended_model
-    out = {"applicable": True, "parametrisation": "fit coordinates linear in ln(bearing area)",
-           "metric": HELD_OUT_METRIC, "models": models, "configurations": {}}
+    out = {
+        "applicable": True,
+        "parametrisation": "fit coordinates linear in ln(bearing area)",
+        "metric": HELD_OUT_METRIC,
+        "models": models,
+        "configurations": {},
+    }
     names = list(with_area)
     log_area = np.log([with_area[n].data.bearing_area_in2 for n in names])
     for role, m in models.items():
@@ -1064,15 +1199,15 @@ def across_configurations(diagnoses: Mapping[str, ConfigurationDiagnosis], conte
             beta, *_ = np.linalg.lstsq(design, coords[keep], rcond=None)
             pred = np.array([1.0, log_area[i]]) @ beta
             d = with_area[n]
-            params = {p.name: float(v[0, 0]) for p, v in zip(model.params,
-                                                           to_physical(model, pred).values())}
+            params = {p.name: float(v[0, 0]) for p, v in zip(model.params, to_physical(model, pred).values())}
             if "reference_velocity_in_s" in model.fixed:
                 params["reference_velocity_in_s"] = context.reference_velocity_in_s
             fit = FitResult(m, pred, params, np.nan)
             res = model_residuals(fit, d.data, d.scatter, context)
-            err = _weighted_rms(0.5 * (res[f"z_{HELD_OUT_SCALE}"] ** 2
-                                       + res[f"f_{HELD_OUT_SCALE}"] ** 2),
-                                amplitude_weights(d.data.velocity_in_s))
+            err = _weighted_rms(
+                0.5 * (res[f"z_{HELD_OUT_SCALE}"] ** 2 + res[f"f_{HELD_OUT_SCALE}"] ** 2),
+                amplitude_weights(d.data.velocity_in_s),
+            )
             entry = out["configurations"].setdefault(n, {"bearing_area_in2": d.data.bearing_area_in2})
             entry[f"{role}_error"] = err
             entry[f"{role}_params"] = params
@@ -1103,11 +1238,15 @@ def campaign_verdict(causes: Sequence[str], ratios: Sequence[float]) -> str:
     return min(counts, key=lambda c: (-len(counts[c]), float(np.mean(counts[c]))))
 
 
-def diagnose_campaign(segments: pd.DataFrame, campaign_name: str, *,
-                      response_quantity: str | Mapping[str, str] = "acceleration",
-                      settings: FitSettings | None = None,
-                      segment_cycles: float = 10.0,
-                      return_details: bool = False):
+def diagnose_campaign(
+    segments: pd.DataFrame,
+    campaign_name: str,
+    *,
+    response_quantity: str | Mapping[str, str] = "acceleration",
+    settings: FitSettings | None = None,
+    segment_cycles: float = 10.0,
+    return_details: bool = False,
+):
     """The ``results/diagnosis.json`` document of a campaign.
 
     Parameters
@@ -1142,23 +1281,28 @@ def diagnose_campaign(segments: pd.DataFrame, campaign_name: str, *,
     diagnoses: dict[str, ConfigurationDiagnosis] = {}
     skipped = {}
     for name in names:
-        quantity = (response_quantity if isinstance(response_quantity, str)
-                    else response_quantity.get(name, "acceleration"))
+        quantity = (
+            response_quantity
+            if isinstance(response_quantity, str)
+            else response_quantity.get(name, "acceleration")
+        )
         data = prepare_configuration(segments, name, RESPONSE_ORDER[quantity])
         if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
             skipped[name] = f"only {data.n} usable segments: too few to fit and validate models"
             continue
-        diagnoses[name] = diagnose_configuration(data, context, settings=settings,
-                                                 segment_cycles=segment_cycles)
+        diagnoses[name] = diagnose_configuration(
+            data, context, settings=settings, segment_cycles=segment_cycles
+        )
     configurations = {n: d.document for n, d in diagnoses.items()}
-    cause = campaign_verdict([d["cause"] for d in configurations.values()],
-                             [d["gain"]["ratio"] for d in configurations.values()])
+    cause = campaign_verdict(
+        [d["cause"] for d in configurations.values()], [d["gain"]["ratio"] for d in configurations.values()]
+    )
     extended = CAUSE_MODELS.get(cause)
     document = {
         "campaign": campaign_name,
         "cause": cause,
         "campaign_rule": "most frequent configuration cause other than none (ties: lowest mean "
-                         "gain ratio); none only when every configuration is none",
+        "gain ratio); none only when every configuration is none",
         "configurations": configurations,
         "across_configurations": across_configurations(diagnoses, context, extended),
         "skipped_configurations": skipped,
@@ -1169,8 +1313,19 @@ def diagnose_campaign(segments: pd.DataFrame, campaign_name: str, *,
 
 
 # ---------------------------------------------------------------- residuals
-RESIDUAL_COLUMNS = ["configuration", "run", "segment", "role", "model", "velocity_amplitude_in_s",
-                    "curve", "measured", "predicted", "scatter", "residual"]
+RESIDUAL_COLUMNS = [
+    "configuration",
+    "run",
+    "segment",
+    "role",
+    "model",
+    "velocity_amplitude_in_s",
+    "curve",
+    "measured",
+    "predicted",
+    "scatter",
+    "residual",
+]
 
 
 def residual_table(diagnoses: Mapping[str, ConfigurationDiagnosis]) -> pd.DataFrame:
@@ -1197,24 +1352,44 @@ def residual_table(diagnoses: Mapping[str, ConfigurationDiagnosis]) -> pd.DataFr
     """
     frames = []
     for name, d in diagnoses.items():
-        roles = {"baseline": d.document["baseline"]["model"],
-                 "extended": d.document["extended_model"]["model"]}
+        roles = {
+            "baseline": d.document["baseline"]["model"],
+            "extended": d.document["extended_model"]["model"],
+        }
         data = d.data
         runs = np.array(data.run_names, dtype=object)[data.run_index] if data.n else []
         for role, m in roles.items():
             res = d.residuals[m]
             for curve, measured, predicted, scatter, residual in (
-                    ("zeta", data.zeta, res["zeta_model"], d.scatter.noise_ln_zeta,
-                     res["z_noise"]),
-                    ("frequency_hz", data.frequency_hz, res["f_model"], d.scatter.noise_rel_f,
-                     res["f_noise"])):
-                frames.append(pd.DataFrame({
-                    "configuration": name, "run": runs, "segment": np.arange(data.n),
-                    "role": role, "model": m, "velocity_amplitude_in_s": data.velocity_in_s,
-                    "curve": curve, "measured": measured, "predicted": predicted,
-                    "scatter": scatter, "residual": residual}))
+                ("zeta", data.zeta, res["zeta_model"], d.scatter.noise_ln_zeta, res["z_noise"]),
+                ("frequency_hz", data.frequency_hz, res["f_model"], d.scatter.noise_rel_f, res["f_noise"]),
+            ):
+                frames.append(
+                    pd.DataFrame(
+                        {
+                            "configuration": name,
+                            "run": runs,
+                            "segment": np.arange(data.n),
+                            "role": role,
+                            "model": m,
+                            "velocity_amplitude_in_s": data.velocity_in_s,
+                            "curve": curve,
+                            "measured": measured,
+                            "predicted": predicted,
+                            "scatter": scatter,
+                            "residual": residual,
+                        }
+                    )
+                )
     if not frames:
-        return pd.DataFrame({c: pd.Series(dtype=float if c in (
-            "velocity_amplitude_in_s", "measured", "predicted", "scatter", "residual")
-            else object) for c in RESIDUAL_COLUMNS})
+        return pd.DataFrame(
+            {
+                c: pd.Series(
+                    dtype=float
+                    if c in ("velocity_amplitude_in_s", "measured", "predicted", "scatter", "residual")
+                    else object
+                )
+                for c in RESIDUAL_COLUMNS
+            }
+        )
     return pd.concat(frames, ignore_index=True)[RESIDUAL_COLUMNS]

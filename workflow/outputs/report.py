@@ -18,24 +18,24 @@ from __future__ import annotations
 import html
 import math
 import re
-from typing import Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import pandas as pd
 
 #: What each cause of the output contract means, in plain words.
 CAUSE_WORDS: dict[str, str] = {
-    "none": "none — the paper's friction model explains the data within the "
-            "run-to-run scatter",
+    "none": "none — the paper's friction model explains the data within the run-to-run scatter",
     "microslip_power_law": "micro-slip — slip spreads gradually over the contact "
-                           "(Iwan-type, many slip thresholds), so damping grows as a power of "
-                           "amplitude and the frequency drops as slip spreads",
+    "(Iwan-type, many slip thresholds), so damping grows as a power of "
+    "amplitude and the frequency drops as slip spreads",
     "quadratic_damping": "quadratic damping — a velocity-squared loss (air or fluid drag, radiation): damping "
-                         "proportional to amplitude while the frequency stays put",
+    "proportional to amplitude while the frequency stays put",
     "stiffness_nonlinearity": "stiffness nonlinearity — an amplitude-dependent stiffness that dissipates nothing "
-                              "(contact opening, geometry): the frequency shifts more than "
-                              "friction can explain",
+    "(contact opening, geometry): the frequency shifts more than "
+    "friction can explain",
     "run_drift": "run drift — the joint changed between runs (preload relaxation, settling): the runs' "
-                 "damping shifts steadily with run order",
+    "damping shifts steadily with run order",
     "unknown": "unknown — the paper's model fails, but none of the candidate causes fixes it",
 }
 
@@ -59,9 +59,11 @@ MODEL_NAMES: dict[str, str] = {
     "dahl_drift": "Dahl + run drift",
 }
 
-ERROR_UNIT = ("held-out error: RMS of the residuals on runs left out of the fit, divided by "
-              "the measured run-to-run scatter (1 = the model predicts a new run as well as the "
-              "runs repeat each other)")
+ERROR_UNIT = (
+    "held-out error: RMS of the residuals on runs left out of the fit, divided by "
+    "the measured run-to-run scatter (1 = the model predicts a new run as well as the "
+    "runs repeat each other)"
+)
 
 CSS = """
 body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; font-size: 15px;
@@ -146,20 +148,29 @@ def tag(text: str, kind: str) -> str:
 
 def page(title: str, body: str) -> str:
     """A complete HTML page (inline style, no external resources)."""
-    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-            f"<title>{esc(title)}</title><style>{CSS}</style></head>\n"
-            f"<body>\n{body}\n</body></html>\n")
+    return (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>{esc(title)}</title><style>{CSS}</style></head>\n"
+        f"<body>\n{body}\n</body></html>\n"
+    )
 
 
-def html_table(header: Sequence[str], rows: Sequence[Sequence[str]], *,
-               numeric: Sequence[int] = (), row_classes: Sequence[str] | None = None) -> str:
+def html_table(
+    header: Sequence[str],
+    rows: Sequence[Sequence[str]],
+    *,
+    numeric: Sequence[int] = (),
+    row_classes: Sequence[str] | None = None,
+) -> str:
     """A table from already-escaped cell HTML; ``numeric`` columns right-aligned."""
     head = "".join(f"<th>{cell}</th>" for cell in header)
     lines = [f"<table><thead><tr>{head}</tr></thead><tbody>"]
     for index, row in enumerate(rows):
         cls = f' class="{row_classes[index]}"' if row_classes and row_classes[index] else ""
-        cells = "".join(f'<td class="num">{cell}</td>' if k in numeric else f"<td>{cell}</td>"
-                        for k, cell in enumerate(row))
+        cells = "".join(
+            f'<td class="num">{cell}</td>' if k in numeric else f"<td>{cell}</td>"
+            for k, cell in enumerate(row)
+        )
         lines.append(f"<tr{cls}>{cells}</tr>")
     lines.append("</tbody></table>")
     return "\n".join(lines)
@@ -193,8 +204,13 @@ def candidate_margin(entry: Mapping) -> dict | None:
     chosen_score = float(mine[0]["score"])
     next_score = float(best_other["score"])
     ratio = next_score / chosen_score if chosen_score > 0 else None
-    return {"chosen": entry.get("cause"), "chosen_score": chosen_score,
-            "next": best_other["cause"], "next_score": next_score, "ratio": ratio}
+    return {
+        "chosen": entry.get("cause"),
+        "chosen_score": chosen_score,
+        "next": best_other["cause"],
+        "next_score": next_score,
+        "ratio": ratio,
+    }
 
 
 def campaign_headline(document: Mapping) -> str:
@@ -204,33 +220,43 @@ def campaign_headline(document: Mapping) -> str:
     cause = document.get("cause", "unknown")
     failing = [n for n in names if entries[n].get("cause") != "none"]
     if not names:
-        return ("No configuration had enough usable segments to be diagnosed; "
-                "see the excluded runs below.")
+        return "No configuration had enough usable segments to be diagnosed; see the excluded runs below."
     if cause == "none":
-        return (f"The paper's friction model explains all {len(names)} configuration"
-                f"{'s' if len(names) != 1 else ''} within the run-to-run scatter: "
-                "no missing physics was found.")
+        return (
+            f"The paper's friction model explains all {len(names)} configuration"
+            f"{'s' if len(names) != 1 else ''} within the run-to-run scatter: "
+            "no missing physics was found."
+        )
     which = ", ".join(failing)
     if cause == "unknown":
-        return (f"The paper's friction model (the better of Dahl and LuGre) does not explain the "
-                f"measured damping and frequency in {len(failing)} of {len(names)} configuration"
-                f"{'s' if len(names) != 1 else ''} ({which}), and none of the candidate causes "
-                "fixes it: the cause is unknown.")
-    text = (f"The paper's friction model (the better of Dahl and LuGre) falls short in "
-            f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
-            f"({which}): a model with the missing physics predicts runs held out of the fit "
-            "clearly better. ")
-    ratios = [entries[n]["gain"].get("ratio") for n in failing
-              if entries[n].get("cause") == cause and entries[n].get("gain")]
+        return (
+            f"The paper's friction model (the better of Dahl and LuGre) does not explain the "
+            f"measured damping and frequency in {len(failing)} of {len(names)} configuration"
+            f"{'s' if len(names) != 1 else ''} ({which}), and none of the candidate causes "
+            "fixes it: the cause is unknown."
+        )
+    text = (
+        f"The paper's friction model (the better of Dahl and LuGre) falls short in "
+        f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
+        f"({which}): a model with the missing physics predicts runs held out of the fit "
+        "clearly better. "
+    )
+    ratios = [
+        entries[n]["gain"].get("ratio")
+        for n in failing
+        if entries[n].get("cause") == cause and entries[n].get("gain")
+    ]
     ratios = [r for r in ratios if r is not None]
-    extended = [entries[n]["extended_model"]["model"] for n in failing
-                if entries[n].get("cause") == cause]
+    extended = [entries[n]["extended_model"]["model"] for n in failing if entries[n].get("cause") == cause]
     text += f"The cause: {CAUSE_WORDS.get(cause, cause)}."
     if extended and ratios:
         best = min(ratios)
-        text += (f" The extended model, {model_name(extended[0])}, predicts runs it was not "
-                 f"fitted to with {ratio(best)} of the baseline's error"
-                 + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "") + ".")
+        text += (
+            f" The extended model, {model_name(extended[0])}, predicts runs it was not "
+            f"fitted to with {ratio(best)} of the baseline's error"
+            + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "")
+            + "."
+        )
     return text
 
 
@@ -266,48 +292,67 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
     items = []
     runs, segments = evidence.get("n_runs"), evidence.get("n_segments")
     if runs is not None:
-        items.append(f"Based on {runs} runs and {segments} segments "
-                     f"({evidence.get('effective_observations', '?')} effectively independent).")
+        items.append(
+            f"Based on {runs} runs and {segments} segments "
+            f"({evidence.get('effective_observations', '?')} effectively independent)."
+        )
     baselines = evidence.get("baselines") or {}
     if baselines:
         parts = [f"{model_name(m)} {fmt(b.get('heldout_error'))}" for m, b in baselines.items()]
-        items.append("Held-out error of the paper's models: " + ", ".join(parts)
-                     + f"; the better one, {model_name(entry.get('baseline', {}).get('model'))}, "
-                       "is the baseline.")
+        items.append(
+            "Held-out error of the paper's models: "
+            + ", ".join(parts)
+            + f"; the better one, {model_name(entry.get('baseline', {}).get('model'))}, "
+            "is the baseline."
+        )
     if cause not in ("none", "unknown"):
         candidate = (evidence.get("candidates") or {}).get(cause, {})
-        text = (f"{model_name(entry.get('extended_model', {}).get('model'))} lowers the held-out "
-                f"error from {fmt(gain.get('baseline'))} to {fmt(gain.get('extended'))} "
-                f"(ratio {ratio(gain.get('ratio'))}; a clear gain needs a ratio below "
-                f"{ratio(evidence.get('clear_gain_threshold'))})")
+        text = (
+            f"{model_name(entry.get('extended_model', {}).get('model'))} lowers the held-out "
+            f"error from {fmt(gain.get('baseline'))} to {fmt(gain.get('extended'))} "
+            f"(ratio {ratio(gain.get('ratio'))}; a clear gain needs a ratio below "
+            f"{ratio(evidence.get('clear_gain_threshold'))})"
+        )
         if candidate.get("delta_bic") is not None:
-            text += (f" and the information criterion by {fmt(-candidate['delta_bic'])} "
-                     f"(ΔBIC {fmt(candidate['delta_bic'])})")
+            text += (
+                f" and the information criterion by {fmt(-candidate['delta_bic'])} "
+                f"(ΔBIC {fmt(candidate['delta_bic'])})"
+            )
         items.append(text + ".")
         if candidate.get("residual_significant"):
-            items.append(f"Some misfit remains after the extension ({candidate.get('significant_bins', '?')} "
-                         "amplitude bin(s) still significant): the extended model is better, "
-                         "not perfect.")
+            items.append(
+                f"Some misfit remains after the extension ({candidate.get('significant_bins', '?')} "
+                "amplitude bin(s) still significant): the extended model is better, "
+                "not perfect."
+            )
     margin = candidate_margin(entry)
     if margin and margin["ratio"] is not None:
         if margin["ratio"] >= 1 and cause in ("none", "unknown"):
-            items.append(f"No candidate predicts held-out runs better than the baseline; the "
-                         f"closest, {cause_name(margin['next'])}, has {ratio(margin['ratio'])} "
-                         f"times its held-out error ({fmt(margin['next_score'])}).")
+            items.append(
+                f"No candidate predicts held-out runs better than the baseline; the "
+                f"closest, {cause_name(margin['next'])}, has {ratio(margin['ratio'])} "
+                f"times its held-out error ({fmt(margin['next_score'])})."
+            )
         elif margin["ratio"] >= 1:
-            items.append(f"Margin over the next-best candidate, {candidate_name(margin['next'])}: its "
-                         f"held-out error ({fmt(margin['next_score'])}) is "
-                         f"{ratio(margin['ratio'])} times the verdict's.")
+            items.append(
+                f"Margin over the next-best candidate, {candidate_name(margin['next'])}: its "
+                f"held-out error ({fmt(margin['next_score'])}) is "
+                f"{ratio(margin['ratio'])} times the verdict's."
+            )
         else:
-            items.append(f"{cause_name(margin['next'])} scored a lower held-out error "
-                         f"({fmt(margin['next_score'])} against {fmt(margin['chosen_score'])}, "
-                         f"ratio {ratio(margin['ratio'])}) but was not accepted: "
-                         f"{evidence.get('decision_rule', 'see the decision rule')}.")
+            items.append(
+                f"{cause_name(margin['next'])} scored a lower held-out error "
+                f"({fmt(margin['next_score'])} against {fmt(margin['chosen_score'])}, "
+                f"ratio {ratio(margin['ratio'])}) but was not accepted: "
+                f"{evidence.get('decision_rule', 'see the decision rule')}."
+            )
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
-        items.append(f"Run-order trend of the damping: {fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
-                     f"from the first run to the last, p = {fmt(trend['p'], 2)} "
-                     f"({'significant' if trend.get('significant') else 'not significant'}).")
+        items.append(
+            f"Run-order trend of the damping: {fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
+            f"from the first run to the last, p = {fmt(trend['p'], 2)} "
+            f"({'significant' if trend.get('significant') else 'not significant'})."
+        )
     if evidence.get("decision_rule"):
         items.append(f"Decision rule: {evidence['decision_rule']}.")
     return [esc(item) for item in items]
@@ -318,26 +363,41 @@ def hypothesis_summary(hypotheses: pd.DataFrame) -> list[list[str]]:
     rows = []
     if hypotheses is None or hypotheses.empty:
         return rows
-    for (hypothesis, configuration), part in hypotheses.groupby(
-            ["hypothesis", "configuration"], sort=False):
+    for (hypothesis, configuration), part in hypotheses.groupby(["hypothesis", "configuration"], sort=False):
         counts = part["verdict"].value_counts()
         if len(part) == 1:
             verdicts = tag(part["verdict"].iloc[0], part["verdict"].iloc[0])
         else:
-            verdicts = " ".join(tag(f"{verdict} at {count} of {len(part)}", verdict)
-                                for verdict, count in counts.items())
+            verdicts = " ".join(
+                tag(f"{verdict} at {count} of {len(part)}", verdict) for verdict, count in counts.items()
+            )
         if len(part) == 1:
             r = part.iloc[0]
             estimates = f"{fmt(r.estimate)} [{fmt(r.ci_low)}, {fmt(r.ci_high)}]"
         else:
-            estimates = (f"{fmt(part['estimate'].min())} to {fmt(part['estimate'].max())}; "
-                         f"intervals within [{fmt(part['ci_low'].min())}, {fmt(part['ci_high'].max())}]")
-        statistic = re.sub(r" at velocity amplitude [0-9.eE+-]+ in/s", " at each amplitude",
-                           str(part["statistic"].iloc[0])) if len(part) > 1 else part["statistic"].iloc[0]
-        rows.append([esc(hypothesis), esc(configuration), verdicts,
-                     esc(amplitude_range(part["amplitude_low_in_s"].min(),
-                                         part["amplitude_high_in_s"].max())),
-                     esc(statistic), esc(estimates)])
+            estimates = (
+                f"{fmt(part['estimate'].min())} to {fmt(part['estimate'].max())}; "
+                f"intervals within [{fmt(part['ci_low'].min())}, {fmt(part['ci_high'].max())}]"
+            )
+        statistic = (
+            re.sub(
+                r" at velocity amplitude [0-9.eE+-]+ in/s",
+                " at each amplitude",
+                str(part["statistic"].iloc[0]),
+            )
+            if len(part) > 1
+            else part["statistic"].iloc[0]
+        )
+        rows.append(
+            [
+                esc(hypothesis),
+                esc(configuration),
+                verdicts,
+                esc(amplitude_range(part["amplitude_low_in_s"].min(), part["amplitude_high_in_s"].max())),
+                esc(statistic),
+                esc(estimates),
+            ]
+        )
     return rows
 
 
@@ -347,9 +407,13 @@ def excluded_runs(runs: pd.DataFrame) -> pd.DataFrame:
     return runs[runs["status"] == "excluded"]
 
 
-def verdict_html(document: Mapping, *, runs: pd.DataFrame | None = None,
-                 hypotheses: pd.DataFrame | None = None,
-                 areas: Mapping[str, float] | None = None) -> str:
+def verdict_html(
+    document: Mapping,
+    *,
+    runs: pd.DataFrame | None = None,
+    hypotheses: pd.DataFrame | None = None,
+    areas: Mapping[str, float] | None = None,
+) -> str:
     """The report's first page: the verdict of ``results/diagnosis.json`` in plain words.
 
     Parameters
@@ -373,46 +437,73 @@ def verdict_html(document: Mapping, *, runs: pd.DataFrame | None = None,
     areas = dict(areas or {})
     across = document.get("across_configurations") or {}
     if not areas:
-        areas = {n: c.get("bearing_area_in2")
-                 for n, c in (across.get("configurations") or {}).items()}
+        areas = {n: c.get("bearing_area_in2") for n, c in (across.get("configurations") or {}).items()}
     parts = [f"<h1>Verdict: campaign {esc(document.get('campaign', '?'))}</h1>"]
     kind = "none" if cause == "none" else ("unknown" if cause == "unknown" else "")
-    parts.append(f'<div class="headline {kind}"><b>Campaign verdict: '
-                 f"{esc(cause_name(cause))}.</b> {esc(campaign_headline(document))}</div>")
+    parts.append(
+        f'<div class="headline {kind}"><b>Campaign verdict: '
+        f"{esc(cause_name(cause))}.</b> {esc(campaign_headline(document))}</div>"
+    )
 
     # what the paper's model gets wrong
     parts.append("<h2>What the paper's model gets wrong</h2>")
     if entries:
-        parts.append("<ul>" + "".join(
-            f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
-            f"{esc(e.get('discrepancy', ''))}</li>" for n, e in entries.items()) + "</ul>")
+        parts.append(
+            "<ul>"
+            + "".join(
+                f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
+                f"{esc(e.get('discrepancy', ''))}</li>"
+                for n, e in entries.items()
+            )
+            + "</ul>"
+        )
     skipped = document.get("skipped_configurations") or {}
     if skipped:
-        parts.append("<p>Not diagnosed: " + "; ".join(
-            f"<b>{esc(n)}</b> ({esc(reason)})" for n, reason in skipped.items()) + ".</p>")
+        parts.append(
+            "<p>Not diagnosed: "
+            + "; ".join(f"<b>{esc(n)}</b> ({esc(reason)})" for n, reason in skipped.items())
+            + ".</p>"
+        )
 
     # cause and gain per configuration
     parts.append("<h2>Cause and extended model per configuration</h2>")
-    parts.append(html_table(
-        ["configuration", "bearing area (in²)", "baseline (best of Dahl, LuGre)", "cause",
-         "extended model", "held-out error, baseline", "held-out error, extended",
-         "gain ratio (extended / baseline)", "next-best candidate",
-         "its held-out error (× the verdict's)"],
-        [_configuration_row(n, e, areas.get(n)) for n, e in entries.items()],
-        numeric=(1, 5, 6, 7, 9)))
-    parts.append(f'<p class="note">{esc(ERROR_UNIT)}. A gain ratio below 1 means the extended '
-                 "model predicts better; with cause none the extended model is the baseline and "
-                 "the ratio is 1.</p>")
+    parts.append(
+        html_table(
+            [
+                "configuration",
+                "bearing area (in²)",
+                "baseline (best of Dahl, LuGre)",
+                "cause",
+                "extended model",
+                "held-out error, baseline",
+                "held-out error, extended",
+                "gain ratio (extended / baseline)",
+                "next-best candidate",
+                "its held-out error (× the verdict's)",
+            ],
+            [_configuration_row(n, e, areas.get(n)) for n, e in entries.items()],
+            numeric=(1, 5, 6, 7, 9),
+        )
+    )
+    parts.append(
+        f'<p class="note">{esc(ERROR_UNIT)}. A gain ratio below 1 means the extended '
+        "model predicts better; with cause none the extended model is the baseline and "
+        "the ratio is 1.</p>"
+    )
     for name, entry in entries.items():
         if entry.get("cause") not in ("none", "unknown"):
-            parts.append(f"<p><b>{esc(name)}</b>, the cause: {esc(CAUSE_WORDS.get(entry['cause'], entry['cause']))}.</p>")
+            parts.append(
+                f"<p><b>{esc(name)}</b>, the cause: {esc(CAUSE_WORDS.get(entry['cause'], entry['cause']))}.</p>"
+            )
 
     # how sure
     parts.append("<h2>How sure we are</h2>")
     for name, entry in entries.items():
-        parts.append(f"<h3>{esc(name)}</h3><ul>"
-                     + "".join(f"<li>{item}</li>" for item in _sureness_items(name, entry))
-                     + "</ul>")
+        parts.append(
+            f"<h3>{esc(name)}</h3><ul>"
+            + "".join(f"<li>{item}</li>" for item in _sureness_items(name, entry))
+            + "</ul>"
+        )
     if across:
         parts.append("<h3>Across configurations (predicting a left-out bearing area)</h3>")
         if across.get("applicable"):
@@ -423,7 +514,8 @@ def verdict_html(document: Mapping, *, runs: pd.DataFrame | None = None,
                 f"{fmt(across.get('baseline_mean_error'))} for {esc(model_name(models.get('baseline')))} "
                 f"and {fmt(across.get('extended_mean_error'))} for "
                 f"{esc(model_name(models.get('extended')))} (ratio {ratio(across.get('ratio'))}), "
-                "in units of the run-to-run scatter.</p>")
+                "in units of the run-to-run scatter.</p>"
+            )
         else:
             parts.append(f"<p>Not applicable: {esc(across.get('reason', 'no reason given'))}.</p>")
 
@@ -431,8 +523,19 @@ def verdict_html(document: Mapping, *, runs: pd.DataFrame | None = None,
     parts.append("<h2>The paper's hypotheses</h2>")
     rows = hypothesis_summary(hypotheses) if hypotheses is not None else []
     if rows:
-        parts.append(html_table(["hypothesis", "configuration", "verdict", "amplitudes tested",
-                                 "statistic", "estimate [95 % CI]"], rows))
+        parts.append(
+            html_table(
+                [
+                    "hypothesis",
+                    "configuration",
+                    "verdict",
+                    "amplitudes tested",
+                    "statistic",
+                    "estimate [95 % CI]",
+                ],
+                rows,
+            )
+        )
     else:
         parts.append("<p>No hypothesis could be tested.</p>")
 
@@ -443,33 +546,65 @@ def verdict_html(document: Mapping, *, runs: pd.DataFrame | None = None,
         used = int((runs["status"] == "used").sum())
         parts.append(f"<p>{used} of {len(runs)} run files used, {len(excluded)} excluded.</p>")
         if len(excluded):
-            parts.append(html_table(
-                ["configuration", "run", "file", "reason"],
-                [[esc(r.configuration), esc(r.run), esc(r.path), esc(r.reason)]
-                 for r in excluded.itertuples()],
-                row_classes=["excluded"] * len(excluded)))
-    parts.append('<p class="note">The figures and tables behind this page are in the other '
-                 "categories of the report: measured data, damping and area fits, friction models, "
-                 "diagnosis (residuals, candidates, held-out prediction) and quality.</p>")
+            parts.append(
+                html_table(
+                    ["configuration", "run", "file", "reason"],
+                    [
+                        [esc(r.configuration), esc(r.run), esc(r.path), esc(r.reason)]
+                        for r in excluded.itertuples()
+                    ],
+                    row_classes=["excluded"] * len(excluded),
+                )
+            )
+    parts.append(
+        '<p class="note">The figures and tables behind this page are in the other '
+        "categories of the report: measured data, damping and area fits, friction models, "
+        "diagnosis (residuals, candidates, held-out prediction) and quality.</p>"
+    )
     return page(f"Verdict: {document.get('campaign', '')}", "\n".join(parts))
 
 
 # ------------------------------------------------------------------ tables
 def hypotheses_html(hypotheses: pd.DataFrame) -> str:
     """Every hypothesis test, one row per configuration and amplitude."""
-    rows = [[esc(r.hypothesis), esc(r.configuration), tag(r.verdict, r.verdict),
-             esc(r.statistic), fmt(r.estimate), f"{fmt(r.ci_low)} – {fmt(r.ci_high)}",
-             fmt(100 * r.confidence, 3), esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s)),
-             str(r.n_runs), esc(r.note or "")]
-            for r in hypotheses.itertuples()]
-    body = ("<h1>The paper's hypotheses</h1>"
-            "<p>H1: damping rises with amplitude at low amplitude (per configuration). "
-            "H2: damping rises with bearing area (across configurations, at amplitudes all "
-            "reach). Supported: the confidence interval excludes zero on the predicted side; "
-            "contradicted: it excludes zero on the other side; inconclusive: it contains zero.</p>"
-            + html_table(["hypothesis", "configuration", "verdict", "statistic", "estimate",
-                          "confidence interval", "confidence (%)", "amplitudes", "runs", "note"],
-                         rows, numeric=(4, 5, 6, 8)))
+    rows = [
+        [
+            esc(r.hypothesis),
+            esc(r.configuration),
+            tag(r.verdict, r.verdict),
+            esc(r.statistic),
+            fmt(r.estimate),
+            f"{fmt(r.ci_low)} – {fmt(r.ci_high)}",
+            fmt(100 * r.confidence, 3),
+            esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s)),
+            str(r.n_runs),
+            esc(r.note or ""),
+        ]
+        for r in hypotheses.itertuples()
+    ]
+    body = (
+        "<h1>The paper's hypotheses</h1>"
+        "<p>H1: damping rises with amplitude at low amplitude (per configuration). "
+        "H2: damping rises with bearing area (across configurations, at amplitudes all "
+        "reach). Supported: the confidence interval excludes zero on the predicted side; "
+        "contradicted: it excludes zero on the other side; inconclusive: it contains zero.</p>"
+        + html_table(
+            [
+                "hypothesis",
+                "configuration",
+                "verdict",
+                "statistic",
+                "estimate",
+                "confidence interval",
+                "confidence (%)",
+                "amplitudes",
+                "runs",
+                "note",
+            ],
+            rows,
+            numeric=(4, 5, 6, 8),
+        )
+    )
     return page("Hypotheses", body)
 
 
@@ -478,14 +613,25 @@ def runs_html(runs: pd.DataFrame) -> str:
     counts = runs.groupby("configuration", sort=False)["status"].value_counts().unstack(fill_value=0)
     summary = html_table(
         ["configuration", "used", "excluded"],
-        [[esc(name), str(int(row.get("used", 0))), str(int(row.get("excluded", 0)))]
-         for name, row in counts.iterrows()], numeric=(1, 2))
-    rows = [[esc(r.configuration), esc(r.run), esc(r.path), tag(r.status, r.status), esc(r.reason)]
-            for r in runs.itertuples()]
-    body = ("<h1>Runs and quality checks</h1>" + summary
-            + html_table(["configuration", "run", "file", "status", "reason"], rows,
-                         row_classes=["excluded" if r.status == "excluded" else ""
-                                      for r in runs.itertuples()]))
+        [
+            [esc(name), str(int(row.get("used", 0))), str(int(row.get("excluded", 0)))]
+            for name, row in counts.iterrows()
+        ],
+        numeric=(1, 2),
+    )
+    rows = [
+        [esc(r.configuration), esc(r.run), esc(r.path), tag(r.status, r.status), esc(r.reason)]
+        for r in runs.itertuples()
+    ]
+    body = (
+        "<h1>Runs and quality checks</h1>"
+        + summary
+        + html_table(
+            ["configuration", "run", "file", "status", "reason"],
+            rows,
+            row_classes=["excluded" if r.status == "excluded" else "" for r in runs.itertuples()],
+        )
+    )
     return page("Runs", body)
 
 
@@ -494,15 +640,41 @@ def damping_fits_html(fits: pd.DataFrame) -> str:
     rows = []
     for r in fits.itertuples():
         coefficients = ", ".join(fmt(c, 4) for c in (r.coefficients if r.coefficients is not None else []))
-        rows.append([esc(r.configuration), fmt(r.bearing_area_in2), str(r.degree), esc(coefficients),
-                     esc(r.x_transform), fmt(r.cv_rmse_at_degree), str(r.n_runs), str(r.n_segments),
-                     esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s)), esc(r.cv_scheme)])
-    body = ("<h1>Damping fits</h1><p>ζ (fraction of critical) as a polynomial in "
-            "x = log10(velocity amplitude / 1 in/s), coefficients from the constant term up; "
-            "degree chosen by cross-validation.</p>"
-            + html_table(["configuration", "bearing area (in²)", "degree", "coefficients (ζ, constant first)",
-                          "x", "CV RMSE of ζ", "runs", "segments", "amplitude range", "degree chosen by"],
-                         rows, numeric=(1, 2, 5, 6, 7)))
+        rows.append(
+            [
+                esc(r.configuration),
+                fmt(r.bearing_area_in2),
+                str(r.degree),
+                esc(coefficients),
+                esc(r.x_transform),
+                fmt(r.cv_rmse_at_degree),
+                str(r.n_runs),
+                str(r.n_segments),
+                esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s)),
+                esc(r.cv_scheme),
+            ]
+        )
+    body = (
+        "<h1>Damping fits</h1><p>ζ (fraction of critical) as a polynomial in "
+        "x = log10(velocity amplitude / 1 in/s), coefficients from the constant term up; "
+        "degree chosen by cross-validation.</p>"
+        + html_table(
+            [
+                "configuration",
+                "bearing area (in²)",
+                "degree",
+                "coefficients (ζ, constant first)",
+                "x",
+                "CV RMSE of ζ",
+                "runs",
+                "segments",
+                "amplitude range",
+                "degree chosen by",
+            ],
+            rows,
+            numeric=(1, 2, 5, 6, 7),
+        )
+    )
     return page("Damping fits", body)
 
 
@@ -511,39 +683,97 @@ def model_fits_html(fits: pd.DataFrame) -> str:
     rows = []
     for (configuration, model), part in fits.groupby(["configuration", "model"], sort=False):
         first = part.iloc[0]
-        params = "<br>".join(f"{esc(p.parameter)} = {fmt(p.value, 4)} ± {fmt(p.std, 2)}"
-                             for p in part.itertuples())
-        rows.append([esc(configuration), esc(model_name(model)), params,
-                     fmt(first["rms_log_zeta"]), fmt(100 * first["rms_rel_frequency"]),
-                     esc(first.get("modal_coordinate", ""))])
-    body = ("<h1>Friction model fits</h1><p>Each model simulated through the same band-pass, "
-            "envelope and log decrement as the data; parameters ± one sigma from the Jacobian.</p>"
-            + html_table(["configuration", "model", "parameters (± 1σ)", "RMS error of ln ζ",
-                          "RMS error of frequency (%)", "modal coordinate"], rows, numeric=(3, 4)))
+        params = "<br>".join(
+            f"{esc(p.parameter)} = {fmt(p.value, 4)} ± {fmt(p.std, 2)}" for p in part.itertuples()
+        )
+        rows.append(
+            [
+                esc(configuration),
+                esc(model_name(model)),
+                params,
+                fmt(first["rms_log_zeta"]),
+                fmt(100 * first["rms_rel_frequency"]),
+                esc(first.get("modal_coordinate", "")),
+            ]
+        )
+    body = (
+        "<h1>Friction model fits</h1><p>Each model simulated through the same band-pass, "
+        "envelope and log decrement as the data; parameters ± one sigma from the Jacobian.</p>"
+        + html_table(
+            [
+                "configuration",
+                "model",
+                "parameters (± 1σ)",
+                "RMS error of ln ζ",
+                "RMS error of frequency (%)",
+                "modal coordinate",
+            ],
+            rows,
+            numeric=(3, 4),
+        )
+    )
     return page("Friction model fits", body)
 
 
 def candidates_html(document: Mapping) -> str:
     """Every model tried by the diagnosis, per configuration: held-out errors, BIC, params."""
-    parts = ["<h1>Diagnosis: every candidate</h1>",
-             f'<p class="note">{esc(ERROR_UNIT)}. ΔBIC is against the baseline (negative: better '
-             "after paying for the extra parameters).</p>"]
+    parts = [
+        "<h1>Diagnosis: every candidate</h1>",
+        f'<p class="note">{esc(ERROR_UNIT)}. ΔBIC is against the baseline (negative: better '
+        "after paying for the extra parameters).</p>",
+    ]
     for name, entry in (document.get("configurations") or {}).items():
         evidence = entry.get("evidence") or {}
         parts.append(f"<h2>{esc(name)}: {tag(cause_name(entry.get('cause')), 'cause')}</h2>")
         rows = []
         for model, b in (evidence.get("baselines") or {}).items():
-            rows.append([esc(f"paper's model ({'baseline' if model == entry['baseline']['model'] else 'not used'})"),
-                         esc(model_name(model)), fmt(b.get("heldout_error")), fmt(b.get("heldout_error_zeta")),
-                         fmt(b.get("heldout_error_frequency")), "–", fmt(b.get("bic")), "–", ""])
+            rows.append(
+                [
+                    esc(
+                        f"paper's model ({'baseline' if model == entry['baseline']['model'] else 'not used'})"
+                    ),
+                    esc(model_name(model)),
+                    fmt(b.get("heldout_error")),
+                    fmt(b.get("heldout_error_zeta")),
+                    fmt(b.get("heldout_error_frequency")),
+                    "–",
+                    fmt(b.get("bic")),
+                    "–",
+                    "",
+                ]
+            )
         for cause, c in (evidence.get("candidates") or {}).items():
             params = ", ".join(f"{esc(k)} = {fmt(v)}" for k, v in (c.get("params") or {}).items())
-            rows.append([esc(cause_name(cause)), esc(model_name(c.get("model"))), fmt(c.get("heldout_error")),
-                         fmt(c.get("heldout_error_zeta")), fmt(c.get("heldout_error_frequency")),
-                         ratio(c.get("ratio_to_baseline")), fmt(c.get("bic")), fmt(c.get("delta_bic")), params])
-        parts.append(html_table(["cause", "model", "held-out error", "… damping", "… frequency",
-                                 "ratio to baseline", "BIC", "ΔBIC", "parameters"], rows,
-                                numeric=(2, 3, 4, 5, 6, 7)))
+            rows.append(
+                [
+                    esc(cause_name(cause)),
+                    esc(model_name(c.get("model"))),
+                    fmt(c.get("heldout_error")),
+                    fmt(c.get("heldout_error_zeta")),
+                    fmt(c.get("heldout_error_frequency")),
+                    ratio(c.get("ratio_to_baseline")),
+                    fmt(c.get("bic")),
+                    fmt(c.get("delta_bic")),
+                    params,
+                ]
+            )
+        parts.append(
+            html_table(
+                [
+                    "cause",
+                    "model",
+                    "held-out error",
+                    "… damping",
+                    "… frequency",
+                    "ratio to baseline",
+                    "BIC",
+                    "ΔBIC",
+                    "parameters",
+                ],
+                rows,
+                numeric=(2, 3, 4, 5, 6, 7),
+            )
+        )
         parts.append(f"<p>{esc(entry.get('discrepancy', ''))}</p>")
     return page("Diagnosis candidates", "\n".join(parts))
 
@@ -557,11 +787,15 @@ def rejected_segments_html(rejected: pd.DataFrame) -> str:
     table = exploded.groupby(["configuration", "rule"], sort=False).size().unstack(fill_value=0)
     header = ["configuration", *[esc(c) for c in table.columns], "segments dropped"]
     totals = frame.groupby("configuration", sort=False).size()
-    rows = [[esc(name), *[str(int(v)) for v in row.values], str(int(totals.get(name, 0)))]
-            for name, row in table.iterrows()]
-    body = ("<h1>Rejected segments</h1><p>Segments dropped by each rule "
-            "(a segment can be dropped by several; see docs/decay_analysis.md).</p>"
-            + html_table(header, rows, numeric=tuple(range(1, len(header)))))
+    rows = [
+        [esc(name), *[str(int(v)) for v in row.values], str(int(totals.get(name, 0)))]
+        for name, row in table.iterrows()
+    ]
+    body = (
+        "<h1>Rejected segments</h1><p>Segments dropped by each rule "
+        "(a segment can be dropped by several; see docs/decay_analysis.md).</p>"
+        + html_table(header, rows, numeric=tuple(range(1, len(header))))
+    )
     return page("Rejected segments", body)
 
 
@@ -574,8 +808,9 @@ def rst_escape(text: Any) -> str:
     return _RST_SPECIAL.sub(r"\\\1", str(text))
 
 
-def verdict_rst(document: Mapping, *, runs: pd.DataFrame | None = None,
-                hypotheses: pd.DataFrame | None = None) -> str:
+def verdict_rst(
+    document: Mapping, *, runs: pd.DataFrame | None = None, hypotheses: pd.DataFrame | None = None
+) -> str:
     """The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
     Narrow enough for the column Snakemake's report gives its workflow description:
@@ -590,20 +825,25 @@ def verdict_rst(document: Mapping, *, runs: pd.DataFrame | None = None,
         gain = entry.get("gain") or {}
         base = model_name(entry.get("baseline", {}).get("model"))
         if entry.get("cause") == "none":
-            text = (f"{base} fits within the run-to-run scatter "
-                    f"(held-out error {fmt(gain.get('baseline'))}).")
+            text = f"{base} fits within the run-to-run scatter (held-out error {fmt(gain.get('baseline'))})."
         else:
             text = entry.get("discrepancy", "")
             if entry.get("cause") != "unknown":
-                text += (f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
-                         f"held-out runs with {ratio(gain.get('ratio'))} of {base}'s error "
-                         f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))}).")
+                text += (
+                    f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
+                    f"held-out runs with {ratio(gain.get('ratio'))} of {base}'s error "
+                    f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))})."
+                )
                 margin = candidate_margin(entry)
                 if margin and margin["ratio"] is not None and margin["ratio"] >= 1:
-                    text += (f" Next best: {candidate_name(margin['next'])}, with "
-                             f"{ratio(margin['ratio'])} times that error.")
-        lines += [f"* **{rst_escape(name)}**: *{rst_escape(cause_name(entry.get('cause')))}*. "
-                  + rst_escape(text), ""]
+                    text += (
+                        f" Next best: {candidate_name(margin['next'])}, with "
+                        f"{ratio(margin['ratio'])} times that error."
+                    )
+        lines += [
+            f"* **{rst_escape(name)}**: *{rst_escape(cause_name(entry.get('cause')))}*. " + rst_escape(text),
+            "",
+        ]
     skipped = document.get("skipped_configurations") or {}
     for name, reason in skipped.items():
         lines += [f"* **{rst_escape(name)}**: not diagnosed ({rst_escape(reason)}).", ""]
@@ -616,8 +856,9 @@ def verdict_rst(document: Mapping, *, runs: pd.DataFrame | None = None,
                 if len(sub) == 1:
                     verdicts.append(f"{sub['verdict'].iloc[0]} for {configuration}")
                 else:
-                    verdicts.append(", ".join(f"{v} at {c} of {len(sub)} amplitudes"
-                                              for v, c in counts.items()))
+                    verdicts.append(
+                        ", ".join(f"{v} at {c} of {len(sub)} amplitudes" for v, c in counts.items())
+                    )
             parts.append(f"{hypothesis}: {'; '.join(verdicts)}.")
         lines += ["**The paper's hypotheses.** " + rst_escape(" ".join(parts)), ""]
     if runs is not None and not runs.empty:
@@ -625,11 +866,15 @@ def verdict_rst(document: Mapping, *, runs: pd.DataFrame | None = None,
         text = f"{int((runs['status'] == 'used').sum())} of {len(runs)} run files used"
         if len(excluded):
             text += "; excluded: " + "; ".join(
-                f"{r.configuration}/{r.run} ({r.reason})" for r in excluded.itertuples())
+                f"{r.configuration}/{r.run} ({r.reason})" for r in excluded.itertuples()
+            )
         lines += ["**Runs.** " + rst_escape(text + "."), ""]
-    lines += ["The evidence (held-out errors of every candidate, margins, residual tests) is on "
-              "the page verdict.html_ in category `1 Verdict`_; the figures and tables are in "
-              "the categories listed under *Results*.", ""]
+    lines += [
+        "The evidence (held-out errors of every candidate, margins, residual tests) is on "
+        "the page verdict.html_ in category `1 Verdict`_; the figures and tables are in "
+        "the categories listed under *Results*.",
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -640,8 +885,16 @@ def landing_rst(verdict: str, description: str) -> str:
     ``description`` (report/workflow.rst) keeps its Jinja expressions.
     """
     heading = "About this study"
-    return ("{% raw %}\n" + verdict + "\n{% endraw %}\n\n"
-            + heading + "\n" + "=" * len(heading) + "\n\n" + description)
+    return (
+        "{% raw %}\n"
+        + verdict
+        + "\n{% endraw %}\n\n"
+        + heading
+        + "\n"
+        + "=" * len(heading)
+        + "\n\n"
+        + description
+    )
 
 
 def quality_html(quality: pd.DataFrame) -> str:
@@ -660,9 +913,10 @@ def quality_html(quality: pd.DataFrame) -> str:
         rows = quality[quality["check"] == check]
         unit = str(rows["unit"].iloc[0]) if "unit" in rows else ""
         threshold = rows["threshold"].iloc[0] if "threshold" in rows else None
-        detail = "; ".join(part for part in (
-            esc(unit), f"limit {fmt(threshold)}" if fmt(threshold) != "–" else "") if part)
-        header.append(f"{esc(check)}<br><span class=\"note\">{detail}</span>" if detail else esc(check))
+        detail = "; ".join(
+            part for part in (esc(unit), f"limit {fmt(threshold)}" if fmt(threshold) != "–" else "") if part
+        )
+        header.append(f'{esc(check)}<br><span class="note">{detail}</span>' if detail else esc(check))
     body_rows, classes = [], []
     for (configuration, run), part in quality.groupby(["configuration", "run"], sort=False):
         by_check = {r.check: r for r in part.itertuples()}
@@ -683,11 +937,25 @@ def quality_html(quality: pd.DataFrame) -> str:
     if len(failed):
         reasons = "<h2>Failed checks</h2>" + html_table(
             ["configuration", "run", "check", "value", "limit", "reason"],
-            [[esc(r.configuration), esc(r.run), esc(r.check), fmt(r.value), fmt(r.threshold), esc(r.reason)]
-             for r in failed.itertuples()], numeric=(3, 4))
-    body = ("<h1>Quality checks</h1><p>The measured value of every check for every run, with "
-            "the limit from config.yaml (quality). Shaded: a check failed and the run was "
-            "excluded; '–': the check does not apply (no force column, pre-trigger not stated, "
-            "...).</p>" + html_table(header, body_rows, numeric=tuple(range(2, len(header))),
-                                     row_classes=classes) + reasons)
+            [
+                [
+                    esc(r.configuration),
+                    esc(r.run),
+                    esc(r.check),
+                    fmt(r.value),
+                    fmt(r.threshold),
+                    esc(r.reason),
+                ]
+                for r in failed.itertuples()
+            ],
+            numeric=(3, 4),
+        )
+    body = (
+        "<h1>Quality checks</h1><p>The measured value of every check for every run, with "
+        "the limit from config.yaml (quality). Shaded: a check failed and the run was "
+        "excluded; '–': the check does not apply (no force column, pre-trigger not stated, "
+        "...).</p>"
+        + html_table(header, body_rows, numeric=tuple(range(2, len(header))), row_classes=classes)
+        + reasons
+    )
     return page("Quality checks", body)

@@ -21,7 +21,7 @@ Dahl follows from ``g(v) = Fc`` (``alpha1 = 0``, ``alpha0 = Fc``), ``sigma1 = al
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -48,8 +48,7 @@ DAHL_PARAMS = ("sigma", "fc")
 
 
 # --------------------------------------------------------------------------- Dahl
-def dahl_z_rate(z_in: ArrayLike, v_in_s: ArrayLike, sigma_lbf_in: ArrayLike,
-                fc_lbf: ArrayLike) -> np.ndarray:
+def dahl_z_rate(z_in: ArrayLike, v_in_s: ArrayLike, sigma_lbf_in: ArrayLike, fc_lbf: ArrayLike) -> np.ndarray:
     """Dahl state equation (paper eq. 4a): ``dz/dt = v - sigma |v| z / Fc``.
 
     Parameters
@@ -77,8 +76,14 @@ def dahl_force(z_in: ArrayLike, sigma_lbf_in: ArrayLike) -> np.ndarray:
     return np.asarray(sigma_lbf_in, dtype=float) * np.asarray(z_in, dtype=float)
 
 
-def dahl_branch_z(u_in: ArrayLike, direction: ArrayLike, u_rev_in: ArrayLike,
-                  z_rev_in: ArrayLike, sigma_lbf_in: ArrayLike, fc_lbf: ArrayLike) -> np.ndarray:
+def dahl_branch_z(
+    u_in: ArrayLike,
+    direction: ArrayLike,
+    u_rev_in: ArrayLike,
+    z_rev_in: ArrayLike,
+    sigma_lbf_in: ArrayLike,
+    fc_lbf: ArrayLike,
+) -> np.ndarray:
     """Exact Dahl state on a branch of monotonic slip.
 
     Dahl is rate independent: with ``s = sign(v)`` fixed, eq. 4a becomes
@@ -108,8 +113,9 @@ def dahl_branch_z(u_in: ArrayLike, direction: ArrayLike, u_rev_in: ArrayLike,
     return z_sat + (np.asarray(z_rev_in) - z_sat) * np.exp(-np.minimum(decay, 50.0))
 
 
-def dahl_dissipation_per_cycle(amplitude_in: ArrayLike, sigma_lbf_in: ArrayLike,
-                               fc_lbf: ArrayLike) -> np.ndarray:
+def dahl_dissipation_per_cycle(
+    amplitude_in: ArrayLike, sigma_lbf_in: ArrayLike, fc_lbf: ArrayLike
+) -> np.ndarray:
     """Energy dissipated per steady, symmetric slip cycle ``u = A sin(wt)`` by Dahl.
 
     Derivation (rate independence, ``lam = sigma / Fc``): on the rising half-cycle
@@ -145,21 +151,28 @@ def dahl_dissipation_per_cycle(amplitude_in: ArrayLike, sigma_lbf_in: ArrayLike,
 
 
 # --------------------------------------------------------------------------- LuGre
-def lugre_g(v_in_s: ArrayLike, alpha0_lbf: ArrayLike, alpha1_lbf: ArrayLike,
-            v0_in_s: ArrayLike) -> np.ndarray:
+def lugre_g(
+    v_in_s: ArrayLike, alpha0_lbf: ArrayLike, alpha1_lbf: ArrayLike, v0_in_s: ArrayLike
+) -> np.ndarray:
     """Stribeck curve (paper eq. 5c) ``g(v) = alpha0 + alpha1 exp(-(v/v0)^2)`` in lbf."""
     v = np.asarray(v_in_s, dtype=float)
-    return np.asarray(alpha0_lbf) + np.asarray(alpha1_lbf) * np.exp(-(v / np.asarray(v0_in_s)) ** 2)
+    return np.asarray(alpha0_lbf) + np.asarray(alpha1_lbf) * np.exp(-((v / np.asarray(v0_in_s)) ** 2))
 
 
 def lugre_sigma1(v_in_s: ArrayLike, sigma1_lbf_s_in: ArrayLike, vd_in_s: ArrayLike) -> np.ndarray:
     """Velocity-dependent micro-damping (paper eq. 5d) ``sigma1 exp(-(v/vd)^2)``, lbf*s/in."""
     v = np.asarray(v_in_s, dtype=float)
-    return np.asarray(sigma1_lbf_s_in) * np.exp(-(v / np.asarray(vd_in_s)) ** 2)
+    return np.asarray(sigma1_lbf_s_in) * np.exp(-((v / np.asarray(vd_in_s)) ** 2))
 
 
-def lugre_z_rate(z_in: ArrayLike, v_in_s: ArrayLike, sigma0_lbf_in: ArrayLike,
-                 alpha0_lbf: ArrayLike, alpha1_lbf: ArrayLike, v0_in_s: ArrayLike) -> np.ndarray:
+def lugre_z_rate(
+    z_in: ArrayLike,
+    v_in_s: ArrayLike,
+    sigma0_lbf_in: ArrayLike,
+    alpha0_lbf: ArrayLike,
+    alpha1_lbf: ArrayLike,
+    v0_in_s: ArrayLike,
+) -> np.ndarray:
     """LuGre state equation (paper eq. 5a, ``g`` in force units): ``v - sigma0 |v| z / g(v)``.
 
     Returns dz/dt in in/s. With ``alpha1 = 0`` and ``alpha0 = Fc`` this is
@@ -170,15 +183,25 @@ def lugre_z_rate(z_in: ArrayLike, v_in_s: ArrayLike, sigma0_lbf_in: ArrayLike,
     return v - np.asarray(sigma0_lbf_in) * np.abs(v) * np.asarray(z_in) / g
 
 
-def lugre_force(z_in: ArrayLike, v_in_s: ArrayLike, sigma0_lbf_in: ArrayLike,
-                sigma1_lbf_s_in: ArrayLike, alpha0_lbf: ArrayLike, alpha1_lbf: ArrayLike,
-                alpha2_lbf_s_in: ArrayLike, v0_in_s: ArrayLike, vd_in_s: ArrayLike) -> np.ndarray:
+def lugre_force(
+    z_in: ArrayLike,
+    v_in_s: ArrayLike,
+    sigma0_lbf_in: ArrayLike,
+    sigma1_lbf_s_in: ArrayLike,
+    alpha0_lbf: ArrayLike,
+    alpha1_lbf: ArrayLike,
+    alpha2_lbf_s_in: ArrayLike,
+    v0_in_s: ArrayLike,
+    vd_in_s: ArrayLike,
+) -> np.ndarray:
     """LuGre friction force (paper eq. 5b, 5d): ``sigma0 z + sigma1(v) dz/dt + alpha2 v`` in lbf."""
     v = np.asarray(v_in_s, dtype=float)
     z_dot = lugre_z_rate(z_in, v, sigma0_lbf_in, alpha0_lbf, alpha1_lbf, v0_in_s)
-    return (np.asarray(sigma0_lbf_in) * np.asarray(z_in)
-            + lugre_sigma1(v, sigma1_lbf_s_in, vd_in_s) * z_dot
-            + np.asarray(alpha2_lbf_s_in) * v)
+    return (
+        np.asarray(sigma0_lbf_in) * np.asarray(z_in)
+        + lugre_sigma1(v, sigma1_lbf_s_in, vd_in_s) * z_dot
+        + np.asarray(alpha2_lbf_s_in) * v
+    )
 
 
 # --------------------------------------------------------------------------- loops
@@ -186,15 +209,25 @@ def _z_rate_and_force(model: str, params: Mapping[str, ArrayLike]):
     """(rate(z, v), force(z, v)) closures for a model name and its parameters."""
     if model == "dahl":
         sigma, fc = params["sigma"], params["fc"]
-        return (lambda z, v: dahl_z_rate(z, v, sigma, fc),
-                lambda z, v: dahl_force(z, sigma))
+        return (lambda z, v: dahl_z_rate(z, v, sigma, fc), lambda z, v: dahl_force(z, sigma))
     if model == "lugre":
         p = {k: params[k] for k in LUGRE_PARAMS}
-        return (lambda z, v: lugre_z_rate(z, v, p["sigma0"], p["alpha0"], p["alpha1"], p["v0"]),
-                lambda z, v: lugre_force(z, v, **{
-                    "sigma0_lbf_in": p["sigma0"], "sigma1_lbf_s_in": p["sigma1"],
-                    "alpha0_lbf": p["alpha0"], "alpha1_lbf": p["alpha1"],
-                    "alpha2_lbf_s_in": p["alpha2"], "v0_in_s": p["v0"], "vd_in_s": p["vd"]}))
+        return (
+            lambda z, v: lugre_z_rate(z, v, p["sigma0"], p["alpha0"], p["alpha1"], p["v0"]),
+            lambda z, v: lugre_force(
+                z,
+                v,
+                **{
+                    "sigma0_lbf_in": p["sigma0"],
+                    "sigma1_lbf_s_in": p["sigma1"],
+                    "alpha0_lbf": p["alpha0"],
+                    "alpha1_lbf": p["alpha1"],
+                    "alpha2_lbf_s_in": p["alpha2"],
+                    "v0_in_s": p["v0"],
+                    "vd_in_s": p["vd"],
+                },
+            ),
+        )
     raise ValueError(f"unknown friction model {model!r}; expected one of {MODELS}")
 
 
@@ -207,9 +240,16 @@ def _relaxation_per_length(model: str, params: Mapping[str, ArrayLike]) -> np.nd
     return np.asarray(params["sigma0"], float) / gmin
 
 
-def hysteresis_loop(model: str, params: Mapping[str, ArrayLike], amplitude_in: float, *,
-                    frequency_hz: float = 1.0, cycles: int = 3, points_per_cycle: int = 2000,
-                    steady_start: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def hysteresis_loop(
+    model: str,
+    params: Mapping[str, ArrayLike],
+    amplitude_in: float,
+    *,
+    frequency_hz: float = 1.0,
+    cycles: int = 3,
+    points_per_cycle: int = 2000,
+    steady_start: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
     """Friction force along a displacement-driven cycle ``x = A sin(2 pi f t)``.
 
     The drive starts at ``x = 0`` moving up. With ``steady_start`` the state starts on
@@ -305,8 +345,8 @@ def loop_dissipation(x_in: ArrayLike, force_lbf: ArrayLike, points_per_cycle: in
         Samples per period.
     """
     n = points_per_cycle
-    x = np.asarray(x_in, float)[-(n + 1):-1]
-    f = np.asarray(force_lbf, float)[..., -(n + 1):-1]
+    x = np.asarray(x_in, float)[-(n + 1) : -1]
+    f = np.asarray(force_lbf, float)[..., -(n + 1) : -1]
     k = np.fft.rfftfreq(n) * 2.0 * np.pi  # radians per sample
     dx_dn = np.fft.irfft(1j * k * np.fft.rfft(x), n)
     return np.sum(f * dx_dn, axis=-1)

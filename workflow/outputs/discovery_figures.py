@@ -5,24 +5,24 @@
 * :func:`candidates_figure`: held-out error of every candidate per configuration.
 * :func:`heldout_figure`: the across-configurations prediction of a left-out area.
 
-All take what :func:`workflow.discovery.diagnose_campaign` and
-:func:`workflow.discovery.residual_table` return; nothing is refitted here.
+All take what :func:`workflow.discovery.diagnosis.diagnose_campaign` and
+:func:`workflow.discovery.diagnosis.residual_table` return; nothing is refitted here.
 """
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import matplotlib
 
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib import ticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
+from matplotlib import ticker  # noqa: E402
 
-from workflow.figures import STYLE, VELOCITY_LABEL  # noqa: E402
+from workflow.outputs.figures import STYLE, VELOCITY_LABEL  # noqa: E402
 
 __all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
@@ -41,8 +41,7 @@ def _configuration_document(document: Mapping, configuration: str | None = None)
     return document
 
 
-def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Mean residual in bins of ``1 / per_decade`` decade of amplitude (>= 3 segments)."""
     if v.size == 0:
         return np.array([]), np.array([])
@@ -56,14 +55,13 @@ def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4
     return np.array(centres), np.array(means)
 
 
-def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapping
-                     ) -> plt.Figure:
+def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapping) -> plt.Figure:
     """Residuals vs amplitude of the baseline and the extended model of one configuration.
 
     Parameters
     ----------
     residuals : DataFrame
-        :func:`workflow.discovery.residual_table` (all configurations or this one).
+        :func:`workflow.discovery.diagnosis.residual_table` (all configurations or this one).
     configuration : str
     document : mapping
         The campaign's diagnosis document (or this configuration's entry): names the
@@ -80,13 +78,11 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
     entry = _configuration_document(document, configuration)
     rows = residuals[residuals["configuration"] == configuration]
     cause = entry.get("cause", "?")
-    models = {"baseline": entry["baseline"]["model"],
-              "extended": entry["extended_model"]["model"]}
+    models = {"baseline": entry["baseline"]["model"], "extended": entry["extended_model"]["model"]}
     gain = entry.get("gain", {}).get("ratio")
     with plt.rc_context(STYLE):
         fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7.0, 6.4))
-        roles = ["baseline"] if models["extended"] == models["baseline"] else ["baseline",
-                                                                               "extended"]
+        roles = ["baseline"] if models["extended"] == models["baseline"] else ["baseline", "extended"]
         for ax, curve in zip(axes, ("zeta", "frequency_hz")):
             ax.axhspan(-2, 2, color="0.85", alpha=0.6, lw=0, label="±2 scatter")
             ax.axhline(0.0, color="0.4", lw=0.8)
@@ -97,8 +93,15 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
                 colour = ROLE_COLOURS[role]
                 ax.scatter(v, r, s=5, alpha=0.25, color=colour, lw=0)
                 centres, means = _binned_means(v, r)
-                ax.plot(centres, means, "o-", color=colour, ms=4, lw=1.5,
-                        label=f"{role}: {models[role]} (binned mean)")
+                ax.plot(
+                    centres,
+                    means,
+                    "o-",
+                    color=colour,
+                    ms=4,
+                    lw=1.5,
+                    label=f"{role}: {models[role]} (binned mean)",
+                )
             ax.set_xscale("log")
             ax.set_ylabel(CURVE_LABELS[curve])
             finite = rows.loc[rows["curve"] == curve, "residual"].to_numpy(float)
@@ -136,19 +139,25 @@ def candidates_figure(document: Mapping) -> plt.Figure:
         fig, axes = plt.subplots(1, n, figsize=(max(4.2 * n, 5.0), 3.8), squeeze=False)
         axes = axes[0]
         if not names:
-            axes[0].text(0.5, 0.5, "no configuration diagnosed", ha="center", va="center",
-                         transform=axes[0].transAxes)
+            axes[0].text(
+                0.5, 0.5, "no configuration diagnosed", ha="center", va="center", transform=axes[0].transAxes
+            )
             axes[0].set_axis_off()
         for ax, name in zip(axes, names):
             entry = entries[name]
             ranking = entry.get("ranking", [])
             causes = [r["cause"] for r in ranking][::-1]
-            scores = np.array([r["score"] if r["score"] is not None else np.nan
-                               for r in ranking][::-1], dtype=float)
+            scores = np.array(
+                [r["score"] if r["score"] is not None else np.nan for r in ranking][::-1], dtype=float
+            )
             candidates = entry.get("evidence", {}).get("candidates", {})
             base_model = entry["baseline"]["model"]
-            labels = [f"none ({base_model}, baseline)" if c == "none"
-                      else f"{c} ({candidates.get(c, {}).get('model', '?')})" for c in causes]
+            labels = [
+                f"none ({base_model}, baseline)"
+                if c == "none"
+                else f"{c} ({candidates.get(c, {}).get('model', '?')})"
+                for c in causes
+            ]
             colours = ["0.6" if c == "none" else "tab:blue" for c in causes]
             bars = ax.barh(np.arange(len(causes)), scores, color=colours)
             for bar, c in zip(bars, causes):
@@ -160,8 +169,9 @@ def candidates_figure(document: Mapping) -> plt.Figure:
             if np.isfinite(scores).any():
                 base = scores[causes.index("none")] if "none" in causes else np.nan
                 if np.isfinite(base):
-                    ax.axvline(base, color="tab:red", ls="--", lw=1,
-                               label=f"baseline {base_model}: {base:.2f}")
+                    ax.axvline(
+                        base, color="tab:red", ls="--", lw=1, label=f"baseline {base_model}: {base:.2f}"
+                    )
                 ax.set_xscale("log")
                 ax.legend(loc="lower right")
             ax.set_yticks(np.arange(len(causes)), labels)
@@ -192,8 +202,15 @@ def heldout_figure(document: Mapping) -> plt.Figure:
         fig, ax = plt.subplots(figsize=(7.0, 4.2))
         if not across.get("applicable"):
             reason = across.get("reason", "no across-configuration prediction in the document")
-            ax.text(0.5, 0.5, f"Across-configuration prediction not applicable:\n{reason}",
-                    ha="center", va="center", wrap=True, transform=ax.transAxes)
+            ax.text(
+                0.5,
+                0.5,
+                f"Across-configuration prediction not applicable:\n{reason}",
+                ha="center",
+                va="center",
+                wrap=True,
+                transform=ax.transAxes,
+            )
             ax.set_axis_off()
             ax.set_title("Prediction of a left-out bearing area")
             return fig
@@ -208,16 +225,15 @@ def heldout_figure(document: Mapping) -> plt.Figure:
             errors = np.array([e if e is not None else np.nan for e in errors], dtype=float)
             mean = across.get(f"{role}_mean_error")
             label = f"{role}: {models[role]}" + (f" (mean {mean:.2f})" if mean is not None else "")
-            ax.bar(x + (k - (len(roles) - 1) / 2) * width, errors, width,
-                   color=ROLE_COLOURS[role], label=label)
-        ax.set_xticks(x, [f"{n}\n{configs[n].get('bearing_area_in2', float('nan')):.2f} in²"
-                          for n in names])
+            ax.bar(
+                x + (k - (len(roles) - 1) / 2) * width, errors, width, color=ROLE_COLOURS[role], label=label
+            )
+        ax.set_xticks(x, [f"{n}\n{configs[n].get('bearing_area_in2', float('nan')):.2f} in²" for n in names])
         ax.set_yscale("log")
         ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
         ax.yaxis.set_minor_formatter(ticker.FormatStrFormatter("%g"))
         ax.set_xlabel("left-out configuration (bearing area, in²)")
-        ax.set_ylabel("prediction error of the left-out configuration\n"
-                      "(RMS residual / scatter, 1)")
+        ax.set_ylabel("prediction error of the left-out configuration\n(RMS residual / scatter, 1)")
         ratio = across.get("ratio")
         title = "Prediction of a left-out bearing area from the others' ln(area) law"
         if ratio is not None:

@@ -88,10 +88,7 @@ def normalize_unit(unit: str) -> str:
 def known_units(quantity: str) -> tuple[str, ...]:
     """Canonical units accepted for ``quantity`` (a response quantity or ``"force"``)."""
     if quantity not in _FACTORS_TO_INTERNAL:
-        raise ValueError(
-            f"unknown quantity {quantity!r}; expected one of "
-            f"{', '.join(_FACTORS_TO_INTERNAL)}"
-        )
+        raise ValueError(f"unknown quantity {quantity!r}; expected one of {', '.join(_FACTORS_TO_INTERNAL)}")
     return tuple(_FACTORS_TO_INTERNAL[quantity])
 
 
@@ -124,9 +121,7 @@ def factor_to_internal(quantity: str, unit: str) -> float:
         )
     canonical = normalize_unit(unit)
     if canonical not in units:
-        raise ValueError(
-            f"unit {unit!r} is not a unit of {quantity}; expected one of {', '.join(units)}"
-        )
+        raise ValueError(f"unit {unit!r} is not a unit of {quantity}; expected one of {', '.join(units)}")
     return units[canonical]
 
 

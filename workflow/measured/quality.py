@@ -15,8 +15,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from workflow.campaign import RunRecord
-from workflow.config import QualitySettings
+from workflow.io.campaign import RunRecord
+from workflow.io.settings import QualitySettings
 
 
 class CheckResult(NamedTuple):
@@ -69,15 +69,16 @@ def _clipping(response, clip_fraction_of_peak, clip_max_samples, unit="") -> Che
     at_peak = int(np.count_nonzero(magnitude >= clip_fraction_of_peak * peak))
     if at_peak <= clip_max_samples:
         return CheckResult(at_peak, None)
-    return CheckResult(at_peak, (
-        f"response clipped: {at_peak} samples within {100 * (1 - clip_fraction_of_peak):.3g} % "
-        f"of the peak {peak:.4g}{' ' + unit if unit else ''} (limit {clip_max_samples})"
-    ))
+    return CheckResult(
+        at_peak,
+        (
+            f"response clipped: {at_peak} samples within {100 * (1 - clip_fraction_of_peak):.3g} % "
+            f"of the peak {peak:.4g}{' ' + unit if unit else ''} (limit {clip_max_samples})"
+        ),
+    )
 
 
-def check_double_hit(
-    force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float
-) -> str | None:
+def check_double_hit(force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float) -> str | None:
     """Two hammer pulses: a second one larger than ``ratio`` of the main one.
 
     Pulses are the stretches where the force exceeds ``ratio`` times its peak; a
@@ -127,11 +128,14 @@ def _double_hit(force_lbf, fs_hz, ratio, gap_s) -> CheckResult:
         return CheckResult(0.0, None)
     separation_ms = 1e3 * (second_index - main_index) / fs_hz
     when = f"{abs(separation_ms):.3g} ms {'after' if separation_ms > 0 else 'before'}"
-    return CheckResult(second_peak_lbf / main_peak_lbf, (
-        f"double hit: a second force pulse of {second_peak_lbf:.3g} lbf "
-        f"({second_peak_lbf / main_peak_lbf:.2f} of the main {main_peak_lbf:.3g} lbf pulse) "
-        f"{when} it (limit {ratio:.2f})"
-    ))
+    return CheckResult(
+        second_peak_lbf / main_peak_lbf,
+        (
+            f"double hit: a second force pulse of {second_peak_lbf:.3g} lbf "
+            f"({second_peak_lbf / main_peak_lbf:.2f} of the main {main_peak_lbf:.3g} lbf pulse) "
+            f"{when} it (limit {ratio:.2f})"
+        ),
+    )
 
 
 def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> str | None:
@@ -159,8 +163,9 @@ def _excitation(force_lbf, min_peak_force_lbf) -> CheckResult:
     value = peak_lbf if force.size else math.nan
     if peak_lbf >= min_peak_force_lbf and peak_lbf > 0.0:
         return CheckResult(value, None)
-    return CheckResult(value, f"no real hit: peak force {peak_lbf:.3g} lbf is below "
-                              f"{min_peak_force_lbf:.3g} lbf")
+    return CheckResult(
+        value, f"no real hit: peak force {peak_lbf:.3g} lbf is below {min_peak_force_lbf:.3g} lbf"
+    )
 
 
 def check_trigger(
@@ -200,22 +205,24 @@ def _trigger(force_lbf, pretrigger_samples, trigger_lbf=1.0, tolerance_samples=5
     force = _oriented_force(force_lbf)
     crossings = np.flatnonzero(force >= trigger_lbf)
     if crossings.size == 0:
-        return CheckResult(math.inf, f"trigger: the force never reaches the trigger level "
-                                     f"{trigger_lbf:.3g} lbf")
+        return CheckResult(
+            math.inf, f"trigger: the force never reaches the trigger level {trigger_lbf:.3g} lbf"
+        )
     first = int(crossings[0])
     offset = first - pretrigger_samples
     if abs(offset) <= tolerance_samples:
         return CheckResult(abs(offset), None)
-    return CheckResult(abs(offset), (
-        f"trigger: the force first reaches {trigger_lbf:.3g} lbf at sample {first}, "
-        f"{abs(offset)} samples {'after' if offset > 0 else 'before'} the pre-trigger "
-        f"length {pretrigger_samples} (tolerance {tolerance_samples})"
-    ))
+    return CheckResult(
+        abs(offset),
+        (
+            f"trigger: the force first reaches {trigger_lbf:.3g} lbf at sample {first}, "
+            f"{abs(offset)} samples {'after' if offset > 0 else 'before'} the pre-trigger "
+            f"length {pretrigger_samples} (tolerance {tolerance_samples})"
+        ),
+    )
 
 
-def check_record_length(
-    n_samples: int, fs_hz: float, mode_hz: float, min_cycles: float
-) -> str | None:
+def check_record_length(n_samples: int, fs_hz: float, mode_hz: float, min_cycles: float) -> str | None:
     """Record long enough to hold ``min_cycles`` cycles of the mode.
 
     Parameters
@@ -243,10 +250,13 @@ def _record_length(n_samples, fs_hz, mode_hz, min_cycles) -> CheckResult:
     cycles = duration_s * mode_hz
     if cycles >= min_cycles:
         return CheckResult(cycles, None)
-    return CheckResult(cycles, (
-        f"record too short: {duration_s:.3g} s holds {cycles:.3g} cycles of the "
-        f"{mode_hz:.4g} Hz mode (need {min_cycles:.3g})"
-    ))
+    return CheckResult(
+        cycles,
+        (
+            f"record too short: {duration_s:.3g} s holds {cycles:.3g} cycles of the "
+            f"{mode_hz:.4g} Hz mode (need {min_cycles:.3g})"
+        ),
+    )
 
 
 def check_mode_found(
@@ -319,26 +329,33 @@ def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> st
 def _snr(peak_envelope, noise_floor, min_snr_db) -> CheckResult:
     """:func:`check_snr` with the signal-to-noise ratio, dB."""
     if not peak_envelope > 0.0:
-        return CheckResult(-math.inf, f"signal-to-noise: no signal (peak envelope "
-                                      f"{peak_envelope:.3g})")
+        return CheckResult(-math.inf, f"signal-to-noise: no signal (peak envelope {peak_envelope:.3g})")
     if not noise_floor > 0.0:
         return CheckResult(math.inf, None)  # a noiseless record: unlimited signal-to-noise
     snr_db = 20.0 * math.log10(peak_envelope / noise_floor)
     if snr_db >= min_snr_db:
         return CheckResult(snr_db, None)
-    return CheckResult(snr_db, (
-        f"signal-to-noise {snr_db:.3g} dB is below {min_snr_db:.3g} dB "
-        f"(peak envelope {peak_envelope:.3g}, noise floor {noise_floor:.3g})"
-    ))
+    return CheckResult(
+        snr_db,
+        (
+            f"signal-to-noise {snr_db:.3g} dB is below {min_snr_db:.3g} dB "
+            f"(peak envelope {peak_envelope:.3g}, noise floor {noise_floor:.3g})"
+        ),
+    )
 
 
-def run_quality_checks(record: RunRecord, settings: QualitySettings, *, mode_hz: float | None = None) -> list[str]:
+def run_quality_checks(
+    record: RunRecord, settings: QualitySettings, *, mode_hz: float | None = None
+) -> list[str]:
     """Reasons of the failed record-level checks of one run (empty: it passes).
 
     The checks and when they apply are those of :func:`quality_rows`.
     """
-    return [row["reason"] for row in quality_rows(record, settings, mode_hz=mode_hz)
-            if row["applied"] and not row["passed"]]
+    return [
+        row["reason"]
+        for row in quality_rows(record, settings, mode_hz=mode_hz)
+        if row["applied"] and not row["passed"]
+    ]
 
 
 QC_COLUMNS: list[str] = ["check", "applied", "passed", "value", "threshold", "unit", "reason"]
@@ -388,36 +405,66 @@ def quality_rows(
 
     def row(check, result, threshold, unit, applied=True):
         return {
-            "check": check, "applied": applied, "passed": applied and result.reason is None,
+            "check": check,
+            "applied": applied,
+            "passed": applied and result.reason is None,
             "value": float(result.value) if applied else math.nan,
-            "threshold": float(threshold), "unit": unit, "reason": result.reason or "",
+            "threshold": float(threshold),
+            "unit": unit,
+            "reason": result.reason or "",
         }
 
     not_applied = CheckResult(math.nan, None)
     force = record.force_lbf
     has_force = force is not None
     excitation = _excitation(force, settings.min_peak_force_lbf) if has_force else not_applied
-    trigger_applies = (has_force and excitation.reason is None
-                       and record.pretrigger_source != "default")
+    trigger_applies = has_force and excitation.reason is None and record.pretrigger_source != "default"
     return [
-        row("clipping", _clipping(record.response, settings.clip_fraction_of_peak,
-                                  settings.clip_max_samples, record.response_unit),
-            settings.clip_max_samples, "samples at the peak (at most)"),
-        row("excitation", excitation, settings.min_peak_force_lbf,
-            "lbf peak force (at least)", applied=has_force),
-        row("double_hit", _double_hit(force, record.sample_rate_hz, settings.double_hit_ratio,
-                                      settings.double_hit_gap_s) if has_force else not_applied,
-            settings.double_hit_ratio, "second pulse / main pulse (at most)", applied=has_force),
-        row("trigger", _trigger(force, record.pretrigger_samples,
-                                tolerance_samples=settings.trigger_tolerance_samples)
-            if trigger_applies else not_applied,
-            settings.trigger_tolerance_samples, "samples from the pre-trigger length (at most)",
-            applied=trigger_applies),
-        row("record_length", _record_length(record.n_samples, record.sample_rate_hz, mode_hz,
-                                            settings.min_record_cycles)
-            if mode_hz is not None else not_applied,
-            settings.min_record_cycles, "cycles of the mode (at least)",
-            applied=mode_hz is not None),
+        row(
+            "clipping",
+            _clipping(
+                record.response,
+                settings.clip_fraction_of_peak,
+                settings.clip_max_samples,
+                record.response_unit,
+            ),
+            settings.clip_max_samples,
+            "samples at the peak (at most)",
+        ),
+        row(
+            "excitation",
+            excitation,
+            settings.min_peak_force_lbf,
+            "lbf peak force (at least)",
+            applied=has_force,
+        ),
+        row(
+            "double_hit",
+            _double_hit(force, record.sample_rate_hz, settings.double_hit_ratio, settings.double_hit_gap_s)
+            if has_force
+            else not_applied,
+            settings.double_hit_ratio,
+            "second pulse / main pulse (at most)",
+            applied=has_force,
+        ),
+        row(
+            "trigger",
+            _trigger(force, record.pretrigger_samples, tolerance_samples=settings.trigger_tolerance_samples)
+            if trigger_applies
+            else not_applied,
+            settings.trigger_tolerance_samples,
+            "samples from the pre-trigger length (at most)",
+            applied=trigger_applies,
+        ),
+        row(
+            "record_length",
+            _record_length(record.n_samples, record.sample_rate_hz, mode_hz, settings.min_record_cycles)
+            if mode_hz is not None
+            else not_applied,
+            settings.min_record_cycles,
+            "cycles of the mode (at least)",
+            applied=mode_hz is not None,
+        ),
     ]
 
 
@@ -428,13 +475,26 @@ def analysis_rows(
     snr_db, snr_reason = _snr(peak_envelope, noise_floor, settings.min_snr_db)
     segments_reason = None
     if n_segments < settings.min_segments:
-        segments_reason = (f"only {n_segments} usable log-decrement segments "
-                           f"(at least {settings.min_segments} needed)")
+        segments_reason = (
+            f"only {n_segments} usable log-decrement segments (at least {settings.min_segments} needed)"
+        )
     return [
-        {"check": "snr", "applied": True, "passed": snr_reason is None, "value": snr_db,
-         "threshold": float(settings.min_snr_db), "unit": "dB (at least)",
-         "reason": snr_reason or ""},
-        {"check": "segments", "applied": True, "passed": segments_reason is None,
-         "value": float(n_segments), "threshold": float(settings.min_segments),
-         "unit": "usable segments (at least)", "reason": segments_reason or ""},
+        {
+            "check": "snr",
+            "applied": True,
+            "passed": snr_reason is None,
+            "value": snr_db,
+            "threshold": float(settings.min_snr_db),
+            "unit": "dB (at least)",
+            "reason": snr_reason or "",
+        },
+        {
+            "check": "segments",
+            "applied": True,
+            "passed": segments_reason is None,
+            "value": float(n_segments),
+            "threshold": float(settings.min_segments),
+            "unit": "usable segments (at least)",
+            "reason": segments_reason or "",
+        },
     ]

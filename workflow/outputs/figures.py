@@ -62,15 +62,30 @@ def run_colours(runs: list[str]) -> dict[str, tuple]:
     return {run: cmap(0.9 * index / count) for index, run in enumerate(runs)}
 
 
-def _plot_runs(axis: plt.Axes, segments: pd.DataFrame, column: str, *, scale: float = 1.0,
-               markersize: float = 3.0, alpha: float = 0.8, labels: bool = True) -> list[str]:
+def _plot_runs(
+    axis: plt.Axes,
+    segments: pd.DataFrame,
+    column: str,
+    *,
+    scale: float = 1.0,
+    markersize: float = 3.0,
+    alpha: float = 0.8,
+    labels: bool = True,
+) -> list[str]:
     """One marker series per run (coloured in run order); returns the run names."""
     runs = list(dict.fromkeys(segments["run"]))
     colours = run_colours(runs)
     for run in runs:
         part = segments[segments["run"] == run]
-        axis.plot(part["velocity_amplitude_in_s"], scale * part[column], "o", markersize=markersize,
-                  color=colours[run], alpha=alpha, label=run if labels else None)
+        axis.plot(
+            part["velocity_amplitude_in_s"],
+            scale * part[column],
+            "o",
+            markersize=markersize,
+            color=colours[run],
+            alpha=alpha,
+            label=run if labels else None,
+        )
     return runs
 
 
@@ -92,14 +107,24 @@ def time_history(
         top.set_ylabel(response_label)
         top.set_title(title)
         top.legend(loc="upper right")
-        bottom.plot(time_s, filtered, color="tab:blue", linewidth=0.6,
-                    label=f"band-passed [{band_hz[0]:.0f}, {band_hz[1]:.0f}] Hz")
+        bottom.plot(
+            time_s,
+            filtered,
+            color="tab:blue",
+            linewidth=0.6,
+            label=f"band-passed [{band_hz[0]:.0f}, {band_hz[1]:.0f}] Hz",
+        )
         bottom.plot(time_s, envelope, color="tab:red", linewidth=1.2, label="Hilbert envelope (eq. 1)")
         bottom.plot(time_s, -envelope, color="tab:red", linewidth=1.2)
         if decay_start_s is not None:
             for axis in (top, bottom):
-                axis.axvline(decay_start_s, color="k", linestyle=":", linewidth=0.8,
-                             label="decay start (excitation peak)")
+                axis.axvline(
+                    decay_start_s,
+                    color="k",
+                    linestyle=":",
+                    linewidth=0.8,
+                    label="decay start (excitation peak)",
+                )
         bottom.set_xlabel("time (s)")
         bottom.set_ylabel(response_label)
         bottom.legend(loc="upper right")
@@ -131,14 +156,23 @@ def damping_vs_amplitude(
         figure, axis = plt.subplots()
         runs = _plot_runs(axis, segments, "zeta", scale=100)
         if curve is not None and len(curve):
-            axis.fill_between(curve["velocity_amplitude_in_s"], 100 * curve["zeta_low"],
-                              100 * curve["zeta_high"], color="k", alpha=0.12,
-                              label="95 % band (bootstrap over runs)")
-            axis.plot(curve["velocity_amplitude_in_s"], 100 * curve["zeta"], color="k",
-                      linewidth=1.6, label="polynomial fit")
+            axis.fill_between(
+                curve["velocity_amplitude_in_s"],
+                100 * curve["zeta_low"],
+                100 * curve["zeta_high"],
+                color="k",
+                alpha=0.12,
+                label="95 % band (bootstrap over runs)",
+            )
+            axis.plot(
+                curve["velocity_amplitude_in_s"],
+                100 * curve["zeta"],
+                color="k",
+                linewidth=1.6,
+                label="polynomial fit",
+            )
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
-            axis.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style,
-                      linewidth=2.0, label=name)
+            axis.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style, linewidth=2.0, label=name)
         amplitude_axis(axis)
         axis.set_ylabel(DAMPING_LABEL)
         axis.set_title(title)
@@ -158,8 +192,9 @@ def frequency_vs_amplitude(
         figure, axis = plt.subplots()
         runs = _plot_runs(axis, segments, "frequency_hz")
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
-            axis.plot(frame["velocity_amplitude_in_s"], frame["frequency_hz"], style,
-                      linewidth=2.0, label=name)
+            axis.plot(
+                frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, linewidth=2.0, label=name
+            )
         amplitude_axis(axis)
         axis.set_ylabel(FREQUENCY_LABEL)
         axis.set_title(title)
@@ -185,9 +220,16 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
         for name, part in curves.groupby("configuration", sort=False):
             area = part["bearing_area_in2"].iloc[0]
             label = f"{name} ({area:.2f} in²)" if np.isfinite(area) else name
-            line, = left.plot(part["velocity_amplitude_in_s"], 100 * part["zeta"], linewidth=1.8, label=label)
-            left.fill_between(part["velocity_amplitude_in_s"], 100 * part["zeta_low"],
-                              100 * part["zeta_high"], color=line.get_color(), alpha=0.15)
+            (line,) = left.plot(
+                part["velocity_amplitude_in_s"], 100 * part["zeta"], linewidth=1.8, label=label
+            )
+            left.fill_between(
+                part["velocity_amplitude_in_s"],
+                100 * part["zeta_low"],
+                100 * part["zeta_high"],
+                color=line.get_color(),
+                alpha=0.15,
+            )
         amplitude_axis(left)
         left.set_ylabel(DAMPING_LABEL)
         left.set_title("polynomial fits with 95 % bands")
@@ -195,15 +237,28 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
         amplitudes = list(dict.fromkeys(area_table["velocity_amplitude_in_s"]))
         colours = run_colours([f"{value:.3g}" for value in amplitudes])
         for amplitude in amplitudes:
-            part = area_table[area_table["velocity_amplitude_in_s"] == amplitude].sort_values("bearing_area_in2")
+            part = area_table[area_table["velocity_amplitude_in_s"] == amplitude].sort_values(
+                "bearing_area_in2"
+            )
             colour = colours[f"{amplitude:.3g}"]
             if {"zeta_low", "zeta_high"} <= set(part.columns):
-                right.errorbar(part["bearing_area_in2"], 100 * part["zeta"],
-                               yerr=[100 * (part["zeta"] - part["zeta_low"]), 100 * (part["zeta_high"] - part["zeta"])],
-                               fmt="o-", color=colour, capsize=3, label=f"{amplitude:.3g} in/s")
+                right.errorbar(
+                    part["bearing_area_in2"],
+                    100 * part["zeta"],
+                    yerr=[100 * (part["zeta"] - part["zeta_low"]), 100 * (part["zeta_high"] - part["zeta"])],
+                    fmt="o-",
+                    color=colour,
+                    capsize=3,
+                    label=f"{amplitude:.3g} in/s",
+                )
             else:
-                right.plot(part["bearing_area_in2"], 100 * part["zeta"], "o-", color=colour,
-                           label=f"{amplitude:.3g} in/s")
+                right.plot(
+                    part["bearing_area_in2"],
+                    100 * part["zeta"],
+                    "o-",
+                    color=colour,
+                    label=f"{amplitude:.3g} in/s",
+                )
         right.set_xlabel("bearing area (in²)")
         right.set_ylabel(DAMPING_LABEL)
         right.set_title("damping vs bearing area at common amplitudes")
@@ -225,8 +280,13 @@ def friction_loops(loops: list[tuple[float, np.ndarray, np.ndarray]], *, title: 
         figure, axis = plt.subplots()
         colours = run_colours([f"{amplitude:g}" for amplitude, _, _ in loops])
         for amplitude, displacement, force in loops:
-            axis.plot(displacement, force, color=colours[f"{amplitude:g}"], linewidth=1.4,
-                      label=f"amplitude {amplitude:g} in")
+            axis.plot(
+                displacement,
+                force,
+                color=colours[f"{amplitude:g}"],
+                linewidth=1.4,
+                label=f"amplitude {amplitude:g} in",
+            )
         axis.axhline(0, color="k", linewidth=0.5)
         axis.axvline(0, color="k", linewidth=0.5)
         axis.set_xlabel("relative displacement (in)")
@@ -250,10 +310,22 @@ def model_comparison(
         runs = _plot_runs(top, segments, "zeta", scale=100, markersize=2.5, alpha=0.6)
         _plot_runs(bottom, segments, "frequency_hz", markersize=2.5, alpha=0.6, labels=False)
         for (name, frame), style in zip(models.items(), ("-", "--", "-.", ":")):
-            top.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style, color="k",
-                     linewidth=2.0, label=name)
-            bottom.plot(frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, color="k",
-                        linewidth=2.0, label=name)
+            top.plot(
+                frame["velocity_amplitude_in_s"],
+                100 * frame["zeta"],
+                style,
+                color="k",
+                linewidth=2.0,
+                label=name,
+            )
+            bottom.plot(
+                frame["velocity_amplitude_in_s"],
+                frame["frequency_hz"],
+                style,
+                color="k",
+                linewidth=2.0,
+                label=name,
+            )
         amplitude_axis(top)
         top.set_xlabel("")
         top.set_ylabel(DAMPING_LABEL)

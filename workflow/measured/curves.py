@@ -29,8 +29,8 @@ Hypotheses (from the source paper's introduction)
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -450,9 +450,7 @@ def bootstrap_band(
     if len(runs) < 2:
         nan = np.full(grid.shape, np.nan)
         return nan, centre, nan.copy()
-    curves = _bootstrap_curves(
-        x, damping, runs, degree, x_grid.ravel(), n_boot, np.random.default_rng(seed)
-    )
+    curves = _bootstrap_curves(x, damping, runs, degree, x_grid.ravel(), n_boot, np.random.default_rng(seed))
     lower, upper = _percentile_band(curves, confidence, min_coverage)
     return lower.reshape(grid.shape), centre, upper.reshape(grid.shape)
 
@@ -705,8 +703,7 @@ def area_hypothesis(
     ]
     base = dict(hypothesis=H2_NAME, configuration="all", confidence=confidence)
     statistic_combined = (
-        "mean over the common velocity amplitudes of the slope of fitted zeta vs "
-        "bearing area, 1/in^2"
+        "mean over the common velocity amplitudes of the slope of fitted zeta vs bearing area, 1/in^2"
     )
     areas = np.array([float(areas_in2[name]) for name in names])
     if len(names) < 2 or np.unique(areas).size < 2:
@@ -721,9 +718,7 @@ def area_hypothesis(
         )
         return pd.DataFrame([row], columns=HYPOTHESIS_COLUMNS)
 
-    data = {
-        name: _validated(*data_by_configuration[name]) for name in names
-    }
+    data = {name: _validated(*data_by_configuration[name]) for name in names}
     common = common_amplitude_range(data)
     n_runs_total = int(sum(np.unique(d[2]).size for d in data.values()))
     if common is None:
@@ -760,9 +755,7 @@ def area_hypothesis(
     slopes = np.full((n_boot, grid.size), np.nan)
     note = ""
     if single:
-        note = (
-            "no between-run CI: configuration(s) with a single run: " + ", ".join(single)
-        )
+        note = "no between-run CI: configuration(s) with a single run: " + ", ".join(single)
     else:
         rng = np.random.default_rng(seed)
         for b in range(n_boot):
@@ -785,8 +778,7 @@ def area_hypothesis(
             _row(
                 **base,
                 statistic=(
-                    "slope of fitted zeta vs bearing area at velocity amplitude "
-                    f"{amplitude:.3g} in/s, 1/in^2"
+                    f"slope of fitted zeta vs bearing area at velocity amplitude {amplitude:.3g} in/s, 1/in^2"
                 ),
                 estimate=float(estimate[j]),
                 ci_low=float(ci_low),
@@ -802,15 +794,12 @@ def area_hypothesis(
         )
     complete = np.all(np.isfinite(slopes), axis=1)
     combined = slopes[complete].mean(axis=1)
-    ci_low, ci_high = _bootstrap_t_interval(
-        float(np.mean(estimate)), combined, n_runs_min, confidence
-    )
+    ci_low, ci_high = _bootstrap_t_interval(float(np.mean(estimate)), combined, n_runs_min, confidence)
     supported, verdict = _verdict(ci_low, ci_high)
     rows.append(
         _row(
             **base,
-            statistic=statistic_combined
-            + f" ({grid.size} amplitudes, {grid[0]:.3g}-{grid[-1]:.3g} in/s)",
+            statistic=statistic_combined + f" ({grid.size} amplitudes, {grid[0]:.3g}-{grid[-1]:.3g} in/s)",
             estimate=float(np.mean(estimate)),
             ci_low=float(ci_low),
             ci_high=float(ci_high),

@@ -23,7 +23,7 @@ The pipeline measures the band-passed response, i.e. the fundamental harmonic of
 recorded quantity, whose amplitude is ``omega^n a`` (``n`` = 0, 1, 2 for displacement,
 velocity, acceleration). Its envelope decays at ``s_a (1 + n dln(omega)/dln(a))``; the
 pipeline reports ``zeta = s / sqrt(s^2 + omega_d^2)`` and ``f = omega_d / 2 pi``
-(:mod:`workflow.decay`), and so does this module.
+(:mod:`workflow.measured.decay`), and so does this module.
 
 Identifiable parametrisation
 ----------------------------
@@ -58,7 +58,7 @@ Joint laws (dimensionless, per :class:`JointAverages`)
   have density ``R t^chi`` on ``(0, 1)`` (``-1 < chi``) plus a macro-slip element of
   weight ``S`` at ``t = 1``: ``D ~ y^(3 + chi)`` and ``zeta ~ y^(1 + chi)`` below
   macro-slip.
-* Extensions used by :mod:`workflow.discovery`: quadratic damping ``c2 xi'|xi'|``,
+* Extensions used by :mod:`workflow.discovery.diagnosis`: quadratic damping ``c2 xi'|xi'|``,
   a non-dissipative power-law stiffness, and a run-order drift of the slip scale.
 
 Units: velocity amplitudes in in/s, frequencies in Hz, angular frequencies in rad/s.
@@ -66,8 +66,8 @@ Units: velocity amplitudes in in/s, frequencies in Hz, angular frequencies in ra
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Callable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -201,8 +201,7 @@ def _gauss_legendre01(n: int) -> tuple[np.ndarray, np.ndarray]:
     return _GL_CACHE[n]
 
 
-def iwan_averages(x: ArrayLike, chi: ArrayLike, macro_ratio: ArrayLike,
-                  n_nodes: int = 24) -> JointAverages:
+def iwan_averages(x: ArrayLike, chi: ArrayLike, macro_ratio: ArrayLike, n_nodes: int = 24) -> JointAverages:
     """Cycle averages of Segalman's four-parameter Iwan joint (unit total stiffness).
 
     Jenkins elements (unit stiffness density) with slip onsets ``t`` distributed as
@@ -253,8 +252,13 @@ def iwan_averages(x: ArrayLike, chi: ArrayLike, macro_ratio: ArrayLike,
     return JointAverages(d, g, tip_energy_slope=slope)
 
 
-def lugre_averages(y: ArrayLike, velocity_ratio: ArrayLike, stiction_ratio: ArrayLike,
-                   micro_damping: ArrayLike, n_steps: int = 32) -> JointAverages:
+def lugre_averages(
+    y: ArrayLike,
+    velocity_ratio: ArrayLike,
+    stiction_ratio: ArrayLike,
+    micro_damping: ArrayLike,
+    n_steps: int = 32,
+) -> JointAverages:
     """Cycle averages of the LuGre joint (paper eq. 5) on its steady periodic cycle.
 
     Normalised with ``z~ = sigma0 z / alpha0`` and ``u~ = sigma0 u / alpha0 = y cos psi``,
@@ -291,15 +295,16 @@ def lugre_averages(y: ArrayLike, velocity_ratio: ArrayLike, stiction_ratio: Arra
     JointAverages
         ``tip_energy`` is given (``tip_energy_slope`` is None).
     """
-    y, w, s, tw = np.broadcast_arrays(*(np.asarray(v, dtype=float)
-                                        for v in (y, velocity_ratio, stiction_ratio, micro_damping)))
+    y, w, s, tw = np.broadcast_arrays(
+        *(np.asarray(v, dtype=float) for v in (y, velocity_ratio, stiction_ratio, micro_damping))
+    )
     y = np.maximum(np.abs(y), 1e-12)
     psi = np.linspace(0.0, np.pi, n_steps + 1)
     cos_p, sin_p = np.cos(psi), np.sin(psi)
     sin_mid = np.sin(0.5 * (psi[1:] + psi[:-1]))
     shape = (n_steps,) + (1,) * y.ndim
     # all steps at once: mid-step Stribeck factor and exact decay of (z~ + g~)
-    g_mid = 1.0 + s * np.exp(-(w * sin_mid.reshape(shape)) ** 2)
+    g_mid = 1.0 + s * np.exp(-((w * sin_mid.reshape(shape)) ** 2))
     decays = np.exp(-y * (cos_p[:-1] - cos_p[1:]).reshape(shape) / g_mid)
     offsets = g_mid * (decays - 1.0)
     p_map = np.prod(decays, axis=0)
@@ -311,7 +316,7 @@ def lugre_averages(y: ArrayLike, velocity_ratio: ArrayLike, stiction_ratio: Arra
     for j in range(n_steps):
         z[j + 1] = decays[j] * z[j] + offsets[j]
     node_shape = (n_steps + 1,) + (1,) * y.ndim
-    stribeck = np.exp(-(w * sin_p.reshape(node_shape)) ** 2)
+    stribeck = np.exp(-((w * sin_p.reshape(node_shape)) ** 2))
     du = -y * sin_p.reshape(node_shape)
     force = z + tw * stribeck * du * (1.0 + z / (1.0 + s * stribeck))
     trap = np.full(n_steps + 1, np.pi / n_steps)
@@ -334,11 +339,18 @@ def power_stiffness_harmonic_factor(p: ArrayLike) -> np.ndarray:
 
 
 # ------------------------------------------------------------------- ring-down model
-def ring_down_observables(*, omega_lin: ArrayLike, y: ArrayLike, joint: JointAverages,
-                          beta: ArrayLike, zeta0: ArrayLike,
-                          slip_velocity: ArrayLike = 1.0, quadratic: ArrayLike = 0.0,
-                          extra_inphase: ArrayLike = 0.0, extra_energy_slope: ArrayLike = 0.0,
-                          ) -> dict[str, np.ndarray]:
+def ring_down_observables(
+    *,
+    omega_lin: ArrayLike,
+    y: ArrayLike,
+    joint: JointAverages,
+    beta: ArrayLike,
+    zeta0: ArrayLike,
+    slip_velocity: ArrayLike = 1.0,
+    quadratic: ArrayLike = 0.0,
+    extra_inphase: ArrayLike = 0.0,
+    extra_energy_slope: ArrayLike = 0.0,
+) -> dict[str, np.ndarray]:
     """Displacement-envelope decay rate and frequency from the cycle averages.
 
     All energies are divided by ``a_s^2`` (``a = a_s y``).
@@ -377,9 +389,11 @@ def ring_down_observables(*, omega_lin: ArrayLike, y: ArrayLike, joint: JointAve
     omega2 = np.maximum(k_nj + kappa * joint.inphase + extra_inphase, 1e-6 * omega_lin**2)
     omega = np.sqrt(omega2)
     y = np.asarray(y, dtype=float)
-    dissipation = (np.pi * 2.0 * np.asarray(zeta0) * omega_lin * omega * y**2
-                   + kappa * joint.dissipation
-                   + 2.0 * np.pi * np.asarray(quadratic) * np.asarray(slip_velocity) * omega2 * y**3)
+    dissipation = (
+        np.pi * 2.0 * np.asarray(zeta0) * omega_lin * omega * y**2
+        + kappa * joint.dissipation
+        + 2.0 * np.pi * np.asarray(quadratic) * np.asarray(slip_velocity) * omega2 * y**3
+    )
     energy_slope = k_nj * y + kappa * joint.tip_energy_slope + extra_energy_slope
     energy_slope = np.maximum(energy_slope, 1e-9 * omega_lin**2 * y)
     decay_rate = dissipation * omega / (2.0 * np.pi * y * energy_slope)
@@ -399,10 +413,18 @@ class ParamSpec:
 _BASE = (
     ParamSpec("f_lin_hz", "Hz", "log", "small-amplitude natural frequency (stuck joint)"),
     ParamSpec("zeta0", "1", "log", "linear viscous modal damping ratio"),
-    ParamSpec("joint_stiffness_fraction", "1", "log",
-              "joint share of the small-amplitude modal stiffness (frequency^2 lost at full slip)"),
-    ParamSpec("slip_velocity_in_s", "in/s", "log",
-              "measured velocity amplitude at which the joint slip reaches its slip scale"),
+    ParamSpec(
+        "joint_stiffness_fraction",
+        "1",
+        "log",
+        "joint share of the small-amplitude modal stiffness (frequency^2 lost at full slip)",
+    ),
+    ParamSpec(
+        "slip_velocity_in_s",
+        "in/s",
+        "log",
+        "measured velocity amplitude at which the joint slip reaches its slip scale",
+    ),
 )
 
 
@@ -441,40 +463,97 @@ class AveragedModel:
 
 
 MODELS: dict[str, AveragedModel] = {
-    "dahl": AveragedModel("dahl", "dahl", _BASE,
-                          "Dahl joint (paper eq. 4) + linear viscous modal damping"),
-    "lugre": AveragedModel("lugre", "lugre", _BASE + (
-        ParamSpec("stiction_ratio", "1", "linear", "alpha1 / alpha0 (stiction over Coulomb level)"),
-        ParamSpec("stribeck_velocity_in_s", "in/s", "log",
-                  "Stribeck velocity v0 = vd in measured velocity units"),
-        ParamSpec("micro_damping_ratio", "1", "linear",
-                  "sigma1 term as a damping ratio at small amplitude, over zeta0"),
-    ), "LuGre joint (paper eq. 5; alpha2 folded into zeta0, vd = v0) + linear viscous damping"),
-    "iwan": AveragedModel("iwan", "iwan", _BASE[:3] + (
-        ParamSpec("slip_velocity_in_s", "in/s", "log",
-                  "measured velocity amplitude at which the largest slip threshold is reached "
-                  "(macro-slip)"),
-        ParamSpec("chi", "1", "linear", "power-law exponent of the slip-threshold density"),
-        ParamSpec("macro_ratio", "1", "log",
-                  "stiffness of the macro-slip element over the distributed elements"),
-    ), "Segalman four-parameter Iwan joint (micro-slip) + linear viscous damping"),
-    "dahl_quadratic": AveragedModel("dahl_quadratic", "dahl", _BASE + (
-        ParamSpec("quadratic_zeta_per_in_s", "s/in", "log",
-                  "quadratic damping c2 v|v| as damping ratio per unit velocity amplitude"),
-    ), "Dahl joint + linear viscous + quadratic (velocity-squared) damping"),
-    "dahl_stiffness": AveragedModel("dahl_stiffness", "dahl", _BASE + (
-        ParamSpec("stiffness_shift", "1", "linear",
-                  "relative change of omega^2 from a non-dissipative stiffness at the "
-                  "reference velocity amplitude (negative: softening)"),
-        ParamSpec("stiffness_exponent", "1", "log",
-                  "power of amplitude of that stiffness change (2: cubic spring)"),
-    ), "Dahl joint + linear viscous damping + non-dissipative power-law stiffness",
-        fixed=("reference_velocity_in_s",)),
-    "dahl_drift": AveragedModel("dahl_drift", "dahl", _BASE + (
-        ParamSpec("drift", "1", "linear",
-                  "relative change of the friction limit Fc (slip scale) over the run "
-                  "sequence: Fc_r = Fc (1 + drift (r - r_mean) / n_runs)"),
-    ), "Dahl joint with a friction limit drifting linearly with run order + viscous damping"),
+    "dahl": AveragedModel("dahl", "dahl", _BASE, "Dahl joint (paper eq. 4) + linear viscous modal damping"),
+    "lugre": AveragedModel(
+        "lugre",
+        "lugre",
+        _BASE
+        + (
+            ParamSpec("stiction_ratio", "1", "linear", "alpha1 / alpha0 (stiction over Coulomb level)"),
+            ParamSpec(
+                "stribeck_velocity_in_s",
+                "in/s",
+                "log",
+                "Stribeck velocity v0 = vd in measured velocity units",
+            ),
+            ParamSpec(
+                "micro_damping_ratio",
+                "1",
+                "linear",
+                "sigma1 term as a damping ratio at small amplitude, over zeta0",
+            ),
+        ),
+        "LuGre joint (paper eq. 5; alpha2 folded into zeta0, vd = v0) + linear viscous damping",
+    ),
+    "iwan": AveragedModel(
+        "iwan",
+        "iwan",
+        _BASE[:3]
+        + (
+            ParamSpec(
+                "slip_velocity_in_s",
+                "in/s",
+                "log",
+                "measured velocity amplitude at which the largest slip threshold is reached (macro-slip)",
+            ),
+            ParamSpec("chi", "1", "linear", "power-law exponent of the slip-threshold density"),
+            ParamSpec(
+                "macro_ratio", "1", "log", "stiffness of the macro-slip element over the distributed elements"
+            ),
+        ),
+        "Segalman four-parameter Iwan joint (micro-slip) + linear viscous damping",
+    ),
+    "dahl_quadratic": AveragedModel(
+        "dahl_quadratic",
+        "dahl",
+        _BASE
+        + (
+            ParamSpec(
+                "quadratic_zeta_per_in_s",
+                "s/in",
+                "log",
+                "quadratic damping c2 v|v| as damping ratio per unit velocity amplitude",
+            ),
+        ),
+        "Dahl joint + linear viscous + quadratic (velocity-squared) damping",
+    ),
+    "dahl_stiffness": AveragedModel(
+        "dahl_stiffness",
+        "dahl",
+        _BASE
+        + (
+            ParamSpec(
+                "stiffness_shift",
+                "1",
+                "linear",
+                "relative change of omega^2 from a non-dissipative stiffness at the "
+                "reference velocity amplitude (negative: softening)",
+            ),
+            ParamSpec(
+                "stiffness_exponent",
+                "1",
+                "log",
+                "power of amplitude of that stiffness change (2: cubic spring)",
+            ),
+        ),
+        "Dahl joint + linear viscous damping + non-dissipative power-law stiffness",
+        fixed=("reference_velocity_in_s",),
+    ),
+    "dahl_drift": AveragedModel(
+        "dahl_drift",
+        "dahl",
+        _BASE
+        + (
+            ParamSpec(
+                "drift",
+                "1",
+                "linear",
+                "relative change of the friction limit Fc (slip scale) over the run "
+                "sequence: Fc_r = Fc (1 + drift (r - r_mean) / n_runs)",
+            ),
+        ),
+        "Dahl joint with a friction limit drifting linearly with run order + viscous damping",
+    ),
 }
 """The averaged models, by id."""
 
@@ -487,8 +566,9 @@ def _joint_averages(model: AveragedModel, y, velocity, params) -> JointAverages:
     if model.joint == "lugre":
         beta = np.asarray(params["joint_stiffness_fraction"], dtype=float)
         tau_omega = 2.0 * np.asarray(params["micro_damping_ratio"]) * np.asarray(params["zeta0"]) / beta
-        return lugre_averages(y, velocity / np.asarray(params["stribeck_velocity_in_s"]),
-                              params["stiction_ratio"], tau_omega)
+        return lugre_averages(
+            y, velocity / np.asarray(params["stribeck_velocity_in_s"]), params["stiction_ratio"], tau_omega
+        )
     raise ValueError(f"unknown joint law {model.joint!r}")
 
 
@@ -501,9 +581,15 @@ def drift_factor(drift: ArrayLike, run_position: ArrayLike) -> np.ndarray:
     return np.maximum(1.0 + np.asarray(drift, dtype=float) * np.asarray(run_position, dtype=float), 0.05)
 
 
-def model_curves_on_grid(model: AveragedModel, params: Mapping[str, ArrayLike],
-                         velocity_grid: ArrayLike, *, run_position: ArrayLike | None = None,
-                         response_order: int = 2, n_iter: int = 2) -> tuple[np.ndarray, np.ndarray]:
+def model_curves_on_grid(
+    model: AveragedModel,
+    params: Mapping[str, ArrayLike],
+    velocity_grid: ArrayLike,
+    *,
+    run_position: ArrayLike | None = None,
+    response_order: int = 2,
+    n_iter: int = 2,
+) -> tuple[np.ndarray, np.ndarray]:
     """Damping ratio and damped frequency on a velocity-amplitude grid.
 
     Parameters
@@ -555,10 +641,17 @@ def model_curves_on_grid(model: AveragedModel, params: Mapping[str, ArrayLike],
         dlny = np.gradient(np.log(y), log_v, axis=-1)
         slope = np.gradient(joint.tip_energy, log_v, axis=-1) / (dlny * y)
         joint = JointAverages(joint.dissipation, joint.inphase, tip_energy_slope=slope)
-    out = ring_down_observables(omega_lin=omega_lin, y=y, joint=joint, beta=beta,
-                                zeta0=p["zeta0"], slip_velocity=v_s,
-                                quadratic=quadratic, extra_inphase=extra_k,
-                                extra_energy_slope=extra_e)
+    out = ring_down_observables(
+        omega_lin=omega_lin,
+        y=y,
+        joint=joint,
+        beta=beta,
+        zeta0=p["zeta0"],
+        slip_velocity=v_s,
+        quadratic=quadratic,
+        extra_inphase=extra_k,
+        extra_energy_slope=extra_e,
+    )
     omega2 = out["omega2"]
     s_a = out["decay_rate"]
     if response_order:
@@ -641,14 +734,18 @@ class CurveGrid:
         r = np.arange(self.n_runs, dtype=float)
         return (r - r.mean()) / self.n_runs
 
-    def __call__(self, model: AveragedModel | str, params: Mapping[str, ArrayLike]
-                 ) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(
+        self, model: AveragedModel | str, params: Mapping[str, ArrayLike]
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Model ``zeta`` and ``frequency_hz`` at the segments, shape ``B + (n,)``."""
         model = MODELS[model] if isinstance(model, str) else model
         zeta_g, f_g = model_curves_on_grid(
-            model, params, self.grid,
+            model,
+            params,
+            self.grid,
             run_position=self.run_positions if model.uses_runs else None,
-            response_order=self.response_order)
+            response_order=self.response_order,
+        )
         return self._interp(zeta_g, model.uses_runs), self._interp(f_g, model.uses_runs)
 
     def _interp(self, values: np.ndarray, per_run: bool) -> np.ndarray:
@@ -661,16 +758,26 @@ class CurveGrid:
         return a + (b - a) * self._w
 
 
-def model_curves(model: AveragedModel | str, params: Mapping[str, ArrayLike],
-                 velocity_in_s: ArrayLike, *, run_index: ArrayLike | None = None,
-                 n_runs: int | None = None, response_order: int = 2
-                 ) -> tuple[np.ndarray, np.ndarray]:
+def model_curves(
+    model: AveragedModel | str,
+    params: Mapping[str, ArrayLike],
+    velocity_in_s: ArrayLike,
+    *,
+    run_index: ArrayLike | None = None,
+    n_runs: int | None = None,
+    response_order: int = 2,
+) -> tuple[np.ndarray, np.ndarray]:
     """Model damping ratio and damped frequency (Hz) at measured velocity amplitudes.
 
     Convenience wrapper around :class:`CurveGrid`; see there for the arguments.
     """
-    grid = CurveGrid(np.atleast_1d(np.asarray(velocity_in_s, dtype=float)), run_index=run_index,
-                     n_runs=n_runs, response_order=response_order, n_grid=64)
+    grid = CurveGrid(
+        np.atleast_1d(np.asarray(velocity_in_s, dtype=float)),
+        run_index=run_index,
+        n_runs=n_runs,
+        response_order=response_order,
+        n_grid=64,
+    )
     return grid(model, params)
 
 

@@ -138,9 +138,7 @@ def _check_band(fs_hz: float, band_hz: tuple[float, float], order: int) -> tuple
     if order < 2 or order % 2:
         raise ValueError(f"order must be an even integer >= 2, got {order}")
     if not 0.0 < low_hz < high_hz < fs_hz / 2.0:
-        raise ValueError(
-            f"band_hz must satisfy 0 < low < high < fs/2 = {fs_hz / 2:g} Hz, got {band_hz}"
-        )
+        raise ValueError(f"band_hz must satisfy 0 < low < high < fs/2 = {fs_hz / 2:g} Hz, got {band_hz}")
     return low_hz, high_hz
 
 
@@ -634,9 +632,7 @@ def _synthetic_decay(
     t = (np.arange(n_samples) - onset_index) / fs_hz
     after = t >= 0
     x = np.zeros(n_samples)
-    x[after] = np.exp(-zeta * omega_n * t[after]) * np.sin(
-        omega_n * np.sqrt(1.0 - zeta**2) * t[after]
-    )
+    x[after] = np.exp(-zeta * omega_n * t[after]) * np.sin(omega_n * np.sqrt(1.0 - zeta**2) * t[after])
     return x
 
 
@@ -796,8 +792,13 @@ def analyse_decay(
         if last - first < 2:
             first, last = start, stop
         return noise_floor(
-            env, fs_hz, phase_rad=phase, window_samples=window, start_index=first,
-            stop_index=last, bandwidth_hz=bandwidth_hz,
+            env,
+            fs_hz,
+            phase_rad=phase,
+            window_samples=window,
+            start_index=first,
+            stop_index=last,
+            bandwidth_hz=bandwidth_hz,
         )
 
     def data_checks(floor: float) -> dict[str, np.ndarray]:
@@ -829,21 +830,28 @@ def analyse_decay(
         # filter transients; the floor is re-measured without them (light damping
         # makes them last far longer than the fixed edges, and they would otherwise
         # count as noise).
-        fn_ref = float(np.median(segments["frequency_hz"][preliminary])) / np.sqrt(
-            1.0 - zeta_ref**2
-        )
+        fn_ref = float(np.median(segments["frequency_hz"][preliminary])) / np.sqrt(1.0 - zeta_ref**2)
         onset = start
         if start_index is None:
             # Align the synthetic's envelope peak with the record's: the band-pass
             # delays the envelope maximum behind the hit.
             probe = analytic_bandpass(
-                _synthetic_decay(n, fs_hz, fn_ref, zeta_ref, start), fs_hz, band_hz,
+                _synthetic_decay(n, fs_hz, fn_ref, zeta_ref, start),
+                fs_hz,
+                band_hz,
                 filter_order,
             )
             onset = max(0, 2 * start - int(np.argmax(np.abs(probe[:stop]))))
         bias = startup_bias(
-            n, fs_hz, band_hz, fn_ref, zeta_ref, starts, stops,
-            onset_index=onset, filter_order=filter_order,
+            n,
+            fs_hz,
+            band_hz,
+            fn_ref,
+            zeta_ref,
+            starts,
+            stops,
+            onset_index=onset,
+            filter_order=filter_order,
         )
         transient = ~(np.abs(bias["zeta_relative_error"]) <= bias_tolerance) | ~(
             np.abs(bias["frequency_error_hz"]) <= FREQUENCY_BIAS_TOLERANCE_HZ
@@ -855,7 +863,13 @@ def analyse_decay(
         checks["filter_transient"] = transient
 
     segments["zeta_std"], segments["frequency_std_hz"] = _noise_standard_errors(
-        env, floor, fs_hz, starts, stops, low_hz=band_hz[0], high_hz=band_hz[1],
+        env,
+        floor,
+        fs_hz,
+        starts,
+        stops,
+        low_hz=band_hz[0],
+        high_hz=band_hz[1],
         frequency_hz=segments["frequency_hz"],
     )
     reasons = np.array(
@@ -879,4 +893,3 @@ def analyse_decay(
         time_constant_s=tau_s,
         segments=segments,
     )
-

@@ -3,7 +3,7 @@
 The specimen's first mode is nonlinear (joint friction); it is simulated with
 the averaged (slow-flow) equations ``da/dt = -zeta(a) omega(a) a``,
 ``dtheta/dt = omega_d(a)`` using the describing-function damping and
-frequency of :mod:`workflow.contact`.  These are autonomous, so time and phase
+frequency of :mod:`workflow.models.contact`.  These are autonomous, so time and phase
 are tabulated once per joint as functions of ``ln a`` (quadrature) and every
 run is an interpolation: fast, and accurate for this weak nonlinearity.
 Higher flexible modes and the two rigid-body suspension modes (bounce and
@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import scipy.optimize
 
-from workflow import contact, specimen
-from workflow.paper_layout import PAPER_CONFIGURATIONS, run_name
+from workflow.lab.layout import PAPER_CONFIGURATIONS, run_name
+from workflow.models import contact, specimen
 
 SAMPLE_RATE_HZ = 2560.0
 N_SAMPLES = 8192
@@ -36,15 +36,23 @@ FORCE_RANGE_LBF = 500.0
 REFERENCE_VELOCITY_IN_S = 3.0
 """Accelerometer velocity amplitude at which effect sizes are defined, in/s."""
 
-EFFECT_CAUSES = {None: None, "quadratic_damping": "quadratic_damping",
-                 "stiffness_nonlinearity": "stiffness_nonlinearity",
-                 "run_drift": "run_drift", "second_mode": "unknown"}
-DEFAULT_EFFECT_SIZES = {"quadratic_damping": 0.003, "stiffness_nonlinearity": 0.01,
-                        "run_drift": 0.4, "second_mode": 0.5}
+EFFECT_CAUSES = {
+    None: None,
+    "quadratic_damping": "quadratic_damping",
+    "stiffness_nonlinearity": "stiffness_nonlinearity",
+    "run_drift": "run_drift",
+    "second_mode": "unknown",
+}
+DEFAULT_EFFECT_SIZES = {
+    "quadratic_damping": 0.003,
+    "stiffness_nonlinearity": 0.01,
+    "run_drift": 0.4,
+    "second_mode": 0.5,
+}
 EFFECT_SIZE_MEANING = {
     "quadratic_damping": "damping ratio added by c2 v|v| at the reference velocity amplitude",
     "stiffness_nonlinearity": "fractional frequency drop at the reference velocity amplitude "
-                              "(saturating contact-opening softening; asymptote twice that)",
+    "(saturating contact-opening softening; asymptote twice that)",
     "run_drift": "fractional fall of the Dahl friction limit Fc from the first to the last run",
     "second_mode": "initial acceleration amplitude of a linear mode at 1.08 f1, relative to mode 1",
 }
@@ -91,8 +99,9 @@ def half_sine_response(t_s, omega_rad_s, zeta, peak, duration_s):
     lam = -zeta * omega_rad_s + 1j * wd
     big_omega = np.pi / duration_s
     tc = np.clip(t, 0.0, duration_s)
-    integral = (np.exp(-lam * tc) * (-lam * np.sin(big_omega * tc) - big_omega
-                * np.cos(big_omega * tc)) + big_omega) / (lam**2 + big_omega**2)
+    integral = (
+        np.exp(-lam * tc) * (-lam * np.sin(big_omega * tc) - big_omega * np.cos(big_omega * tc)) + big_omega
+    ) / (lam**2 + big_omega**2)
     z = np.exp(lam * np.clip(t, 0.0, None)) * integral * peak / wd
     q = z.imag
     qd = (lam * z).imag
@@ -120,7 +129,7 @@ class ModeTable:
     phase_rad: np.ndarray
 
     @classmethod
-    def build(cls, amplitude, zeta, omega_rad_s) -> "ModeTable":
+    def build(cls, amplitude, zeta, omega_rad_s) -> ModeTable:
         order = np.argsort(amplitude)[::-1]
         log_a = np.log(np.asarray(amplitude)[order])
         z, w = np.asarray(zeta)[order], np.asarray(omega_rad_s)[order]
@@ -129,8 +138,7 @@ class ModeTable:
         wd = w * np.sqrt(1 - z**2)
         d = -np.diff(log_a)
         time = np.concatenate([[0.0], np.cumsum(0.5 * d * (1 / rate[1:] + 1 / rate[:-1]))])
-        phase = np.concatenate([[0.0], np.cumsum(0.5 * d * (wd[1:] / rate[1:]
-                                                            + wd[:-1] / rate[:-1]))])
+        phase = np.concatenate([[0.0], np.cumsum(0.5 * d * (wd[1:] / rate[1:] + wd[:-1] / rate[:-1]))])
         return cls(log_a, z, w, time, phase)
 
     def evolve(self, a0, t_s):
@@ -153,8 +161,10 @@ class ModeTable:
     def at(self, a):
         """Damping ratio and undamped frequency (rad/s) at amplitude ``a``."""
         la = np.log(a)
-        return (np.interp(la, self.log_a[::-1], self.zeta[::-1]),
-                np.interp(la, self.log_a[::-1], self.omega_rad_s[::-1]))
+        return (
+            np.interp(la, self.log_a[::-1], self.zeta[::-1]),
+            np.interp(la, self.log_a[::-1], self.omega_rad_s[::-1]),
+        )
 
 
 def nonlinear_mode_response(t_s, table: ModeTable, omega0_rad_s, zeta0, modal_peak, duration_s):
@@ -165,8 +175,7 @@ def nonlinear_mode_response(t_s, table: ModeTable, omega0_rad_s, zeta0, modal_pe
     """
     t = np.asarray(t_s, dtype=float)
     _, _, acc = half_sine_response(t, omega0_rad_s, zeta0, modal_peak, duration_s)
-    q1, v1, _ = half_sine_response(np.array([duration_s]), omega0_rad_s, zeta0, modal_peak,
-                                   duration_s)
+    q1, v1, _ = half_sine_response(np.array([duration_s]), omega0_rad_s, zeta0, modal_peak, duration_s)
     # amplitude and phase at the pulse end, with the amplitude's own frequency
     a0 = np.hypot(q1[0], v1[0] / omega0_rad_s)
     for _ in range(3):
@@ -185,8 +194,9 @@ def nonlinear_mode_response(t_s, table: ModeTable, omega0_rad_s, zeta0, modal_pe
     return acc
 
 
-def integrate_patch_ringdown(xi0, omega0_rad_s, zeta0, slip_per_xi, stiffness_lbf_in,
-                             slip_force_lbf, dt_s, n_steps):
+def integrate_patch_ringdown(
+    xi0, omega0_rad_s, zeta0, slip_per_xi, stiffness_lbf_in, slip_force_lbf, dt_s, n_steps
+):
     """Direct time integration of mode 1 with the patch forces (for validation).
 
     ``xi'' + 2 zeta0 w0 xi' + w0^2 xi + sum s (F - k s xi) = 0`` (the stuck
@@ -206,14 +216,14 @@ def integrate_patch_ringdown(xi0, omega0_rad_s, zeta0, slip_per_xi, stiffness_lb
     x_prev, x = xi0, xi0
     v = 0.0
     # first step from rest (Taylor)
-    acc = -omega0_rad_s**2 * x - np.dot(s, force - k * s * x)
+    acc = -(omega0_rad_s**2) * x - np.dot(s, force - k * s * x)
     x_next = x + 0.5 * dt_s**2 * acc
     xi[0] = x
     for n in range(1, n_steps):
         x_prev, x = x, x_next
         force = contact.jenkins_force_update(force, s * (x - x_prev), k, fs)
         v = (x - x_prev) / dt_s
-        acc = -omega0_rad_s**2 * x - 2 * zeta0 * omega0_rad_s * v - np.dot(s, force - k * s * x)
+        acc = -(omega0_rad_s**2) * x - 2 * zeta0 * omega0_rad_s * v - np.dot(s, force - k * s * x)
         # v lags half a step; with >= 200 steps per cycle the damping error is < 1 %
         x_next = 2 * x - x_prev + dt_s**2 * acc
         xi[n] = x
@@ -247,8 +257,9 @@ def _amplitude_grid(mode: specimen.FirstMode, omega0, points):
 
 def _patch_curves(setup: JointSetup, a):
     p = setup.joint_modes.patches
-    return contact.patch_describing_function(a, setup.joint_modes.slip_per_xi,
-                                             p.stiffness_lbf_in, p.slip_force_lbf)
+    return contact.patch_describing_function(
+        a, setup.joint_modes.slip_per_xi, p.stiffness_lbf_in, p.slip_force_lbf
+    )
 
 
 def _dahl_curves(a, sigma, coulomb):
@@ -266,8 +277,7 @@ def _fit_dahl(setup: JointSetup, zeta0, patch_d, patch_loss, a):
     phi = abs(setup.mode.accelerometer_participation)
     v = phi * setup.omega0_rad_s * a
     sel = (v > 0.1) & (v < 10.0)
-    target, _ = contact.equivalent_damping(a[sel], setup.omega0_rad_s, zeta0, patch_d[sel],
-                                           patch_loss[sel])
+    target, _ = contact.equivalent_damping(a[sel], setup.omega0_rad_s, zeta0, patch_d[sel], patch_loss[sel])
 
     def residual(log_p):
         sigma, fc = np.exp(log_p)
@@ -281,8 +291,9 @@ def _fit_dahl(setup: JointSetup, zeta0, patch_d, patch_loss, a):
     k = setup.joint_modes.patches.stiffness_lbf_in
     sigma0 = 0.1 * float(np.sum(s**2 * k))
     fc0 = sigma0 * np.median(a[sel])
-    fit = scipy.optimize.least_squares(residual, np.log([sigma0, fc0]),
-                                       bounds=(np.log([1.0, 1e-9]), np.log([1e9, 1e6])))
+    fit = scipy.optimize.least_squares(
+        residual, np.log([sigma0, fc0]), bounds=(np.log([1.0, 1e-9]), np.log([1e9, 1e6]))
+    )
     return tuple(float(x) for x in np.exp(fit.x))
 
 
@@ -310,8 +321,9 @@ def setup_configuration(name, bearing_area_in2, settings: LabSettings) -> tuple[
     return JointSetup(name, bearing_area_in2, jm, jm.omega_rad_s, sigma, coulomb), curves
 
 
-def joint_curves(setup: JointSetup, patch_curves, settings: LabSettings, joint, effect,
-                 effect_size, run_fraction=0.0):
+def joint_curves(
+    setup: JointSetup, patch_curves, settings: LabSettings, joint, effect, effect_size, run_fraction=0.0
+):
     """Dissipation per cycle and stiffness loss of the whole mode-1 joint model.
 
     ``run_fraction`` in [0, 1] is the run's position in the campaign (drift).
@@ -339,8 +351,7 @@ def joint_curves(setup: JointSetup, patch_curves, settings: LabSettings, joint, 
 
 def mode_table(setup, patch_curves, settings, joint, effect, effect_size, run_fraction=0.0):
     a = patch_curves[0]
-    d, loss = joint_curves(setup, patch_curves, settings, joint, effect, effect_size,
-                           run_fraction)
+    d, loss = joint_curves(setup, patch_curves, settings, joint, effect, effect_size, run_fraction)
     zeta, omega = contact.equivalent_damping(a, setup.omega0_rad_s, settings.zeta0, d, loss)
     return ModeTable.build(a, zeta, omega)
 
@@ -378,8 +389,7 @@ def boxcar_half_sine(t_start_s, dt_s, t0_s, peak, duration_s):
     return (primitive(t_start_s + dt_s) - primitive(t_start_s)) / dt_s
 
 
-def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng,
-                 second_mode_ratio=0.0):
+def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng, second_mode_ratio=0.0):
     """One triggered record: (time s, force lbf, acceleration g) and run facts."""
     dt = 1.0 / SAMPLE_RATE_HZ
     lo, hi = settings.peak_force_lbf
@@ -396,14 +406,21 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
     tau = t - t0
     phi_h = mode.hammer_participation
     acc = mode.accelerometer_participation * nonlinear_mode_response(
-        tau, table, setup.omega0_rad_s, settings.zeta0, phi_h * peak, duration)
+        tau, table, setup.omega0_rad_s, settings.zeta0, phi_h * peak, duration
+    )
     for m in mode.higher_modes:
-        _, _, q = half_sine_response(tau, 2 * np.pi * m.frequency_hz, settings.higher_mode_zeta,
-                                     m.hammer_participation * peak, duration)
+        _, _, q = half_sine_response(
+            tau,
+            2 * np.pi * m.frequency_hz,
+            settings.higher_mode_zeta,
+            m.hammer_participation * peak,
+            duration,
+        )
         acc += m.accelerometer_participation * q
     if second_mode_ratio:
-        _, _, q = half_sine_response(tau, SECOND_MODE_FREQUENCY_RATIO * setup.omega0_rad_s,
-                                     settings.zeta0, phi_h * peak, duration)
+        _, _, q = half_sine_response(
+            tau, SECOND_MODE_FREQUENCY_RATIO * setup.omega0_rad_s, settings.zeta0, phi_h * peak, duration
+        )
         # An extra (e.g. torsional) mode that the beam model lacks: excited like
         # mode 1, seen at the accelerometer with the chosen relative amplitude.
         acc += second_mode_ratio * mode.accelerometer_participation * q
@@ -411,11 +428,11 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
     geo = settings.joint.geometry
     lever_acc = geo.accelerometer_x_in - mode.centre_of_mass_in
     lever_ham = geo.hammer_x_in - mode.centre_of_mass_in
-    for f_hz, gain in ((settings.suspension_hz[0], 1.0 / mode.total_mass_lbf_s2_in),
-                       (settings.suspension_hz[1],
-                        lever_acc * lever_ham / mode.pitch_inertia_lbf_s2_in)):
-        _, _, q = half_sine_response(tau, 2 * np.pi * f_hz, settings.suspension_zeta,
-                                     gain * peak, duration)
+    for f_hz, gain in (
+        (settings.suspension_hz[0], 1.0 / mode.total_mass_lbf_s2_in),
+        (settings.suspension_hz[1], lever_acc * lever_ham / mode.pitch_inertia_lbf_s2_in),
+    ):
+        _, _, q = half_sine_response(tau, 2 * np.pi * f_hz, settings.suspension_zeta, gain * peak, duration)
         acc += q
     acc_g = acc / specimen.G_IN_S2 + settings.acceleration_noise_g * rng.standard_normal(n)
     sl = slice(trigger - PRETRIGGER_SAMPLES, trigger - PRETRIGGER_SAMPLES + settings.samples_per_run)
@@ -427,24 +444,34 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
 
 def format_run(time_s, force_lbf, acceleration_g) -> str:
     """The run file text (Dactron-like ASCII export)."""
-    lines = ["Virtual lab ASCII export (lapjoint)",
-             f"Sample rate: {SAMPLE_RATE_HZ:g} Hz",
-             f"Pre-trigger: {PRETRIGGER_SAMPLES} samples",
-             "Time (s)\tForce (lbf)\tAcceleration (g)"]
-    body = np.char.add(np.char.add(np.char.add(np.char.add(
-        np.char.mod("%.6f", time_s), "\t"), np.char.mod("%.10g", force_lbf)), "\t"),
-        np.char.mod("%.10g", acceleration_g))
+    lines = [
+        "Virtual lab ASCII export (lapjoint)",
+        f"Sample rate: {SAMPLE_RATE_HZ:g} Hz",
+        f"Pre-trigger: {PRETRIGGER_SAMPLES} samples",
+        "Time (s)\tForce (lbf)\tAcceleration (g)",
+    ]
+    body = np.char.add(
+        np.char.add(
+            np.char.add(np.char.add(np.char.mod("%.6f", time_s), "\t"), np.char.mod("%.10g", force_lbf)), "\t"
+        ),
+        np.char.mod("%.10g", acceleration_g),
+    )
     return "\n".join(lines + body.tolist()) + "\n"
 
 
 def _campaign_yaml(name, configurations, mode_hz) -> str:
-    lines = [f"name: {name}", f"sample_rate_hz: {SAMPLE_RATE_HZ:g}",
-             f"pretrigger_samples: {PRETRIGGER_SAMPLES}", f"mode_hz: {mode_hz:g}",
-             "response: {quantity: acceleration, unit: g}", "force: {unit: lbf}",
-             "configurations:"]
+    lines = [
+        f"name: {name}",
+        f"sample_rate_hz: {SAMPLE_RATE_HZ:g}",
+        f"pretrigger_samples: {PRETRIGGER_SAMPLES}",
+        f"mode_hz: {mode_hz:g}",
+        "response: {quantity: acceleration, unit: g}",
+        "force: {unit: lbf}",
+        "configurations:",
+    ]
     for cname, area in configurations.items():
         area_part = f"bearing_area_in2: {area:g}, " if area is not None else ""
-        lines.append(f"  {cname}: {{{area_part}files: \"{cname}/*.txt\"}}")
+        lines.append(f'  {cname}: {{{area_part}files: "{cname}/*.txt"}}')
     return "\n".join(lines) + "\n"
 
 
@@ -454,9 +481,17 @@ def truth_path(out_dir) -> Path:
     return out.parent / (out.name + ".truth.json")
 
 
-def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="patches",
-                      effect=None, effect_size=None, configurations=None,
-                      samples_per_run=N_SAMPLES) -> dict:
+def generate_campaign(
+    out_dir,
+    *,
+    seed=2004,
+    runs_per_configuration=10,
+    joint="patches",
+    effect=None,
+    effect_size=None,
+    configurations=None,
+    samples_per_run=N_SAMPLES,
+) -> dict:
     """Write a simulated campaign folder and its truth; return the truth dict.
 
     Parameters
@@ -483,8 +518,9 @@ def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="p
     if joint not in ("patches", "dahl"):
         raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")
     if effect not in EFFECT_CAUSES:
-        raise ValueError(f"effect must be one of {sorted(k for k in EFFECT_CAUSES if k)} "
-                         f"or None, got {effect!r}")
+        raise ValueError(
+            f"effect must be one of {sorted(k for k in EFFECT_CAUSES if k)} or None, got {effect!r}"
+        )
     if effect is not None and joint != "dahl":
         raise ValueError("an added effect departs from the Dahl baseline: pass joint='dahl'")
     if effect is not None and effect_size is None:
@@ -498,28 +534,31 @@ def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="p
     root_seq = np.random.SeedSequence(seed)
     children = root_seq.spawn(len(configurations))
     velocity = np.logspace(-3, 2, 101)
-    cause = EFFECT_CAUSES[effect] if effect else ("microslip_power_law" if joint == "patches"
-                                                  else "none")
-    truth = {"campaign_dir": out.name, "seed": seed, "joint": joint, "effect": effect,
-             "effect_size": effect_size,
-             "effect_size_meaning": EFFECT_SIZE_MEANING.get(effect),
-             "reference_velocity_in_s": REFERENCE_VELOCITY_IN_S,
-             "expected_cause": cause,
-             "lab_settings": {k: v for k, v in asdict(settings).items() if k != "joint"},
-             "joint_parameters": {k: v for k, v in asdict(settings.joint).items()
-                                  if k != "geometry"},
-             "preload_lbf": settings.joint.preload_lbf,
-             "geometry": asdict(settings.joint.geometry),
-             "velocity_amplitude_in_s": velocity.tolist(),
-             "configurations": {}}
+    cause = EFFECT_CAUSES[effect] if effect else ("microslip_power_law" if joint == "patches" else "none")
+    truth = {
+        "campaign_dir": out.name,
+        "seed": seed,
+        "joint": joint,
+        "effect": effect,
+        "effect_size": effect_size,
+        "effect_size_meaning": EFFECT_SIZE_MEANING.get(effect),
+        "reference_velocity_in_s": REFERENCE_VELOCITY_IN_S,
+        "expected_cause": cause,
+        "lab_settings": {k: v for k, v in asdict(settings).items() if k != "joint"},
+        "joint_parameters": {k: v for k, v in asdict(settings.joint).items() if k != "geometry"},
+        "preload_lbf": settings.joint.preload_lbf,
+        "geometry": asdict(settings.joint.geometry),
+        "velocity_amplitude_in_s": velocity.tolist(),
+        "configurations": {},
+    }
     setups = {}
-    for (cname, area), child in zip(configurations.items(), children):
+    for (cname, area), _child in zip(configurations.items(), children):
         setup, curves = setup_configuration(cname, area, settings)
         setups[cname] = (setup, curves)
     mode_hz = float(np.mean([s.mode.frequency_hz for s, _ in setups.values()]))
     (out / "campaign.yaml").write_text(
-        _campaign_yaml(f"virtual-lab-{joint}-{effect or 'baseline'}-{seed}", configurations,
-                       round(mode_hz)))
+        _campaign_yaml(f"virtual-lab-{joint}-{effect or 'baseline'}-{seed}", configurations, round(mode_hz))
+    )
     for (cname, (setup, curves)), child in zip(setups.items(), children):
         folder = out / cname
         folder.mkdir(exist_ok=True)
@@ -529,15 +568,20 @@ def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="p
         base_table = mode_table(setup, curves, settings, joint, effect, effect_size)
         zeta, fd = truth_curves(setup, base_table, velocity)
         mode = setup.mode
-        entry = {"bearing_area_in2": setup.bearing_area_in2,
-                 "linear_frequency_hz": mode.frequency_hz,
-                 "node_positions_in": mode.node_positions_in.tolist(),
-                 "accelerometer_participation": mode.accelerometer_participation,
-                 "hammer_participation": mode.hammer_participation,
-                 "higher_modes_hz": [m.frequency_hz for m in mode.higher_modes],
-                 "dahl_sigma_modal": setup.dahl_sigma, "dahl_coulomb_modal": setup.dahl_coulomb,
-                 "n_patches_per_interface": int(setup.joint_modes.patches.x_rel_in.size),
-                 "zeta": zeta.tolist(), "damped_frequency_hz": fd.tolist(), "runs": []}
+        entry = {
+            "bearing_area_in2": setup.bearing_area_in2,
+            "linear_frequency_hz": mode.frequency_hz,
+            "node_positions_in": mode.node_positions_in.tolist(),
+            "accelerometer_participation": mode.accelerometer_participation,
+            "hammer_participation": mode.hammer_participation,
+            "higher_modes_hz": [m.frequency_hz for m in mode.higher_modes],
+            "dahl_sigma_modal": setup.dahl_sigma,
+            "dahl_coulomb_modal": setup.dahl_coulomb,
+            "n_patches_per_interface": int(setup.joint_modes.patches.x_rel_in.size),
+            "zeta": zeta.tolist(),
+            "damped_frequency_hz": fd.tolist(),
+            "runs": [],
+        }
         for i in range(runs_per_configuration):
             fraction = i / (runs_per_configuration - 1) if runs_per_configuration > 1 else 0.0
             table = base_table
@@ -550,9 +594,11 @@ def generate_campaign(out_dir, *, seed=2004, runs_per_configuration=10, joint="p
             run_entry = {"run": name, **facts}
             if effect == "run_drift":
                 z_run, f_run = truth_curves(setup, table, velocity)
-                run_entry.update(zeta=z_run.tolist(), damped_frequency_hz=f_run.tolist(),
-                                 dahl_coulomb_modal=setup.dahl_coulomb
-                                 * (1 - effect_size * fraction))
+                run_entry.update(
+                    zeta=z_run.tolist(),
+                    damped_frequency_hz=f_run.tolist(),
+                    dahl_coulomb_modal=setup.dahl_coulomb * (1 - effect_size * fraction),
+                )
             entry["runs"].append(run_entry)
         truth["configurations"][cname] = entry
     truth_path(out).write_text(json.dumps(truth, indent=1))

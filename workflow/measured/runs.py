@@ -15,9 +15,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from workflow import decay, quality, units
-from workflow.campaign import RunRecord
-from workflow.config import QualitySettings
+from workflow.io import units
+from workflow.io.campaign import RunRecord
+from workflow.io.settings import QualitySettings
+from workflow.measured import decay, quality
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -47,7 +48,7 @@ class ModeInfo:
         }
 
     @classmethod
-    def from_dict(cls, document: dict) -> "ModeInfo":
+    def from_dict(cls, document: dict) -> ModeInfo:
         return cls(
             mode_hz=float(document["mode_hz"]),
             band_hz=(float(document["band_hz"][0]), float(document["band_hz"][1])),
@@ -108,14 +109,12 @@ def identify_mode(
     recorded the force, the averaged response spectrum otherwise. The band is
     campaign.yaml's ``band_hz`` when given, else ``mode * (1 -/+ band_half_width)``.
     """
-    from workflow import modal_id  # scipy.signal: imported only by the rule that needs it
+    from workflow.measured import mode as modal_id  # scipy.signal: imported only by the rule that needs it
 
     if not records:
         raise ValueError("no readable run to identify the mode from")
     sample_rate_hz = records[0].sample_rate_hz
-    search_hz = mode_search_range(
-        sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction
-    )
+    search_hz = mode_search_range(sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction)
     responses = [record.response[start:stop] for record, (start, stop) in zip(records, windows)]
     coherence_at_mode = None
     if all(record.force_lbf is not None for record in records):
@@ -131,8 +130,9 @@ def identify_mode(
         method = "spectrum"
         amplitude = np.sqrt(np.abs(psd))
     # A noise ripple on the flank of a mode outside the range is not the mode.
-    not_a_resonance = quality.check_mode_found(frequency_hz, amplitude, mode_hz, search_hz,
-                                               min_prominence=min_mode_prominence)
+    not_a_resonance = quality.check_mode_found(
+        frequency_hz, amplitude, mode_hz, search_hz, min_prominence=min_mode_prominence
+    )
     if not_a_resonance:
         raise ValueError(not_a_resonance)
     if campaign_band_hz is not None:
@@ -197,7 +197,7 @@ def analyse_run_with_quality(
         ``velocity_amplitude_in_s`` uses each segment's local frequency.
     quality_rows : list of dict
         The decay-level quality checks (signal-to-noise, usable segments) as rows
-        of the quality table (:func:`workflow.quality.analysis_rows`).
+        of the quality table (:func:`workflow.measured.quality.analysis_rows`).
     """
     start, stop = window
     result = decay.analyse_decay(
@@ -250,20 +250,31 @@ def analyse_run(record: RunRecord, **arguments) -> tuple[pd.DataFrame, list[str]
     return pd.DataFrame(columns), [row["reason"] for row in rows if not row["passed"]]
 
 
-def read_with_quality(campaign_dir, path: str, campaign, quality_settings) -> tuple[RunRecord | None, list[dict]]:
+def read_with_quality(
+    campaign_dir, path: str, campaign, quality_settings
+) -> tuple[RunRecord | None, list[dict]]:
     """Read one run file and apply the record-level quality checks.
 
     Returns the record (None when it cannot be read) and one row per check
-    (:func:`workflow.quality.quality_rows`); an unreadable file gives a single
+    (:func:`workflow.measured.quality.quality_rows`); an unreadable file gives a single
     ``read`` row whose reason names the file, the line and what is wrong.
     """
-    from workflow.campaign import CampaignFormatError, read_run
+    from workflow.io.campaign import CampaignFormatError, read_run
 
     try:
         record = read_run(campaign_dir, path, campaign)
     except CampaignFormatError as error:
-        return None, [{"check": "read", "applied": True, "passed": False, "value": float("nan"),
-                       "threshold": float("nan"), "unit": "", "reason": str(error)}]
+        return None, [
+            {
+                "check": "read",
+                "applied": True,
+                "passed": False,
+                "value": float("nan"),
+                "threshold": float("nan"),
+                "unit": "",
+                "reason": str(error),
+            }
+        ]
     return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
 
 
@@ -290,7 +301,7 @@ def read_and_check(campaign_dir, path: str, campaign, quality_settings) -> tuple
 class RunAnalysis:
     """What the workflow keeps of one run file: its segments (columns of
     :data:`SEGMENT_COLUMNS`), its quality checks (columns of
-    :func:`workflow.quality.quality_columns`) and its status (used, or excluded with
+    :func:`workflow.measured.quality.quality_columns`) and its status (used, or excluded with
     the reason)."""
 
     segments: dict[str, np.ndarray]
@@ -327,7 +338,7 @@ def analyse_run_file(
     quality_settings : QualitySettings
         Quality thresholds.
     analysis : dict
-        The decay analysis settings (:meth:`workflow.config.AnalysisSettings.run_parameters`).
+        The decay analysis settings (:meth:`workflow.io.settings.AnalysisSettings.run_parameters`).
     """
     from pathlib import PurePosixPath
 
@@ -351,12 +362,19 @@ def analyse_run_file(
             )
             rows += decay_rows
             problems = failed_checks(run_path, decay_rows)
-    status = {"configuration": configuration, "run": run, "path": run_path,
-              "status": "excluded" if problems else "used", "reason": "; ".join(problems)}
+    status = {
+        "configuration": configuration,
+        "run": run,
+        "path": run_path,
+        "status": "excluded" if problems else "used",
+        "reason": "; ".join(problems),
+    }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
 
 
-def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, campaign) -> dict[str, pd.DataFrame]:
+def collect_tables(
+    *, segment_paths, quality_paths, status_paths, mode_paths, campaign
+) -> dict[str, pd.DataFrame]:
     """Merge the per-run outputs into the campaign's tables.
 
     Returns ``segments`` (kept segments of used runs: the output contract's
@@ -369,16 +387,22 @@ def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, ca
 
     import pandas as pd
 
-    from workflow.tables import read_columns
+    from workflow.io.tables import read_columns
 
     # Each status file holds the statuses of one job's runs.
-    statuses = pd.DataFrame([status for path in status_paths for status in json.loads(Path(path).read_text())])
+    statuses = pd.DataFrame(
+        [status for path in status_paths for status in json.loads(Path(path).read_text())]
+    )
     runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
     frames = [frame for frame in frames if len(frame)]
     all_segments = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(empty_segments())
-    used = set(zip(runs.loc[runs["status"] == "used", "configuration"], runs.loc[runs["status"] == "used", "run"]))
-    run_used = np.array([(c, r) in used for c, r in zip(all_segments["configuration"], all_segments["run"])], dtype=bool)
+    used = set(
+        zip(runs.loc[runs["status"] == "used", "configuration"], runs.loc[runs["status"] == "used", "run"])
+    )
+    run_used = np.array(
+        [(c, r) in used for c, r in zip(all_segments["configuration"], all_segments["run"])], dtype=bool
+    )
     keep = run_used & all_segments["kept"].to_numpy(dtype=bool)
     rejected = all_segments[~keep].copy()
     rejected.loc[~run_used[~keep], "reject_reason"] = "run excluded (see runs.parquet)"
@@ -412,8 +436,7 @@ def collect_tables(*, segment_paths, quality_paths, status_paths, mode_paths, ca
         "segments": segments.reset_index(drop=True),
         "rejected": rejected.reset_index(drop=True),
         "runs": runs,
-        "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths],
-                             ignore_index=True),
+        "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True),
         "modes": pd.DataFrame(mode_rows),
     }
 
@@ -439,7 +462,7 @@ def fit_damping_curves(
     """
     import pandas as pd
 
-    from workflow import curves
+    from workflow.measured import curves
 
     fit_rows, curve_frames, by_configuration, fits = [], [], {}, {}
     for offset, (name, part) in enumerate(segments.groupby("configuration", sort=False)):
@@ -451,35 +474,53 @@ def fit_damping_curves(
         by_configuration[name] = (v, zeta, run)
         grid = np.geomspace(v.min(), v.max(), grid_points)
         lower, centre, upper = curves.bootstrap_band(
-            v, zeta, run, fit.degree, grid, n_boot=bootstrap_samples, confidence=confidence,
-            seed=seed + offset, log_amplitude=log_amplitude,
+            v,
+            zeta,
+            run,
+            fit.degree,
+            grid,
+            n_boot=bootstrap_samples,
+            confidence=confidence,
+            seed=seed + offset,
+            log_amplitude=log_amplitude,
         )
         area = areas_in2.get(name)
-        curve_frames.append(pd.DataFrame({
-            "configuration": name,
-            "bearing_area_in2": np.nan if area is None else area,
-            "velocity_amplitude_in_s": grid,
-            "zeta": centre,
-            "zeta_low": lower,
-            "zeta_high": upper,
-        }))
-        fit_rows.append({
-            "configuration": name,
-            "bearing_area_in2": np.nan if area is None else area,
-            "degree": fit.degree,
-            "coefficients": [float(c) for c in fit.coefficients],
-            "x_transform": fit.x_transform,
-            "cv_scheme": fit.cv_scheme,
-            "cv_rmse_at_degree": float(fit.cv_rmse[fit.degree]),
-            "n_runs": fit.n_runs,
-            "n_segments": fit.n_points,
-            "amplitude_low_in_s": fit.amplitude_range_in_s[0],
-            "amplitude_high_in_s": fit.amplitude_range_in_s[1],
-        })
+        curve_frames.append(
+            pd.DataFrame(
+                {
+                    "configuration": name,
+                    "bearing_area_in2": np.nan if area is None else area,
+                    "velocity_amplitude_in_s": grid,
+                    "zeta": centre,
+                    "zeta_low": lower,
+                    "zeta_high": upper,
+                }
+            )
+        )
+        fit_rows.append(
+            {
+                "configuration": name,
+                "bearing_area_in2": np.nan if area is None else area,
+                "degree": fit.degree,
+                "coefficients": [float(c) for c in fit.coefficients],
+                "x_transform": fit.x_transform,
+                "cv_scheme": fit.cv_scheme,
+                "cv_rmse_at_degree": float(fit.cv_rmse[fit.degree]),
+                "n_runs": fit.n_runs,
+                "n_segments": fit.n_points,
+                "amplitude_low_in_s": fit.amplitude_range_in_s[0],
+                "amplitude_high_in_s": fit.amplitude_range_in_s[1],
+            }
+        )
     known_areas = {name: a for name, a in areas_in2.items() if a is not None and name in fits}
     hypotheses = curves.hypothesis_tests(
-        segments, known_areas or None, max_degree=max_degree, log_amplitude=log_amplitude,
-        n_boot=bootstrap_samples, confidence=confidence, seed=seed,
+        segments,
+        known_areas or None,
+        max_degree=max_degree,
+        log_amplitude=log_amplitude,
+        n_boot=bootstrap_samples,
+        confidence=confidence,
+        seed=seed,
     )
     area_rows = []
     common = curves.common_amplitude_range(by_configuration) if len(by_configuration) > 1 else None
@@ -488,18 +529,38 @@ def fit_damping_curves(
         for offset, name in enumerate(known_areas):
             v, zeta, run = by_configuration[name]
             lower, centre, upper = curves.bootstrap_band(
-                v, zeta, run, fits[name].degree, amplitudes, n_boot=bootstrap_samples,
-                confidence=confidence, seed=seed + 100 + offset, log_amplitude=log_amplitude,
+                v,
+                zeta,
+                run,
+                fits[name].degree,
+                amplitudes,
+                n_boot=bootstrap_samples,
+                confidence=confidence,
+                seed=seed + 100 + offset,
+                log_amplitude=log_amplitude,
             )
             for amplitude, low, mid, high in zip(amplitudes, lower, centre, upper):
-                area_rows.append({
-                    "configuration": name, "bearing_area_in2": known_areas[name],
-                    "velocity_amplitude_in_s": amplitude, "zeta": mid,
-                    "zeta_low": low, "zeta_high": high,
-                })
-    area = pd.DataFrame(area_rows, columns=[
-        "configuration", "bearing_area_in2", "velocity_amplitude_in_s", "zeta", "zeta_low", "zeta_high",
-    ])
+                area_rows.append(
+                    {
+                        "configuration": name,
+                        "bearing_area_in2": known_areas[name],
+                        "velocity_amplitude_in_s": amplitude,
+                        "zeta": mid,
+                        "zeta_low": low,
+                        "zeta_high": high,
+                    }
+                )
+    area = pd.DataFrame(
+        area_rows,
+        columns=[
+            "configuration",
+            "bearing_area_in2",
+            "velocity_amplitude_in_s",
+            "zeta",
+            "zeta_low",
+            "zeta_high",
+        ],
+    )
     return {
         "fits": pd.DataFrame(fit_rows),
         "curves": pd.concat(curve_frames, ignore_index=True) if curve_frames else pd.DataFrame(),

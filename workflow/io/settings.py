@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 from annotated_types import Ge, Gt, Le, Lt
 
-from workflow.validation import FORBID_UNKNOWN_KEYS, UNKNOWN_KEY_ERRORS, After, validate
+from workflow.io.validation import FORBID_UNKNOWN_KEYS, UNKNOWN_KEY_ERRORS, After, validate
 
 if TYPE_CHECKING:
     from pydantic import ValidationError
@@ -64,7 +64,7 @@ class AnalysisSettings:
 
     def run_parameters(self) -> dict[str, Any]:
         """The settings of one run's decay analysis, as keyword arguments of
-        :func:`workflow.pipeline.analyse_run_with_quality` (the mode search and the
+        :func:`workflow.measured.runs.analyse_run_with_quality` (the mode search and the
         band are settled per configuration, before)."""
         per_configuration = {"band_half_width", "mode_search_hz", "mode_search_fraction"}
         return {key: value for key, value in asdict(self).items() if key not in per_configuration}

@@ -16,7 +16,7 @@ its centroid.  This is the classic partial-interaction layered beam (Newmark):
   centroid (cubic Hermite element) and bar stiffness ``EA`` (linear element),
   with consistent mass matrices for both;
 * the layers are tied tangentially only through the interface contact:
-  point springs (the stuck contact patches of :mod:`workflow.contact`) acting
+  point springs (the stuck contact patches of :mod:`workflow.models.contact`) acting
   on the interface slip.
 
 Interface slip (the quantity that drives friction): with plane sections,
@@ -57,7 +57,7 @@ MINDLIN_TANGENTIAL_TO_NORMAL = 2 * (1 - 0.3) / (2 - 0.3)
 DEFAULT_CONTACT_STIFFNESS_LBF_IN3 = 1.0e6
 """Uniform tangential stiffness per unit area used when no contact model is
 supplied, lbf/in^3: the uniform value that gives the same first frequency as
-the no-washer contact patches of :mod:`workflow.contact` (whose stiffness is
+the no-washer contact patches of :mod:`workflow.models.contact` (whose stiffness is
 concentrated near the bolt and tiny in the lightly clamped periphery)."""
 
 
@@ -163,23 +163,47 @@ class InterfaceSprings:
 
 def _hermite(xi: float, le: float) -> tuple[np.ndarray, np.ndarray]:
     """Cubic Hermite shape functions and their x-derivatives at xi in [0, 1]."""
-    n = np.array([1 - 3 * xi**2 + 2 * xi**3, le * (xi - 2 * xi**2 + xi**3),
-                  3 * xi**2 - 2 * xi**3, le * (-(xi**2) + xi**3)])
-    dn = np.array([(-6 * xi + 6 * xi**2) / le, 1 - 4 * xi + 3 * xi**2,
-                   (6 * xi - 6 * xi**2) / le, -2 * xi + 3 * xi**2])
+    n = np.array(
+        [
+            1 - 3 * xi**2 + 2 * xi**3,
+            le * (xi - 2 * xi**2 + xi**3),
+            3 * xi**2 - 2 * xi**3,
+            le * (-(xi**2) + xi**3),
+        ]
+    )
+    dn = np.array(
+        [(-6 * xi + 6 * xi**2) / le, 1 - 4 * xi + 3 * xi**2, (6 * xi - 6 * xi**2) / le, -2 * xi + 3 * xi**2]
+    )
     return n, dn
 
 
 def _beam_element(ei: float, rho_a: float, le: float) -> tuple[np.ndarray, np.ndarray]:
     """Euler-Bernoulli element stiffness and consistent mass, dofs (w1, t1, w2, t2)."""
-    k = ei / le**3 * np.array([[12, 6 * le, -12, 6 * le],
-                               [6 * le, 4 * le**2, -6 * le, 2 * le**2],
-                               [-12, -6 * le, 12, -6 * le],
-                               [6 * le, 2 * le**2, -6 * le, 4 * le**2]])
-    m = rho_a * le / 420.0 * np.array([[156, 22 * le, 54, -13 * le],
-                                       [22 * le, 4 * le**2, 13 * le, -3 * le**2],
-                                       [54, 13 * le, 156, -22 * le],
-                                       [-13 * le, -3 * le**2, -22 * le, 4 * le**2]])
+    k = (
+        ei
+        / le**3
+        * np.array(
+            [
+                [12, 6 * le, -12, 6 * le],
+                [6 * le, 4 * le**2, -6 * le, 2 * le**2],
+                [-12, -6 * le, 12, -6 * le],
+                [6 * le, 2 * le**2, -6 * le, 4 * le**2],
+            ]
+        )
+    )
+    m = (
+        rho_a
+        * le
+        / 420.0
+        * np.array(
+            [
+                [156, 22 * le, 54, -13 * le],
+                [22 * le, 4 * le**2, 13 * le, -3 * le**2],
+                [54, 13 * le, 156, -22 * le],
+                [-13 * le, -3 * le**2, -22 * le, 4 * le**2],
+            ]
+        )
+    )
     return k, m
 
 
@@ -232,9 +256,18 @@ class SpecimenModel:
     # ---------------------------------------------------------------- mesh
     def _mesh(self) -> None:
         g = self.geometry
-        keys = {0.0, g.total_length_in, g.beam_length_in, g.beam_length_in + g.gap_in,
-                g.plate_start_in, g.plate_end_in, g.accelerometer_x_in, g.hammer_x_in,
-                *g.bolt_positions_in, *g.suspension_x_in}
+        keys = {
+            0.0,
+            g.total_length_in,
+            g.beam_length_in,
+            g.beam_length_in + g.gap_in,
+            g.plate_start_in,
+            g.plate_end_in,
+            g.accelerometer_x_in,
+            g.hammer_x_in,
+            *g.bolt_positions_in,
+            *g.suspension_x_in,
+        }
         keys = np.array(sorted(keys))
         xs = [keys[0]]
         for a, b in zip(keys[:-1], keys[1:]):
@@ -279,10 +312,10 @@ class SpecimenModel:
         for interface in self.interfaces:
             for j, x_rel in enumerate(springs.x_rel_in):
                 x = float(self.patch_x_in(interface, x_rel))
-                for (idx, val), stiff in ((self._slip_entries(interface, x),
-                                           springs.stiffness_lbf_in[j]),
-                                          (self._gap_entries(interface, x),
-                                           springs.normal_stiffness_lbf_in[j])):
+                for (idx, val), stiff in (
+                    (self._slip_entries(interface, x), springs.stiffness_lbf_in[j]),
+                    (self._gap_entries(interface, x), springs.normal_stiffness_lbf_in[j]),
+                ):
                     k[np.ix_(idx, idx)] += stiff * np.outer(val, val)
         self.stiffness = k
         self.mass = m
@@ -293,8 +326,7 @@ class SpecimenModel:
         return interface.bolt_x_in + interface.outward * np.asarray(x_rel_in, dtype=float)
 
     def _element_of(self, x_in: float) -> tuple[int, float, float]:
-        el = int(np.clip(np.searchsorted(self.x_in, x_in, side="right") - 1, 0,
-                         self.x_in.size - 2))
+        el = int(np.clip(np.searchsorted(self.x_in, x_in, side="right") - 1, 0, self.x_in.size - 2))
         le = self.x_in[el + 1] - self.x_in[el]
         return el, (x_in - self.x_in[el]) / le, le
 
@@ -322,8 +354,10 @@ class SpecimenModel:
         ]
         # surface axial displacement = u - (z_interface - z_centroid) * w'
         scale = [1.0, -1.0, -(zi - zp), (zi - zb)]
-        return (np.concatenate([p[0] for p in parts]),
-                np.concatenate([s * p[1] for s, p in zip(scale, parts)]))
+        return (
+            np.concatenate([p[0] for p in parts]),
+            np.concatenate([s * p[1] for s, p in zip(scale, parts)]),
+        )
 
     def _gap_entries(self, interface: Interface, x_in: float) -> tuple[np.ndarray, np.ndarray]:
         wp = self._layer_entries(interface.plate_layer, x_in, "w")
@@ -340,12 +374,17 @@ class SpecimenModel:
 
         On a beam where one exists, else (in the gap) the mean of the two plates.
         """
-        beams = [li for li in (0, 1) if self.dof[li][self._element_of(x_in)[0], 0] >= 0
-                 and self.dof[li][self._element_of(x_in)[0] + 1, 0] >= 0]
+        beams = [
+            li
+            for li in (0, 1)
+            if self.dof[li][self._element_of(x_in)[0], 0] >= 0
+            and self.dof[li][self._element_of(x_in)[0] + 1, 0] >= 0
+        ]
         if beams:
             return self._row(self._layer_entries(beams[0], x_in, "w"))
-        return 0.5 * (self._row(self._layer_entries(2, x_in, "w"))
-                      + self._row(self._layer_entries(3, x_in, "w")))
+        return 0.5 * (
+            self._row(self._layer_entries(2, x_in, "w")) + self._row(self._layer_entries(3, x_in, "w"))
+        )
 
     def slip_operator(self, interface: Interface, x_in: float) -> np.ndarray:
         """Row vector mapping the dof vector to the interface slip at x.
@@ -365,8 +404,7 @@ class SpecimenModel:
         return np.sqrt(lam) / (2.0 * np.pi), vec
 
 
-def default_interface_springs(geometry: SpecimenGeometry,
-                              spacing_in: float = 0.02) -> InterfaceSprings:
+def default_interface_springs(geometry: SpecimenGeometry, spacing_in: float = 0.02) -> InterfaceSprings:
     """Uniform clamped interface over the whole overlap, as point springs.
 
     Parameters
@@ -418,9 +456,13 @@ class FirstMode:
     centre_of_mass_in: float
 
 
-def first_mode(geometry: SpecimenGeometry | None = None, *, elements_per_inch: float = 8.0,
-               springs: InterfaceSprings | None = None,
-               higher_mode_cutoff_hz: float = 1100.0) -> FirstMode:
+def first_mode(
+    geometry: SpecimenGeometry | None = None,
+    *,
+    elements_per_inch: float = 8.0,
+    springs: InterfaceSprings | None = None,
+    higher_mode_cutoff_hz: float = 1100.0,
+) -> FirstMode:
     """Modal analysis of the free-free specimen; return mode 1 and the linear rest.
 
     Parameters
@@ -429,7 +471,7 @@ def first_mode(geometry: SpecimenGeometry | None = None, *, elements_per_inch: f
     elements_per_inch : float
         Mesh density.
     springs : InterfaceSprings, optional
-        Stuck contact patches (from :mod:`workflow.contact`); default uniform.
+        Stuck contact patches (from :mod:`workflow.models.contact`); default uniform.
     higher_mode_cutoff_hz : float
         Flexible modes above this are dropped (the acquisition's anti-alias
         filter removes them at 2560 samples/s).
@@ -455,13 +497,20 @@ def first_mode(geometry: SpecimenGeometry | None = None, *, elements_per_inch: f
         phi = -phi
     shape = line @ phi
     crossings = np.flatnonzero(np.sign(shape[:-1]) * np.sign(shape[1:]) < 0)
-    nodes = model.x_in[crossings] - shape[crossings] * (
-        model.x_in[crossings + 1] - model.x_in[crossings]) / (shape[crossings + 1] - shape[crossings])
-    slip = np.array([[model.slip_operator(itf, float(model.patch_x_in(itf, x))) @ phi
-                      for x in model.springs.x_rel_in] for itf in model.interfaces])
+    nodes = model.x_in[crossings] - shape[crossings] * (model.x_in[crossings + 1] - model.x_in[crossings]) / (
+        shape[crossings + 1] - shape[crossings]
+    )
+    slip = np.array(
+        [
+            [model.slip_operator(itf, float(model.patch_x_in(itf, x))) @ phi for x in model.springs.x_rel_in]
+            for itf in model.interfaces
+        ]
+    )
     higher = tuple(
         LinearMode(float(freqs[j]), float(acc_row @ vecs[:, j]), float(ham_row @ vecs[:, j]))
-        for j in flexible[1:] if freqs[j] <= higher_mode_cutoff_hz)
+        for j in flexible[1:]
+        if freqs[j] <= higher_mode_cutoff_hz
+    )
     # Rigid-body mass and pitch inertia: a rigid transverse translation and a
     # rigid rotation expressed in the layered dofs.
     translation = np.zeros(model.n_dofs)
@@ -478,24 +527,33 @@ def first_mode(geometry: SpecimenGeometry | None = None, *, elements_per_inch: f
     about_cm = rotation - x_cm * translation
     inertia = float(about_cm @ model.mass @ about_cm)
     return FirstMode(
-        frequency_hz=float(freqs[first]), x_in=model.x_in, shape_in=shape,
-        node_positions_in=nodes, accelerometer_participation=float(acc_row @ phi),
-        hammer_participation=float(ham_row @ phi), slip_per_xi=slip, higher_modes=higher,
-        total_mass_lbf_s2_in=mass, pitch_inertia_lbf_s2_in=inertia, centre_of_mass_in=x_cm)
+        frequency_hz=float(freqs[first]),
+        x_in=model.x_in,
+        shape_in=shape,
+        node_positions_in=nodes,
+        accelerometer_participation=float(acc_row @ phi),
+        hammer_participation=float(ham_row @ phi),
+        slip_per_xi=slip,
+        higher_modes=higher,
+        total_mass_lbf_s2_in=mass,
+        pitch_inertia_lbf_s2_in=inertia,
+        centre_of_mass_in=x_cm,
+    )
 
 
-def uniform_beam_first_frequency_hz(length_in: float, ei_lbf_in2: float,
-                                    mass_per_length_lbf_s2_in2: float) -> float:
+def uniform_beam_first_frequency_hz(
+    length_in: float, ei_lbf_in2: float, mass_per_length_lbf_s2_in2: float
+) -> float:
     """Closed-form first flexible frequency of a uniform free-free beam, Hz.
 
     ``f1 = (4.73004)^2 / (2 pi) * sqrt(EI / (m L^4))`` (22.373 = 4.73004^2).
     """
-    return 4.730040745**2 / (2 * np.pi) * np.sqrt(
-        ei_lbf_in2 / (mass_per_length_lbf_s2_in2 * length_in**4))
+    return 4.730040745**2 / (2 * np.pi) * np.sqrt(ei_lbf_in2 / (mass_per_length_lbf_s2_in2 * length_in**4))
 
 
-def uniform_beam_frequencies_hz(length_in: float, n_elements: int, n_modes: int = 3,
-                                geometry: SpecimenGeometry | None = None) -> np.ndarray:
+def uniform_beam_frequencies_hz(
+    length_in: float, n_elements: int, n_modes: int = 3, geometry: SpecimenGeometry | None = None
+) -> np.ndarray:
     """First flexible frequencies of a uniform free-free steel beam by this FE
     formulation (for checking the element matrices against closed forms), Hz."""
     geometry = geometry or SpecimenGeometry()
@@ -504,11 +562,14 @@ def uniform_beam_frequencies_hz(length_in: float, n_elements: int, n_modes: int 
     k = np.zeros((n, n))
     m = np.zeros((n, n))
     for el in range(n_elements):
-        kb, mb = _beam_element(STEEL_E_PSI * geometry.inertia_in4,
-                               STEEL_DENSITY_LBF_S2_IN4 * geometry.area_in2, x[el + 1] - x[el])
+        kb, mb = _beam_element(
+            STEEL_E_PSI * geometry.inertia_in4,
+            STEEL_DENSITY_LBF_S2_IN4 * geometry.area_in2,
+            x[el + 1] - x[el],
+        )
         idx = np.arange(2 * el, 2 * el + 4)
         k[np.ix_(idx, idx)] += kb
         m[np.ix_(idx, idx)] += mb
     lam = scipy.linalg.eigh(k, m, eigvals_only=True)
     freqs = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
-    return freqs[2:2 + n_modes]  # two rigid-body modes first
+    return freqs[2 : 2 + n_modes]  # two rigid-body modes first

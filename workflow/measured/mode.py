@@ -108,14 +108,10 @@ def h1_frf(
     forces = _as_runs(force_runs, "force_runs")
     responses = _as_runs(response_runs, "response_runs")
     if len(forces) != len(responses):
-        raise ValueError(
-            f"{len(forces)} force runs but {len(responses)} response runs; they must pair up"
-        )
+        raise ValueError(f"{len(forces)} force runs but {len(responses)} response runs; they must pair up")
     for index, (force, response) in enumerate(zip(forces, responses)):
         if force.size != response.size:
-            raise ValueError(
-                f"run {index}: force has {force.size} samples, response {response.size}"
-            )
+            raise ValueError(f"run {index}: force has {force.size} samples, response {response.size}")
     segment = _segment_length(forces, nperseg)
     g_ff = g_xx = g_fx = 0.0
     for force, response in zip(forces, responses):
@@ -166,9 +162,7 @@ def response_spectrum(
     return np.fft.rfftfreq(segment, 1.0 / fs_hz), total / len(responses)
 
 
-def find_mode_hz(
-    frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tuple[float, float]
-) -> float:
+def find_mode_hz(frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tuple[float, float]) -> float:
     """Frequency of the largest spectral peak inside a search range.
 
     Parameters

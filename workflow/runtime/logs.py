@@ -67,8 +67,11 @@ def setup_script_logging(log_path: str | Path | None, name: str) -> logging.Logg
     start_up_cpu_s = time.process_time()
 
     def log_cost() -> None:
-        logger.info(COST_LINE.format(start_up=start_up_cpu_s, work=time.process_time() - start_up_cpu_s,
-                                     peak_mb=peak_resident_mb()))
+        logger.info(
+            COST_LINE.format(
+                start_up=start_up_cpu_s, work=time.process_time() - start_up_cpu_s, peak_mb=peak_resident_mb()
+            )
+        )
 
     atexit.register(log_cost)
     return logger

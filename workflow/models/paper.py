@@ -54,14 +54,16 @@ def choose_modal_coordinate(
     Otherwise the modal coordinate is the sensor's displacement.
     """
     if mode_hz_by_configuration and all(areas_in2.get(name) is not None for name in mode_hz_by_configuration):
-        from workflow import specimen
+        from workflow.models import specimen
 
         first = specimen.first_mode()
         if all(
             abs(mode_hz / first.frequency_hz - 1) <= SPECIMEN_FREQUENCY_TOLERANCE
             for mode_hz in mode_hz_by_configuration.values()
         ):
-            return ModalCoordinate("specimen model", abs(float(first.accelerometer_participation)), float(first.frequency_hz))
+            return ModalCoordinate(
+                "specimen model", abs(float(first.accelerometer_participation)), float(first.frequency_hz)
+            )
     return ModalCoordinate("sensor", 1.0, None)
 
 
@@ -73,28 +75,39 @@ def run_start_velocities(segments: pd.DataFrame) -> np.ndarray:
 def averaged_start(model: str, segments: pd.DataFrame, response_quantity: str, seed: int) -> np.ndarray:
     """Search point of the time-domain fit from the averaged model's fit.
 
-    The averaged (describing-function) model of :mod:`workflow.describing` has the
+    The averaged (describing-function) model of :mod:`workflow.models.averaged` has the
     same parameters as the time-domain search (stuck-joint frequency, the joint's
     share of the stiffness, the velocity at which the joint slips, zeta0; LuGre's
     stiction ratio and Stribeck velocity) and fits in seconds, so its optimum is a
     good start for the expensive time-domain refinement.
     """
-    from workflow import describing, discovery
+    from workflow.discovery.diagnosis import diagnosis as discovery
+    from workflow.models import averaged as describing
 
     data = discovery.prepare_configuration(
         segments, str(segments["configuration"].iloc[0]), describing.RESPONSE_ORDER[response_quantity]
     )
     velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
     context = discovery.FitContext(float(np.quantile(velocity, 0.9)))
-    fit = discovery.fit_model(model, data, discovery.scatter_of(data), context,
-                              settings=discovery.FitSettings(seed=seed))
+    fit = discovery.fit_model(
+        model, data, discovery.scatter_of(data), context, settings=discovery.FitSettings(seed=seed)
+    )
     p = fit.params
-    point = [p["f_lin_hz"], np.log10(p["joint_stiffness_fraction"]),
-             np.log10(p["slip_velocity_in_s"]), np.log10(p["zeta0"])]
+    point = [
+        p["f_lin_hz"],
+        np.log10(p["joint_stiffness_fraction"]),
+        np.log10(p["slip_velocity_in_s"]),
+        np.log10(p["zeta0"]),
+    ]
     if model == "lugre":
         stribeck = np.log10(p["stribeck_velocity_in_s"])
-        point += [np.log10(max(p["stiction_ratio"], 1e-3)), stribeck, stribeck,
-                  p["micro_damping_ratio"] * p["zeta0"], 0.0]
+        point += [
+            np.log10(max(p["stiction_ratio"], 1e-3)),
+            stribeck,
+            stribeck,
+            p["micro_damping_ratio"] * p["zeta0"],
+            0.0,
+        ]
     return np.array(point)
 
 
@@ -119,7 +132,7 @@ def fit_configuration(
     Returns a JSON-ready document: per model its parameters, one-sigma
     uncertainties, fit-quality numbers and the simulated curves.
     """
-    from workflow.model_fit import FitContext, fit_friction_model
+    from workflow.models.fitting import FitContext, fit_friction_model
 
     context = FitContext(
         fs_hz=sample_rate_hz,
@@ -134,7 +147,11 @@ def fit_configuration(
         edge_time_constants=analysis["edge_time_constants"],
         steps_per_period=steps_per_period,
     )
-    document = {"modal_coordinate": coordinate.source, "response_per_modal_in": coordinate.response_per_modal, "models": {}}
+    document = {
+        "modal_coordinate": coordinate.source,
+        "response_per_modal_in": coordinate.response_per_modal,
+        "models": {},
+    }
     for offset, model in enumerate(models):
         result = fit_friction_model(
             model,
@@ -168,18 +185,31 @@ def fit_table(documents: dict[str, dict]) -> pd.DataFrame:
     for configuration, document in documents.items():
         for model, fit in document["models"].items():
             for name, value in fit["params"].items():
-                rows.append({
-                    "configuration": configuration,
-                    "model": model,
-                    "parameter": name,
-                    "value": value,
-                    "std": fit["uncertainties"].get(name, np.nan),
-                    "rms_log_zeta": fit["rms_log_zeta"],
-                    "rms_rel_frequency": fit["rms_rel_frequency"],
-                    "modal_coordinate": document["modal_coordinate"],
-                })
-    return pd.DataFrame(rows, columns=["configuration", "model", "parameter", "value", "std",
-                                       "rms_log_zeta", "rms_rel_frequency", "modal_coordinate"])
+                rows.append(
+                    {
+                        "configuration": configuration,
+                        "model": model,
+                        "parameter": name,
+                        "value": value,
+                        "std": fit["uncertainties"].get(name, np.nan),
+                        "rms_log_zeta": fit["rms_log_zeta"],
+                        "rms_rel_frequency": fit["rms_rel_frequency"],
+                        "modal_coordinate": document["modal_coordinate"],
+                    }
+                )
+    return pd.DataFrame(
+        rows,
+        columns=[
+            "configuration",
+            "model",
+            "parameter",
+            "value",
+            "std",
+            "rms_log_zeta",
+            "rms_rel_frequency",
+            "modal_coordinate",
+        ],
+    )
 
 
 def model_curve_frames(document: dict) -> dict[str, pd.DataFrame]:
@@ -187,10 +217,12 @@ def model_curve_frames(document: dict) -> dict[str, pd.DataFrame]:
     frames = {}
     for model, fit in document["models"].items():
         curves = fit["curves"]
-        frame = pd.DataFrame({
-            "velocity_amplitude_in_s": curves["velocity_amplitude_in_s"],
-            "zeta": curves["zeta"],
-            "frequency_hz": curves["frequency_hz"],
-        }).sort_values("velocity_amplitude_in_s")
+        frame = pd.DataFrame(
+            {
+                "velocity_amplitude_in_s": curves["velocity_amplitude_in_s"],
+                "zeta": curves["zeta"],
+                "frequency_hz": curves["frequency_hz"],
+            }
+        ).sort_values("velocity_amplitude_in_s")
         frames[model] = frame
     return frames

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.special
 
-from workflow import specimen
+from workflow.models import specimen
 
 # ----------------------------------------------------------------- Jenkins
 
@@ -97,8 +97,7 @@ def dahl_dissipation_per_cycle(amplitude, sigma, coulomb_force):
         Limiting Coulomb force ``Fc``.
     """
     a = np.abs(np.asarray(amplitude, dtype=float))
-    return 4.0 * coulomb_force * a - 4.0 * coulomb_force**2 / sigma * np.tanh(
-        sigma * a / coulomb_force)
+    return 4.0 * coulomb_force * a - 4.0 * coulomb_force**2 / sigma * np.tanh(sigma * a / coulomb_force)
 
 
 def dahl_secant_stiffness(amplitude, sigma, coulomb_force):
@@ -125,8 +124,7 @@ def dahl_force_update(force, displacement_increment, sigma, coulomb_force):
     """
     direction = np.sign(displacement_increment)
     target = direction * coulomb_force
-    return target + (force - target) * np.exp(
-        -sigma * np.abs(displacement_increment) / coulomb_force)
+    return target + (force - target) * np.exp(-sigma * np.abs(displacement_increment) / coulomb_force)
 
 
 # -------------------------------------------------------- bolted interface
@@ -216,8 +214,10 @@ def contact_patches(bearing_area_in2: float, params: JointParameters | None = No
     outside_hole = r >= params.hole_radius_in
     available = outside_hole.sum() * cell_area
     if not 0 < bearing_area_in2 <= available * (1 + 1e-9):
-        raise ValueError(f"bearing area {bearing_area_in2} in^2 must be positive and fit in "
-                         f"the overlap ({available:.3f} in^2 outside the bolt hole)")
+        raise ValueError(
+            f"bearing area {bearing_area_in2} in^2 must be positive and fit in "
+            f"the overlap ({available:.3f} in^2 outside the bolt hole)"
+        )
     candidates = np.flatnonzero(outside_hole)
     order = candidates[np.argsort(r[candidates], kind="stable")]
     n_cells = max(1, int(round(bearing_area_in2 / cell_area)))
@@ -225,12 +225,18 @@ def contact_patches(bearing_area_in2: float, params: JointParameters | None = No
     area = np.full(chosen.size, bearing_area_in2 / chosen.size)
     weight = np.exp(-(((r[chosen] - params.hole_radius_in) / params.pressure_decay_length_in) ** 2))
     pressure = params.preload_lbf * weight / np.sum(weight * area)
-    k_area = params.contact_stiffness_lbf_in3 * (
-        pressure / params.reference_pressure_psi) ** params.stiffness_pressure_exponent
+    k_area = (
+        params.contact_stiffness_lbf_in3
+        * (pressure / params.reference_pressure_psi) ** params.stiffness_pressure_exponent
+    )
     return ContactPatches(
-        x_rel_in=xx.ravel()[chosen], y_in=yy.ravel()[chosen], area_in2=area,
-        pressure_psi=pressure, stiffness_lbf_in=k_area * area,
-        slip_force_lbf=params.friction_coefficient * pressure * area)
+        x_rel_in=xx.ravel()[chosen],
+        y_in=yy.ravel()[chosen],
+        area_in2=area,
+        pressure_psi=pressure,
+        stiffness_lbf_in=k_area * area,
+        slip_force_lbf=params.friction_coefficient * pressure * area,
+    )
 
 
 def strip_springs(patches: ContactPatches) -> tuple[specimen.InterfaceSprings, np.ndarray]:
@@ -242,8 +248,7 @@ def strip_springs(patches: ContactPatches) -> tuple[specimen.InterfaceSprings, n
     """
     strips, index = np.unique(np.round(patches.x_rel_in, 9), return_inverse=True)
     k_t = np.bincount(index, weights=patches.stiffness_lbf_in)
-    return specimen.InterfaceSprings(
-        strips, k_t, k_t / specimen.MINDLIN_TANGENTIAL_TO_NORMAL), index
+    return specimen.InterfaceSprings(strips, k_t, k_t / specimen.MINDLIN_TANGENTIAL_TO_NORMAL), index
 
 
 @dataclass(frozen=True)
@@ -261,14 +266,14 @@ class JointModes:
         return 2 * np.pi * self.mode.frequency_hz
 
 
-def joint_first_mode(bearing_area_in2: float, params: JointParameters | None = None,
-                     elements_per_inch: float = 8.0) -> JointModes:
+def joint_first_mode(
+    bearing_area_in2: float, params: JointParameters | None = None, elements_per_inch: float = 8.0
+) -> JointModes:
     """First mode of the specimen with this configuration's stuck contact patches."""
     params = params or JointParameters()
     patches = contact_patches(bearing_area_in2, params)
     springs, index = strip_springs(patches)
-    mode = specimen.first_mode(params.geometry, elements_per_inch=elements_per_inch,
-                               springs=springs)
+    mode = specimen.first_mode(params.geometry, elements_per_inch=elements_per_inch, springs=springs)
     return JointModes(patches, mode, mode.slip_per_xi[:, index])
 
 
@@ -302,13 +307,11 @@ def patch_describing_function(modal_amplitude, slip_per_xi, stiffness_lbf_in, sl
         active = onset < amp  # stuck patches contribute nothing to either
         sa = s[active] * amp
         dissipation[i] = jenkins_dissipation_per_cycle(sa, k[active], fs[active]).sum()
-        loss[i] = np.sum(s[active] ** 2 * (k[active] - jenkins_secant_stiffness(
-            sa, k[active], fs[active])))
+        loss[i] = np.sum(s[active] ** 2 * (k[active] - jenkins_secant_stiffness(sa, k[active], fs[active])))
     return dissipation, loss
 
 
-def equivalent_damping(modal_amplitude, omega0_rad_s, zeta0, dissipation_in_lbf,
-                       modal_stiffness_loss):
+def equivalent_damping(modal_amplitude, omega0_rad_s, zeta0, dissipation_in_lbf, modal_stiffness_loss):
     """Equivalent damping ratio and natural frequency of the nonlinear mode.
 
     The first-harmonic balance of a mass-normalised mode gives
@@ -325,6 +328,5 @@ def equivalent_damping(modal_amplitude, omega0_rad_s, zeta0, dissipation_in_lbf,
     a = np.asarray(modal_amplitude, dtype=float)
     omega2 = omega0_rad_s**2 - np.asarray(modal_stiffness_loss, dtype=float)
     omega = np.sqrt(omega2)
-    zeta = zeta0 * omega0_rad_s / omega + np.asarray(dissipation_in_lbf) / (
-        2 * np.pi * omega2 * a**2)
+    zeta = zeta0 * omega0_rad_s / omega + np.asarray(dissipation_in_lbf) / (2 * np.pi * omega2 * a**2)
     return zeta, omega
