@@ -416,56 +416,25 @@ RUN_OFFSET_FLOOR = 0.05
 """Smallest ``1 + delta_zeta0 / zeta_model`` kept when a run's linear-damping offset is
 applied (a run cannot have negative damping)."""
 
-SLIP_SPREAD_PRIOR = 0.1
-"""Prior standard deviation of a run's relative slip-force offset (``delta_ln_slip``).
-Re-tightening and re-hanging change a joint's slip force by a few percent between runs;
-the prior keeps the offset of a run that never slips (its curves flat in amplitude, so
-the data cannot say) at the shared value, and makes a model that explains differences
-between runs with its own parameters (a drift) preferred to free offsets."""
-
-
-@dataclass
-class RunOffsets:
-    """Each run's own beam and joint, relative to the physics the runs share.
-
-    Attributes
-    ----------
-    frequency : ndarray, shape (..., n_runs)
-        Relative natural-frequency offset ``delta_f``: the run's ``f_lin (1 + delta_f)``.
-    zeta0 : ndarray, shape (..., n_runs)
-        Linear-damping offset (damping ratio): the run's ``zeta0 + delta_zeta0``.
-    ln_slip : ndarray, shape (..., n_runs)
-        Relative slip-force offset: the run's slip velocity ``v_s (1 + delta_ln_slip)``.
-    """
-
-    frequency: np.ndarray
-    zeta0: np.ndarray
-    ln_slip: np.ndarray
-
 
 def run_offsets(
     rel_f: np.ndarray,
     ln_zeta: np.ndarray,
     zeta_model: np.ndarray,
-    zeta_slope: np.ndarray,
-    freq_slope: np.ndarray,
     s_rel_f: np.ndarray,
     s_ln_zeta: np.ndarray,
     run_index: np.ndarray,
     n_runs: int,
     use: np.ndarray | None = None,
-) -> RunOffsets:
-    """Each run's own natural frequency, linear damping and slip force, given shared physics.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's own small-amplitude frequency and linear damping, given shared physics.
 
-    Runs of one configuration differ (re-hung, re-struck, a degree warmer, re-tightened):
-    each has its own natural frequency ``f_lin (1 + delta_f)``, linear damping
-    ``zeta0 + delta_zeta0`` and slip force, on top of the joint law they share. To first
-    order the three enter the shared model's residuals linearly: ``delta_f`` shifts
-    ``f / f_model - 1``; ``delta_zeta0`` adds ``delta_zeta0 / zeta_model`` to
-    ``ln zeta``; a slip force larger by ``delta_ln_slip`` moves the joint's curves to
-    larger amplitudes, ``-delta_ln_slip * d ln(curve) / d ln V``. Every run's offsets are
-    the weighted least-squares solution of that linear model (weights ``1 / s^2``), with
-    the prior :data:`SLIP_SPREAD_PRIOR` on the slip offset.
+    Runs of one configuration differ (re-hung, re-struck, a degree warmer): each has its
+    own natural frequency, ``f_lin (1 + delta_f)``, and linear damping,
+    ``zeta0 + delta_zeta0``, on top of the joint physics they share. Both enter the
+    residuals of the shared model almost linearly (``delta_f`` multiplies the model's
+    frequency exactly; ``delta_zeta0`` adds ``delta_zeta0 / zeta_model`` to
+    ``ln zeta``), so the weighted least-squares offsets of every run have a closed form.
 
     Parameters
     ----------
@@ -473,10 +442,8 @@ def run_offsets(
         Residuals of the shared model: ``f / f_model - 1`` and ``ln zeta - ln zeta_model``.
     zeta_model : ndarray, shape (..., n)
         The shared model's damping ratio at each segment.
-    zeta_slope, freq_slope : ndarray, shape (..., n)
-        The shared model's ``d ln zeta / d ln V`` and ``d ln f / d ln V``.
     s_rel_f, s_ln_zeta : ndarray, shape (n,)
-        Standard uncertainties.
+        Standard uncertainties (the fit weights are their inverse squares).
     run_index : ndarray of int, shape (n,)
     n_runs : int
     use : ndarray of bool, shape (n,), optional
@@ -484,78 +451,49 @@ def run_offsets(
 
     Returns
     -------
-    RunOffsets
-        Zero for a run with no segment in ``use``.
+    delta_f, delta_zeta0 : ndarray, shape (..., n_runs)
+        Relative frequency offset and linear-damping offset (damping ratio) of each run;
+        0 for a run with no segment in ``use``.
     """
     use = np.ones(run_index.size, dtype=bool) if use is None else use
     member = ((run_index[:, None] == np.arange(n_runs)[None, :]) & use[:, None]).astype(float)
     w_f = 1.0 / s_rel_f**2
-    w_z = 1.0 / s_ln_zeta**2
+    count_f = w_f @ member
+    delta_f = ((rel_f * w_f) @ member) / np.maximum(count_f, 1e-300)
     g = 1.0 / np.maximum(zeta_model, 1e-12)
-    b_f = -np.nan_to_num(freq_slope)
-    b_z = -np.nan_to_num(zeta_slope)
-    shape = np.broadcast_shapes(rel_f.shape, ln_zeta.shape, g.shape)
-    ones = np.ones(shape)
-    total = lambda x: (x * ones) @ member  # noqa: E731  per-run sums, shape (..., n_runs)
-    a_ff = total(w_f)
-    a_zz = total(w_z * g * g)
-    a_fs = total(w_f * b_f)
-    a_zs = total(w_z * g * b_z)
-    a_ss = total(w_f * b_f * b_f + w_z * b_z * b_z) + 1.0 / SLIP_SPREAD_PRIOR**2
-    normal = np.stack(
-        [
-            np.stack([a_ff, np.zeros_like(a_ff), a_fs], axis=-1),
-            np.stack([np.zeros_like(a_ff), a_zz, a_zs], axis=-1),
-            np.stack([a_fs, a_zs, a_ss], axis=-1),
-        ],
-        axis=-2,
-    )
-    rhs = np.stack(
-        [total(w_f * rel_f), total(w_z * g * ln_zeta), total(w_f * b_f * rel_f + w_z * b_z * ln_zeta)],
-        axis=-1,
-    )
-    empty = a_ff <= 0
-    normal = normal + np.where(empty[..., None, None], np.eye(3), 0.0)
-    solution = np.linalg.solve(normal, rhs[..., None])[..., 0]
-    solution = np.where(empty[..., None], 0.0, solution)
-    return RunOffsets(solution[..., 0], solution[..., 1], solution[..., 2])
+    w_z = 1.0 / s_ln_zeta**2
+    delta_z = ((ln_zeta * g * w_z) @ member) / np.maximum((g * g * w_z) @ member, 1e-300)
+    return delta_f, delta_z
 
 
 def apply_run_offsets(
     rel_f: np.ndarray,
     ln_zeta: np.ndarray,
     zeta_model: np.ndarray,
-    zeta_slope: np.ndarray,
-    freq_slope: np.ndarray,
-    offsets: RunOffsets,
+    delta_f: np.ndarray,
+    delta_zeta0: np.ndarray,
     run_index: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Residuals of the shared model with each run's offsets (:func:`run_offsets`) applied."""
-    df = np.take(offsets.frequency, run_index, axis=-1)
-    dz = np.take(offsets.zeta0, run_index, axis=-1)
-    ds = np.take(offsets.ln_slip, run_index, axis=-1)
-    rel = (1.0 + rel_f) / (1.0 + df) - 1.0 + np.nan_to_num(freq_slope) * ds
-    ln = (
-        ln_zeta
-        - np.log(np.maximum(1.0 + dz / np.maximum(zeta_model, 1e-12), RUN_OFFSET_FLOOR))
-        + np.nan_to_num(zeta_slope) * ds
-    )
+    df = np.take(delta_f, run_index, axis=-1)
+    dz = np.take(delta_zeta0, run_index, axis=-1)
+    rel = (1.0 + rel_f) / (1.0 + df) - 1.0
+    ln = ln_zeta - np.log(np.maximum(1.0 + dz / np.maximum(zeta_model, 1e-12), RUN_OFFSET_FLOOR))
     return rel, ln
 
 
 def centred_run_offsets(
-    rel_f, ln_zeta, zeta_model, zeta_slope, freq_slope, s_rel_f, s_ln_zeta, run_index, n_runs, use=None
-) -> RunOffsets:
+    rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, run_index, n_runs, use=None
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`run_offsets` minus their mean over the runs present, so that the shared
-    ``f_lin``, ``zeta0`` and slip velocity are the runs' mean and stay identifiable."""
+    ``f_lin`` and ``zeta0`` are the runs' mean and stay identifiable."""
     use = np.ones(run_index.size, dtype=bool) if use is None else use
     present = np.zeros(n_runs, dtype=bool)
     present[np.unique(run_index[use])] = True
-    raw = run_offsets(
-        rel_f, ln_zeta, zeta_model, zeta_slope, freq_slope, s_rel_f, s_ln_zeta, run_index, n_runs, use
-    )
-    centre = lambda x: np.where(present, x - np.mean(x[..., present], axis=-1, keepdims=True), 0.0)  # noqa: E731
-    return RunOffsets(centre(raw.frequency), centre(raw.zeta0), centre(raw.ln_slip))
+    delta_f, delta_z = run_offsets(rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, run_index, n_runs, use)
+    delta_f = np.where(present, delta_f - np.mean(delta_f[..., present], axis=-1, keepdims=True), 0.0)
+    delta_z = np.where(present, delta_z - np.mean(delta_z[..., present], axis=-1, keepdims=True), 0.0)
+    return delta_f, delta_z
 
 
 CALIBRATION_FRACTION = 0.25
@@ -622,29 +560,16 @@ class _Problem:
 
     def residuals(self, unit: np.ndarray) -> np.ndarray:
         """Normalised residuals, shape (P, 2 n) for unit-box points (P, k)."""
-        zeta, freq, zeta_slope, freq_slope = self.grid.with_slopes(self.model, self.physical(unit))
+        zeta, freq = self.grid(self.model, self.physical(unit))
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             ln_res = self.ln_zeta - np.log(np.maximum(zeta, 1e-12))
             f_res = self.freq / freq - 1.0
-            parts = []
             if self.per_run:
                 offsets = centred_run_offsets(
-                    f_res,
-                    ln_res,
-                    zeta,
-                    zeta_slope,
-                    freq_slope,
-                    self.s_f,
-                    self.s_z,
-                    self.run_index,
-                    self.n_runs,
+                    f_res, ln_res, zeta, self.s_f, self.s_z, self.run_index, self.n_runs
                 )
-                f_res, ln_res = apply_run_offsets(
-                    f_res, ln_res, zeta, zeta_slope, freq_slope, offsets, self.run_index
-                )
-                # the slip offsets' prior, as residuals: free offsets are not free of cost
-                parts = [offsets.ln_slip / SLIP_SPREAD_PRIOR]
-            r = np.concatenate([ln_res / self.s_z, f_res / self.s_f, *parts], axis=-1)
+                f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, *offsets, self.run_index)
+            r = np.concatenate([ln_res / self.s_z, f_res / self.s_f], axis=-1)
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, unit: np.ndarray, step: float = 1e-5) -> np.ndarray:
@@ -756,48 +681,33 @@ def model_residuals(
 ) -> dict[str, np.ndarray]:
     """Raw and normalised residuals of a fit on all segments of a configuration.
 
-    With two runs or more, every run gets its own frequency, linear-damping and slip
-    offset (:func:`run_offsets`) estimated from its segments in ``offsets_from`` (default: all
+    With two runs or more, every run gets its own frequency and linear-damping offset
+    (:func:`run_offsets`) estimated from its segments in ``offsets_from`` (default: all
     of them, centred over the runs as in the fit); a run with no segment there keeps
     the shared model.
 
     Returns ``ln_zeta`` (``ln zeta - ln zeta_model``), ``rel_f`` (``f / f_model - 1``),
     their normalised versions ``z_norm``, ``f_norm`` (total uncertainty) and
     ``z_noise``, ``f_noise`` (scatter alone), the model curves with each run's offsets
-    (``zeta_model``, ``f_model``), the offsets ``delta_f``, ``delta_zeta0``,
-    ``delta_ln_slip`` per run (:class:`RunOffsets`), and
+    (``zeta_model``, ``f_model``), the offsets ``delta_f``, ``delta_zeta0`` per run, and
     ``ln_zeta_shared``, the damping residual of the shared model before the offsets.
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
-    zeta, freq, zeta_slope, freq_slope = problem.grid.with_slopes(
-        model, {k: np.array(v) for k, v in fit.params.items()}
-    )
+    zeta, freq = problem.grid(model, {k: np.array(v) for k, v in fit.params.items()})
     ln_res = np.log(data.zeta) - np.log(np.maximum(zeta, 1e-12))
     f_res = data.frequency_hz / freq - 1.0
     n_runs = max(data.n_runs, 1)
-    offsets = RunOffsets(np.zeros(n_runs), np.zeros(n_runs), np.zeros(n_runs))
+    delta_f, delta_z = np.zeros(n_runs), np.zeros(n_runs)
     ln_shared = ln_res
     if data.n_runs >= 2:
-        estimate = run_offsets if offsets_from is not None else centred_run_offsets
-        offsets = estimate(
-            f_res,
-            ln_res,
-            zeta,
-            zeta_slope,
-            freq_slope,
-            scatter.rel_f,
-            scatter.ln_zeta,
-            data.run_index,
-            n_runs,
-            offsets_from,
+        offsets = run_offsets if offsets_from is not None else centred_run_offsets
+        delta_f, delta_z = offsets(
+            f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, data.run_index, n_runs, offsets_from
         )
-        f_new, ln_new = apply_run_offsets(
-            f_res, ln_res, zeta, zeta_slope, freq_slope, offsets, data.run_index
-        )
-        zeta = zeta * np.exp(ln_res - ln_new)
-        freq = freq * (1.0 + f_res) / (1.0 + f_new)
-        f_res, ln_res = f_new, ln_new
+        f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, delta_f, delta_z, data.run_index)
+        zeta = zeta * np.maximum(1.0 + delta_z[data.run_index] / np.maximum(zeta, 1e-12), RUN_OFFSET_FLOOR)
+        freq = freq * (1.0 + delta_f[data.run_index])
     return {
         "ln_zeta": ln_res,
         "rel_f": f_res,
@@ -807,9 +717,8 @@ def model_residuals(
         "f_noise": f_res / scatter.noise_rel_f,
         "zeta_model": zeta,
         "f_model": freq,
-        "delta_f": offsets.frequency,
-        "delta_zeta0": offsets.zeta0,
-        "delta_ln_slip": offsets.ln_slip,
+        "delta_f": delta_f,
+        "delta_zeta0": delta_z,
         "ln_zeta_shared": ln_shared,
     }
 
@@ -1459,7 +1368,7 @@ def evaluate_decision(
         }
         residuals[m] = res
         in_sample = _weighted_rms(0.5 * (res["z_noise"] ** 2 + res["f_noise"] ** 2), weights) ** 2
-        offsets = 3 * (n_runs_view - 1) if n_runs_view >= 2 else 0  # frequency, zeta0, slip
+        offsets = 2 * (n_runs_view - 1) if n_runs_view >= 2 else 0  # frequency and zeta0 per run
         bic[m] = information_criterion(in_sample, ev.n_params + offsets, n_eff)
     base = min((m for m in BASELINE_MODELS if m in evidence), key=lambda m: errors[m]["error"])
     bins = binned_discrepancy(view, residuals[base])
@@ -1638,7 +1547,6 @@ def diagnose_configuration(
         run_spread = {
             "relative_frequency_std": float(np.std(residuals[base]["delta_f"], ddof=1)),
             "zeta0_std": float(np.std(residuals[base]["delta_zeta0"], ddof=1)),
-            "relative_slip_std": float(np.std(residuals[base]["delta_ln_slip"], ddof=1)),
         }
     document = {
         "baseline": {

@@ -738,14 +738,6 @@ class CurveGrid:
         self, model: AveragedModel | str, params: Mapping[str, ArrayLike]
     ) -> tuple[np.ndarray, np.ndarray]:
         """Model ``zeta`` and ``frequency_hz`` at the segments, shape ``B + (n,)``."""
-        zeta, freq, _, _ = self.with_slopes(model, params)
-        return zeta, freq
-
-    def with_slopes(
-        self, model: AveragedModel | str, params: Mapping[str, ArrayLike]
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``zeta``, ``frequency_hz`` and their log-log slopes ``d ln zeta / d ln V``,
-        ``d ln f / d ln V`` at the segments (the slope of the grid interval each falls in)."""
         model = MODELS[model] if isinstance(model, str) else model
         zeta_g, f_g = model_curves_on_grid(
             model,
@@ -754,21 +746,16 @@ class CurveGrid:
             run_position=self.run_positions if model.uses_runs else None,
             response_order=self.response_order,
         )
-        zeta, zeta_slope = self._interp(zeta_g, model.uses_runs)
-        freq, freq_slope = self._interp(f_g, model.uses_runs)
-        return zeta, freq, zeta_slope, freq_slope
+        return self._interp(zeta_g, model.uses_runs), self._interp(f_g, model.uses_runs)
 
-    def _interp(self, values: np.ndarray, per_run: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _interp(self, values: np.ndarray, per_run: bool) -> np.ndarray:
         if per_run:
             a = values[..., self.run_index, self._lo]
             b = values[..., self.run_index, self._lo + 1]
         else:
             a = values[..., self._lo]
             b = values[..., self._lo + 1]
-        step = np.log(self.grid[1] / self.grid[0])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.log(np.maximum(b, 1e-300) / np.maximum(a, 1e-300)) / step
-        return a + (b - a) * self._w, slope
+        return a + (b - a) * self._w
 
 
 def model_curves(
