@@ -92,6 +92,7 @@ rule collect_tables:
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
+        excluded_paths=[entry.status() for entry in EXCLUDED_PATHS],
     script:
         "../scripts/collect_tables.py"
 
