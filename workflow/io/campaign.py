@@ -147,6 +147,8 @@ def _relative_glob(files: str) -> str:
         raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
     if ".." in re.split(r"[/\\]", files):
         raise ValueError(f"files glob {files!r} leaves the campaign folder ('..' is not allowed)")
+    if not Path(files).parts:
+        raise ValueError(f"files glob {files!r} names no file")
     return files
 
 
@@ -599,9 +601,11 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                 (p for p in root.glob(spec.files) if not p.name.startswith(".")),
                 key=lambda p: (p.name, p.as_posix()),
             )
-        except (ValueError, NotImplementedError) as error:
+        except (ValueError, NotImplementedError, IndexError) as error:
             raise CampaignFormatError(
-                root / CAMPAIGN_FILE, None, f"configurations.{configuration}.files: {error}"
+                root / CAMPAIGN_FILE,
+                None,
+                f"configurations.{configuration}.files: {spec.files!r} is not a usable glob ({error})",
             ) from None
         if not matches:
             excluded.append(
