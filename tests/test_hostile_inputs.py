@@ -470,8 +470,10 @@ def test_strict_workflow_stops_at_an_empty_glob_before_any_job(lab_campaign, tmp
     shutil.copytree(lab_campaign / "no_washer", campaign / "no_washer")
     result = snakemake(tmp_path, "-n", "all", "--config", f"campaign={campaign}", "strict=true")
     assert result.returncode != 0
-    assert "configurations.spare.files: the glob 'spare/*.txt' matches no file" in result.stderr
-    assert "Job stats" not in result.stdout + result.stderr
+    output = result.stdout + result.stderr
+    assert "strict mode: campaign paths not read" in output
+    assert "configurations.spare.files: the glob 'spare/*.txt' matches no file" in output
+    assert "Job stats" not in output
 
 
 @pytest.mark.parametrize(
