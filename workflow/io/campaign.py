@@ -770,6 +770,39 @@ def _parse_block_careful(
     return values
 
 
+FAST_CHUNK_CHARS: int = 1 << 20
+"""Characters of the numeric block handed to the C reader at a time: the reader's working
+copy of the text (4 bytes a character) then stays small however long the record."""
+
+
+def _parse_text_fast(
+    text: str, start: int, end: int, delimiter: str, n_rows: int, n_columns: int
+) -> NDArray[np.float64] | None:
+    """:func:`_parse_block_fast` of ``text[start:end]``, in chunks of whole rows (no copy
+    of the whole block); None whenever the careful pass must decide."""
+    if _FOREIGN[delimiter].search(text, start, end):
+        return None
+    values = np.empty((n_rows, n_columns))
+    row, position = 0, start
+    while position <= end:
+        stop = end
+        if position + FAST_CHUNK_CHARS < end:
+            stop = text.rfind("\n", position, position + FAST_CHUNK_CHARS)
+            if stop < 0:
+                stop = text.find("\n", position + FAST_CHUNK_CHARS, end)
+                stop = end if stop < 0 else stop
+        chunk = text[position:stop]
+        chunk_rows = chunk.count("\n") + 1
+        if row + chunk_rows > n_rows:
+            return None
+        parsed = _parse_block_fast(chunk, delimiter, chunk_rows, n_columns)
+        if parsed is None:
+            return None
+        values[row : row + chunk_rows] = parsed
+        row, position = row + chunk_rows, stop + 1
+    return values if row == n_rows else None
+
+
 def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -> NDArray[np.float64] | None:
     """C-parser read of the numeric block; None whenever the careful pass must decide."""
     if _FOREIGN[delimiter].search(block):
@@ -1069,6 +1102,7 @@ def _read_text(path: Path, shown: str) -> str:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         text = raw.decode("cp1252", errors="replace")
+    del raw  # a long record: hold one copy of its text at a time
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
     return text
@@ -1372,20 +1406,29 @@ def read_run(
             "after the header, one sample per line)",
         )
 
-    block = text[offset:].rstrip()
-    rows_head = block.split("\n", HEAD_ROWS)[:HEAD_ROWS]
-    rows_head = [row for row in rows_head if row.strip()]
+    # The numbers are text[offset:end]; no copy of them is made (a long record's text
+    # is the largest thing a run-analysis job holds).
+    end = len(text)
+    while end > offset and text[end - 1].isspace():
+        end -= 1
+    head_end = offset
+    for _ in range(HEAD_ROWS):
+        head_end = text.find("\n", head_end + 1, end)
+        if head_end < 0:
+            head_end = end
+            break
+    rows_head = [row for row in text[offset:head_end].split("\n") if row.strip()]
     delimiter = _majority([_line_delimiter(row) for row in rows_head], _SPACES)
     n_columns = _majority([len(_split_row(row, delimiter)) for row in rows_head], 1)
-    n_rows = block.count("\n") + 1
+    n_rows = text.count("\n", offset, end) + 1
 
     header_values = _header_values(header, shown)
     columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
     time_factor_s, force_factor_lbf = _column_unit_factors(columns, campaign, shown)
 
-    values = _parse_block_fast(block, delimiter, n_rows, n_columns)
+    values = _parse_text_fast(text, offset, end, delimiter, n_rows, n_columns)
     if values is None:
-        values = _parse_block_careful(block.split("\n"), first_line, delimiter, n_columns, shown)
+        values = _parse_block_careful(text[offset:end].split("\n"), first_line, delimiter, n_columns, shown)
     last_data_line = first_line + n_rows - 1
     if n_rows < MIN_SAMPLES:
         raise CampaignFormatError(
@@ -1404,7 +1447,7 @@ def read_run(
     time_s = None
     if "time" in columns.roles:
         time_s = values[:, columns.roles["time"]] * time_factor_s
-        first_row, last_row = rows_head[0], block.rsplit("\n", 1)[-1]
+        first_row, last_row = rows_head[0], text[max(text.rfind("\n", offset, end), offset - 1) + 1 : end]
         resolution_s = time_factor_s * _print_resolution(
             [_split_row(row, delimiter)[columns.roles["time"]] for row in (first_row, last_row)]
         )
