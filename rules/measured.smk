@@ -58,7 +58,7 @@ rule analyse_runs:
         "results/benchmarks/analyse_runs/{configuration}/{group}.tsv"
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=1500,
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
