@@ -45,6 +45,7 @@ def read_system_run(full_path: Path, relative: str, shown: str, campaign: Campai
         sample interval, disagreement with campaign.yaml; the message names the file, the
         record or variable and the problem.
     """
+    from workflow.io.campaign import CampaignFormatError
     from workflow.io.readers.channels import assemble_record
 
     suffix = full_path.suffix.lower()
@@ -56,5 +57,7 @@ def read_system_run(full_path: Path, relative: str, shown: str, campaign: Campai
         from workflow.io.readers.tdms import read_tdms_channels as read_channels
     else:
         raise ValueError(f"{shown}: no system-format reader for extension {suffix!r}")
+    if full_path.stat().st_size == 0:
+        raise CampaignFormatError(shown, None, "the file is empty")
     file_channels = read_channels(full_path, shown)
     return assemble_record(file_channels, relative, shown, campaign)

@@ -7,12 +7,24 @@ waveform properties ``wf_increment`` (s), ``wf_start_offset`` (s) and ``unit_str
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels
+
+
+class _WarningRecords(logging.Handler):
+    """Keeps the messages of the warnings logged while a file is read."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(record.getMessage())
 
 
 def read_tdms_channels(path: Path, shown: str) -> FileChannels:
@@ -23,22 +35,23 @@ def read_tdms_channels(path: Path, shown: str) -> FileChannels:
     CampaignFormatError
         Not a readable TDMS file (truncated, corrupt) or no channels of numbers.
     """
-    import warnings
-
     from nptdms import TdmsFile
 
+    # npTDMS reads what it can of a truncated last segment and only logs a warning.
+    warnings = _WarningRecords()
+    logger = logging.getLogger("nptdms")
+    logger.addHandler(warnings)
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            tdms = TdmsFile.read(path)
-            groups = [(group, group.channels()) for group in tdms.groups()]
-            arrays = [[channel[:] for channel in group_channels] for _, group_channels in groups]
+        tdms = TdmsFile.read(path)
+        groups = [(group, group.channels()) for group in tdms.groups()]
+        arrays = [[channel[:] for channel in group_channels] for _, group_channels in groups]
     except Exception as error:  # npTDMS raises ValueError, EOFError, struct.error, ...
         raise CampaignFormatError(
             shown, None, f"cannot read as a TDMS file ({type(error).__name__}: {error})"
         ) from None
-    # npTDMS reads what it can of a truncated final segment and only warns.
-    truncated = [str(w.message) for w in caught if "truncat" in str(w.message).lower()]
+    finally:
+        logger.removeHandler(warnings)
+    truncated = [message for message in warnings.messages if "less data than expected" in message]
     if truncated:
         raise CampaignFormatError(shown, None, f"truncated TDMS file: {truncated[0]}")
     channels = []

@@ -9,6 +9,7 @@ increment and minimum. Other datasets (geometry, units, FRFs) are skipped.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -24,9 +25,33 @@ _ROLE_OF_DATA_TYPE = {8: "response", 11: "response", 12: "response", 9: "force",
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
 
 
+_DELIMITER_LINE = re.compile(rb"^    -1[ \t]*\r?$", re.MULTILINE)
+
+
+def _unclosed_dataset_line(path: Path) -> int | None:
+    """1-based line of a dataset whose closing ``-1`` line is missing (a cut-off file), or None.
+
+    Datasets are enclosed in pairs of ``    -1`` lines; pyuff silently skips an unclosed
+    last one, which would turn a truncated file into a file with a channel missing.
+    """
+    with open(path, "rb") as handle:  # read-only: raw files are never modified
+        data = handle.read()
+    delimiters = [match.start() for match in _DELIMITER_LINE.finditer(data)]
+    if len(delimiters) % 2 == 0:
+        return None
+    return data.count(b"\n", 0, delimiters[-1]) + 1
+
+
 def _read_sets(path: Path, shown: str) -> list[dict[str, Any]]:
     import pyuff
 
+    unclosed = _unclosed_dataset_line(path)
+    if unclosed is not None:
+        raise CampaignFormatError(
+            shown,
+            unclosed,
+            "truncated or corrupt UFF file: the dataset that starts on this line is not closed by a '    -1' line",
+        )
     try:
         uff = pyuff.UFF(str(path))
         if 58 not in [int(t) for t in uff.get_set_types()]:
