@@ -176,3 +176,41 @@ def convert_run(record, target: Path, interval_s: float, binary_uff: bool = Fals
         )
     else:
         raise ValueError(f"no writer for {target.name}")
+
+
+MIXED_FORMATS = ("ascii", "mat", "uff", "uff58b", "tdms")
+"""Formats given to a campaign's runs, in turn, by :func:`write_mixed_format_copy`."""
+
+
+def write_mixed_format_copy(source, target) -> dict[str, str]:
+    """Copy an ASCII campaign folder with its runs turned, in turn, into ASCII, Test.Lab MAT,
+    UFF58, UFF58b and TDMS files (same samples, same run names); returns run path -> format.
+
+    Every configuration's ``files`` glob becomes ``<configuration>/*``.
+    """
+    import shutil
+
+    from workflow.io.campaign import list_runs, load_campaign, read_run
+
+    source, target = Path(source), Path(target)
+    campaign = load_campaign(source)
+    target.mkdir(parents=True)
+    yaml_text = (source / "campaign.yaml").read_text()
+    for name, spec in campaign.configurations.items():
+        yaml_text = yaml_text.replace(f'"{spec.files}"', f'"{name}/*"')
+    (target / "campaign.yaml").write_text(yaml_text)
+    formats = {}
+    for index, run in enumerate(list_runs(source, campaign)):
+        fmt = MIXED_FORMATS[index % len(MIXED_FORMATS)]
+        folder = target / run.configuration
+        folder.mkdir(exist_ok=True)
+        if fmt == "ascii":
+            path = folder / Path(run.path).name
+            shutil.copyfile(source / run.path, path)
+        else:
+            record = read_run(source, run, campaign)
+            suffix = {"mat": ".mat", "uff": ".uff", "uff58b": ".uff", "tdms": ".tdms"}[fmt]
+            path = folder / f"{run.run}{suffix}"
+            convert_run(record, path, 1.0 / record.sample_rate_hz, binary_uff=fmt == "uff58b")
+        formats[path.relative_to(target).as_posix()] = fmt
+    return formats

@@ -354,6 +354,21 @@ def test_nan_in_a_channel_names_the_record_and_sample(tmp_path):
     assert "channel 'g/acc'" in message and "sample 300" in message
 
 
+def test_nan_in_a_uff_record_names_the_dataset_and_sample(tmp_path):
+    force, response = samples()
+
+    def with_nan(path):
+        write_uff58(path, [uff58_record("Acc1", response, "g", 12, DT_S)])
+        lines = path.read_text().split("\n")
+        # 2 delimiter/type lines and 11 header lines, then 4 values per line: line 101 holds
+        # samples 348-351 (0-based)
+        lines[100] = "NaN".rjust(20) + lines[100][20:]
+        path.write_text("\n".join(lines))
+
+    message = error(tmp_path, "run.uff", with_nan, yaml_of(force=None))
+    assert "dataset 1 (58, ID 'Acc1')" in message and "sample 348" in message
+
+
 def test_readers_are_imported_only_for_their_files(tmp_path):
     """Reading an ASCII run loads none of the format libraries (per-run jobs stay light)."""
     import subprocess
