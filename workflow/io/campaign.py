@@ -263,7 +263,8 @@ def campaign_from_dict(data: dict[str, Any]) -> Campaign:
         mode_hz=data["mode_hz"],
         band_hz=pair(data["band_hz"]),
         force=None if data["force"] is None else ForceSpec(**data["force"]),
-        decimal=data["decimal"],
+        # A copy without the key was validated before campaign.yaml could set it.
+        decimal=data.get("decimal", "."),
     )
     object.__setattr__(campaign, "pretrigger_given", bool(data["pretrigger_given"]))
     return campaign
