@@ -136,6 +136,15 @@ def test_mat73_testlab_round_trip_equals_ascii(tmp_path):
     assert_same_record(record, ascii_record(tmp_path, force, response))
 
 
+def test_mat73_plain_variables_round_trip_equals_ascii(tmp_path):
+    force, response = samples()
+    t = (np.arange(N) - PRETRIGGER) * DT_S
+    variables = {"time": t, "hammer": force, "accel": response, "dt": DT_S}
+    record = read(tmp_path, "run.mat", lambda p: write_mat73(p, variables))
+    assert record.header["format"] == "MAT 7.3"
+    assert_same_record(record, ascii_record(tmp_path, force, response))
+
+
 @pytest.mark.parametrize("binary", [False, True])
 def test_uff58_round_trip_equals_ascii_to_the_digits_it_keeps(tmp_path, binary):
     force, response = samples()
