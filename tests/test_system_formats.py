@@ -384,9 +384,10 @@ def test_readers_are_imported_only_for_their_files(tmp_path):
 
     force, response = samples()
     ascii_record(tmp_path, force, response)
+    folder = str(tmp_path / "ascii" / "campaign")
     code = (
         "import sys; from workflow.io.campaign import load_campaign, read_run; "
-        f"c = load_campaign({str(tmp_path / 'ascii' / 'campaign')!r}); read_run(c and {str(tmp_path / 'ascii' / 'campaign')!r}, 'c/run.txt', c); "
+        f"read_run({folder!r}, 'c/run.txt', load_campaign({folder!r})); "
         "print(sorted(m for m in ('scipy.io', 'h5py', 'pyuff', 'nptdms') if m in sys.modules))"
     )
     result = subprocess.run(
