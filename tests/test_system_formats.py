@@ -115,6 +115,15 @@ def test_testlab_mat_round_trip_equals_ascii_with_units_from_the_file(tmp_path):
     assert record.header["format"] == "MAT (Test.Lab export)"
 
 
+def test_testlab_time_signal_names_are_not_time_vectors(tmp_path):
+    """'Time Acc1:+Z' with a unit label the reader does not know is the response by its
+    name after the function-type prefix, not a time vector."""
+    force, response = samples()
+    groups = {"Signal": lms_export_group(["Time Acc1:+Z"], response, "EU", DT_S)}
+    record = read(tmp_path, "run.mat", lambda p: write_testlab_mat(p, groups), yaml_of(force=None))
+    np.testing.assert_array_equal(record.response, response)
+
+
 def test_testlab_unit_transformation_gives_the_label_unit(tmp_path):
     """Test.Lab stores SI values with a label 'g' and factor 1/g: the reader gives g."""
     force, response = samples()

@@ -64,6 +64,9 @@ class Channel:
         ``time``, ``force`` or ``response`` when the file labels it so.
     aliases : tuple of str
         Other names that select the channel (a TDMS channel's bare name).
+    role_name : str or None
+        The name the ASCII column rules read for the role, when not ``name`` (Test.Lab
+        names start with the function type, ``Time Acc1:+X``, which is not a time vector).
     """
 
     name: str
@@ -75,6 +78,7 @@ class Channel:
     start_s: float | None = None
     role: str | None = None
     aliases: tuple[str, ...] = ()
+    role_name: str | None = None
 
 
 @dataclass(frozen=True)
@@ -105,9 +109,10 @@ def channel_role(channel: Channel) -> str | None:
             return "response"
         if unit.lower() in _TIME_UNITS_S:
             return "time"
-    if channel.name.strip().lower() == "t":
+    name = channel.name if channel.role_name is None else channel.role_name
+    if name.strip().lower() == "t":
         return "time"
-    return _column_role(channel.name)
+    return _column_role(name)
 
 
 def describe_channels(channels: list[Channel]) -> str:

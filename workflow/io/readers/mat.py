@@ -30,6 +30,8 @@ from workflow.io.readers.channels import Channel, FileChannels
 _RATE_NAMES_HZ = {"fs", "sample_rate", "sample_rate_hz", "samplerate", "sampling_rate", "sampling_frequency"}
 _INTERVAL_NAMES_S = {"dt", "sample_interval", "sample_interval_s", "sampling_interval"}
 _MAT73_SIGNATURE = b"MATLAB 7.3"
+_TESTLAB_TIME_FUNCTION = "Time "
+"""Prefix of Test.Lab channel names of time signals (``Time Laser:+X``)."""
 
 
 def read_mat_channels(path: Path, shown: str) -> FileChannels:
@@ -154,6 +156,7 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
                 sample_interval_s=interval_s,
                 interval_source="x_values.increment",
                 start_s=start_s,
+                role_name=name.removeprefix(_TESTLAB_TIME_FUNCTION),
             )
         )
     return channels
