@@ -93,6 +93,10 @@ MAX_YAML_VALUES: int = 100_000
 """Most values campaign.yaml may hold once its aliases are expanded: a bound on the
 work of validating it, whatever its aliases and nesting (an alias bomb is refused)."""
 
+SYSTEM_FORMAT_EXTENSIONS: frozenset[str] = frozenset({".mat", ".uff", ".unv", ".tdms"})
+"""Run-file extensions read by the acquisition-system readers (workflow/io/readers);
+every other extension is read as ASCII."""
+
 # --------------------------------------------------------------------------------------
 # Errors
 
@@ -158,6 +162,14 @@ def _ordered_window(window: tuple[float, float] | None) -> tuple[float, float] |
     return window
 
 
+def _channel_reference(channel: str | int | None) -> str | int | None:
+    if isinstance(channel, int) and channel < 0:
+        raise ValueError(f"channel index must be 0 or more, got {channel}")
+    if isinstance(channel, str) and not channel.strip():
+        raise ValueError("channel must be a non-empty name or a 0-based index")
+    return channel
+
+
 def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | None:
     if band is not None and not (0.0 < band[0] < band[1]):
         raise ValueError(f"band_hz must be [low, high] with 0 < low < high, got {list(band)}")
@@ -179,6 +191,9 @@ class ResponseSpec:
     quantity: Literal["acceleration", "velocity", "displacement"]
     unit: str
     """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in)."""
+    channel: Annotated[int | str | None, After(_channel_reference)] = None
+    """Which channel of a system-format file holds the response: its name or 0-based
+    index (workflow/io/readers); None when the file has exactly one response channel."""
 
     def __post_init__(self) -> None:
         canonical = units.normalize_unit(self.unit)
@@ -198,6 +213,8 @@ class ForceSpec:
 
     unit: Annotated[str, After(_canonical_force_unit)]
     """Canonical unit name (lbf or N)."""
+    channel: Annotated[int | str | None, After(_channel_reference)] = None
+    """Which channel of a system-format file holds the force (name or 0-based index)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -227,6 +244,9 @@ class Campaign:
     response: ResponseSpec
     force: ForceSpec | None = None
     configurations: Annotated[dict[str, ConfigurationSpec], MinLen(1)]
+    decimal: Literal[".", ","] = "."
+    """Decimal mark of the ASCII run files; with ``","`` columns are separated by tabs,
+    semicolons or spaces."""
     pretrigger_given: bool = field(default=False, init=False)
     """Whether campaign.yaml states ``pretrigger_samples`` (rather than the default 0);
     set by :func:`load_campaign`, not a key of campaign.yaml."""
@@ -259,6 +279,8 @@ def campaign_from_dict(data: dict[str, Any]) -> Campaign:
         mode_hz=data["mode_hz"],
         band_hz=pair(data["band_hz"]),
         force=None if data["force"] is None else ForceSpec(**data["force"]),
+        # A copy without the key was validated before campaign.yaml could set it.
+        decimal=data.get("decimal", "."),
     )
     object.__setattr__(campaign, "pretrigger_given", bool(data["pretrigger_given"]))
     return campaign
@@ -1108,6 +1130,26 @@ def _read_text(path: Path, shown: str) -> str:
     return text
 
 
+_COMMA_SEPARATED_CELL = re.compile(r"[^\t; \n]*,[^\t; \n]*[,.]|[^\t; \n]*\.[^\t; \n]*,")
+
+
+def _decimal_commas_to_points(text: str, shown: str) -> str:
+    """Text of a file written with decimal commas, with decimal points instead.
+
+    A cell holding two commas, or a comma and a point, means commas also separate the
+    columns (or mark thousands), which cannot be told apart from decimal commas.
+    """
+    clash = _COMMA_SEPARATED_CELL.search(text)
+    if clash is not None:
+        raise CampaignFormatError(
+            shown,
+            text.count("\n", 0, clash.start()) + 1,
+            f"campaign.yaml says decimal: ',' but {clash.group(0)!r} holds more than one "
+            "separator; with decimal commas the columns must be separated by tabs, semicolons or spaces",
+        )
+    return text.replace(",", ".")
+
+
 def _locate_numbers(text: str) -> tuple[list[tuple[int, str]], int, int]:
     """Header lines, character offset and 1-based line of the first numeric row."""
     header: list[tuple[int, str]] = []
@@ -1347,6 +1389,15 @@ def declared_sample_rate_hz(campaign_dir: str | Path, run_file: RunFile, campaig
     return float(1.0 / np.mean(steps_s))
 
 
+def _checked_against_band(record: RunRecord, campaign: Campaign, shown: str) -> RunRecord:
+    """A system-format record whose own sample rate cannot hold campaign.yaml's band and
+    mode is refused, as an ASCII one is."""
+    problem = frequency_problem(campaign, record.sample_rate_hz, f"the file's {record.sample_rate_source}")
+    if problem is not None:
+        raise CampaignFormatError(shown, None, f"campaign.yaml {problem}")
+    return record
+
+
 def read_run(
     campaign_dir: str | Path, run_file_or_path: RunFile | str | Path, campaign: Campaign
 ) -> RunRecord:
@@ -1385,8 +1436,14 @@ def read_run(
     reason = _unreadable_reason(full, root.resolve())
     if reason is not None:
         raise CampaignFormatError(shown, None, reason)
+    if full.suffix.lower() in SYSTEM_FORMAT_EXTENSIONS:
+        from workflow.io.readers import read_system_run
+
+        return _checked_against_band(read_system_run(full, relative, shown, campaign), campaign, shown)
 
     text = _read_text(full, shown)
+    if campaign.decimal == ",":
+        text = _decimal_commas_to_points(text, shown)
     if not text.strip():
         raise CampaignFormatError(shown, 1, "the file is empty")
     header, offset, first_line = _locate_numbers(text)

@@ -1,0 +1,84 @@
+"""The real ``snakemake`` on a campaign whose runs are Test.Lab MAT, UFF58 (ASCII and binary),
+TDMS and ASCII files: the same tables as the same samples in ASCII, and a damaged file
+excluded with its reason while the others complete."""
+
+import functools
+
+import numpy as np
+import pandas as pd
+import pytest
+from helpers import REPO, checksums, run_snakemake
+from system_format_files import write_mixed_format_copy
+
+from workflow.lab.virtual_lab import generate_campaign
+
+snakemake = functools.partial(run_snakemake, timeout=900)
+
+
+def test_mixed_format_campaign_gives_the_tables_of_its_ascii_copy(tmp_path):
+    ascii_campaign = tmp_path / "ascii"
+    generate_campaign(ascii_campaign, seed=7, runs_per_configuration=5, configurations={"no_washer": 1.36})
+    mixed_campaign = tmp_path / "mixed"
+    formats = write_mixed_format_copy(ascii_campaign, mixed_campaign)
+    assert sorted(formats.values()) == ["ascii", "mat", "tdms", "uff", "uff58b"]
+    # a copy of the UFF run cut inside its second record: excluded with file, line and problem
+    uff = (mixed_campaign / "no_washer" / "run03.uff").read_bytes()
+    (mixed_campaign / "no_washer" / "run06.uff").write_bytes(uff[: 3 * len(uff) // 4])
+    before = checksums(mixed_campaign)
+
+    tables = {}
+    for name, campaign in (("ascii", ascii_campaign), ("mixed", mixed_campaign)):
+        workdir = tmp_path / f"work_{name}"
+        workdir.mkdir()
+        result = snakemake(workdir, "-c2", "measured", "--config", f"campaign={campaign}")
+        assert result.returncode == 0, result.stderr[-4000:]
+        tables[name] = {
+            table: pd.read_parquet(workdir / f"results/tables/{table}.parquet")
+            for table in ("segments", "runs", "quality", "modes")
+        }
+
+    runs = tables["mixed"]["runs"].set_index("run")
+    assert runs.loc["run06", "status"] == "excluded"
+    assert "no_washer/run06.uff:" in runs.loc["run06", "reason"]
+    assert "truncated" in runs.loc["run06", "reason"]
+    assert (runs.drop(index="run06")["status"] == "used").all()
+    assert runs.loc["run02", "path"] == "no_washer/run02.mat"
+
+    for table in ("segments", "modes"):
+        pd.testing.assert_frame_equal(tables["mixed"][table], tables["ascii"][table])
+    quality_mixed = tables["mixed"]["quality"]
+    quality_mixed = quality_mixed[quality_mixed["run"] != "run06"].reset_index(drop=True)
+    pd.testing.assert_frame_equal(quality_mixed, tables["ascii"]["quality"].reset_index(drop=True))
+    assert checksums(mixed_campaign) == before
+
+
+REALDATA = REPO.parent / "shared" / "realdata"
+
+
+@pytest.mark.skipif(
+    not (REALDATA / "raw").is_dir(),
+    reason=f"real exports not present at {REALDATA} (../shared beside the repository)",
+)
+def test_real_plain_mat_gives_the_segments_of_the_converted_campaign(tmp_path):
+    campaign = tmp_path / "campaign"
+    (campaign / "decay").mkdir(parents=True)
+    (campaign / "decay" / "run01.mat").symlink_to(REALDATA / "raw" / "pff_Sample_LMS_Data.mat")
+    converted_yaml = (REALDATA / "pff-lms-sample" / "campaign.yaml").read_text()
+    (campaign / "campaign.yaml").write_text(
+        converted_yaml.replace("unit: m/s^2}", "unit: m/s^2, channel: x}").replace("*.txt", "*.mat")
+    )
+    segments = {}
+    for name, folder in (("mat", campaign), ("converted", REALDATA / "pff-lms-sample")):
+        workdir = tmp_path / f"work_{name}"
+        workdir.mkdir()
+        result = snakemake(workdir, "-c2", "measured", "--config", f"campaign={folder}")
+        assert result.returncode == 0, result.stderr[-4000:]
+        segments[name] = pd.read_parquet(workdir / "results/tables/segments.parquet")
+    mat, converted = segments["mat"], segments["converted"]
+    assert len(mat) == len(converted) > 20
+    pd.testing.assert_series_equal(mat["t_s"], converted["t_s"])
+    # The converted file prints 7 significant digits (rounding up to 5e-7 of a sample):
+    # envelope and frequency, averages over many samples, agree far closer; the log
+    # decrement is a difference of logarithms and moves more.
+    for column, rtol in (("response_amplitude", 1e-6), ("frequency_hz", 1e-6), ("zeta", 1e-5)):
+        np.testing.assert_allclose(mat[column], converted[column], rtol=rtol, err_msg=column)

@@ -1,0 +1,215 @@
+"""MATLAB MAT files: plain variables, or LMS Test.Lab / Simcenter export structs.
+
+MAT 5 files are read by ``scipy.io.loadmat``, MATLAB 7.3 files (HDF5 underneath) by
+h5py; both are turned into the same nested mapping (structs as dicts, char arrays as
+str, numeric arrays squeezed), so the channel logic below serves both.
+
+- A variable that is a struct with ``x_values`` and ``y_values`` is a Test.Lab export
+  group: ``y_values.values`` holds samples x channels, named by ``function_record.name``;
+  the unit is ``y_values.quantity.label``, the sample interval and start time are
+  ``x_values.increment`` and ``start_value``. Test.Lab stores SI values and gives the
+  label's unit as ``label value = SI value * factor + offset``
+  (``y_values.quantity.unit_transformation``); that conversion is applied, so the samples
+  are in the label's unit.
+- Other numeric vectors are channels named by their variable; ``t``/``time...`` is the
+  time vector; a scalar ``fs`` (or ``sample_rate``, ``sampling_rate``) in Hz or ``dt``
+  (or ``sample_interval``) in s gives the sample interval. Plain variables carry no
+  units: campaign.yaml gives them. Matrices are not read as channels.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from workflow.io.campaign import CampaignFormatError
+from workflow.io.readers.channels import Channel, FileChannels
+
+_RATE_NAMES_HZ = {"fs", "sample_rate", "sample_rate_hz", "samplerate", "sampling_rate", "sampling_frequency"}
+_INTERVAL_NAMES_S = {"dt", "sample_interval", "sample_interval_s", "sampling_interval"}
+_MAT73_SIGNATURE = b"MATLAB 7.3"
+_TESTLAB_TIME_FUNCTION = "Time "
+"""Prefix of Test.Lab channel names of time signals (``Time Laser:+X``)."""
+
+
+def read_mat_channels(path: Path, shown: str) -> FileChannels:
+    """Channels of a MAT file (MAT 5 or 7.3).
+
+    Raises
+    ------
+    CampaignFormatError
+        The file is not a readable MAT file, or a variable is malformed (named in the message).
+    """
+    with open(path, "rb") as handle:  # read-only: raw files are never modified
+        signature = handle.read(128)
+    if _MAT73_SIGNATURE in signature[:116]:
+        variables, format_name = _read_mat73(path, shown), "MAT 7.3"
+    else:
+        variables, format_name = _read_mat5(path, shown), "MAT"
+    return channels_from_variables(variables, format_name, shown)
+
+
+def _read_mat5(path: Path, shown: str) -> dict[str, Any]:
+    import scipy.io
+
+    try:
+        variables = scipy.io.loadmat(path, squeeze_me=True, simplify_cells=True)
+    except Exception as error:  # scipy raises many types for damaged files
+        raise CampaignFormatError(
+            shown, None, f"cannot read as a MAT file ({type(error).__name__}: {error})"
+        ) from None
+    return {name: value for name, value in variables.items() if not name.startswith("__")}
+
+
+def _read_mat73(path: Path, shown: str) -> dict[str, Any]:
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as handle:
+            return {name: _hdf5_value(handle, handle[name]) for name in handle if not name.startswith("#")}
+    except Exception as error:  # h5py raises OSError, KeyError, ... for damaged files
+        raise CampaignFormatError(
+            shown, None, f"cannot read as a MATLAB 7.3 (HDF5) file ({type(error).__name__}: {error})"
+        ) from None
+
+
+def _hdf5_value(handle: Any, node: Any) -> Any:
+    """A MATLAB 7.3 variable as ``loadmat(squeeze_me=True, simplify_cells=True)`` gives it."""
+    import h5py
+
+    if isinstance(node, h5py.Group):
+        return {name: _hdf5_value(handle, node[name]) for name in node if not name.startswith("#")}
+    matlab_class = node.attrs.get("MATLAB_class", b"")
+    matlab_class = matlab_class.decode() if isinstance(matlab_class, bytes) else str(matlab_class)
+    if node.attrs.get("MATLAB_empty", 0):
+        return np.array([])
+    data = node[()]
+    if matlab_class == "char":
+        return "".join(chr(code) for code in np.asarray(data).T.ravel())
+    if matlab_class == "cell":
+        items = [_hdf5_value(handle, handle[reference]) for reference in np.asarray(data).T.ravel()]
+        return items[0] if len(items) == 1 else np.array(items, dtype=object)
+    # MATLAB writes column-major: the HDF5 dataset is the transpose of the MATLAB array.
+    array = np.asarray(data).T.squeeze()
+    return array.item() if array.ndim == 0 else array
+
+
+def _field(mapping: Any, *keys: str) -> Any:
+    for key in keys:
+        if not isinstance(mapping, dict) or key not in mapping:
+            return None
+        mapping = mapping[key]
+    return mapping
+
+
+def _number(value: Any) -> float | None:
+    array = np.asarray(value)
+    if array.size == 1 and np.issubdtype(array.dtype, np.number) and not np.iscomplexobj(array):
+        return float(array.item())
+    return None
+
+
+def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[Channel]:
+    """The channels of one Test.Lab export struct."""
+    where = f"variable {variable!r}"
+    values = np.asarray(_field(group, "y_values", "values"))
+    if values.size == 0 or not np.issubdtype(values.dtype, np.number):
+        raise CampaignFormatError(shown, None, f"{where}: y_values.values holds no numeric samples")
+    columns = [values] if values.ndim == 1 else list(values.T)
+    names = _field(group, "function_record", "name")
+    names = [names] if isinstance(names, str) else [] if names is None else [str(n) for n in np.ravel(names)]
+    if len(names) != len(columns):
+        raise CampaignFormatError(
+            shown,
+            None,
+            f"{where}: function_record.name gives {len(names)} channel name(s) but y_values.values "
+            f"has {len(columns)} column(s) of {values.shape[0]} samples",
+        )
+    declared = _number(_field(group, "x_values", "number_of_values"))
+    if declared is not None and declared != columns[0].size:
+        raise CampaignFormatError(
+            shown,
+            None,
+            f"{where}: x_values.number_of_values says {declared:.0f} samples but y_values.values "
+            f"holds {columns[0].size} (truncated or mislabelled export)",
+        )
+    interval_s = _number(_field(group, "x_values", "increment"))
+    start_s = _number(_field(group, "x_values", "start_value"))
+    label = _field(group, "y_values", "quantity", "label")
+    factor = _number(_field(group, "y_values", "quantity", "unit_transformation", "factor"))
+    offset = _number(_field(group, "y_values", "quantity", "unit_transformation", "offset"))
+    factor = 1.0 if factor is None else factor
+    offset = 0.0 if offset is None else offset
+    channels = []
+    for name, column in zip(names, columns, strict=True):
+        samples = np.asarray(column, dtype=np.float64)
+        if factor != 1.0 or offset != 0.0:
+            samples = samples * factor + offset
+        channels.append(
+            Channel(
+                name=name,
+                values=samples,
+                record=f"{where} channel {name!r}",
+                unit=label if isinstance(label, str) else None,
+                sample_interval_s=interval_s,
+                interval_source="x_values.increment",
+                start_s=start_s,
+                role_name=name.removeprefix(_TESTLAB_TIME_FUNCTION),
+            )
+        )
+    return channels
+
+
+def channels_from_variables(variables: dict[str, Any], format_name: str, shown: str) -> FileChannels:
+    """Channels of a MAT file's variables (see the module's notes).
+
+    Parameters
+    ----------
+    variables : dict
+        Variable name -> value as ``loadmat(squeeze_me=True, simplify_cells=True)`` gives it.
+    format_name : str
+        For messages (``MAT``, ``MAT 7.3``).
+    shown : str
+        The path used in error messages.
+    """
+    channels: list[Channel] = []
+    testlab = False
+    rates: list[tuple[str, float]] = []
+    plain: list[tuple[str, np.ndarray]] = []
+    for name, value in variables.items():
+        if isinstance(value, dict) and "y_values" in value and "x_values" in value:
+            channels += _testlab_channels(name, value, shown)
+            testlab = True
+            continue
+        scalar = _number(value) if not isinstance(value, (str, dict)) else None
+        if scalar is not None:
+            if name.lower() in _RATE_NAMES_HZ and scalar > 0:
+                rates.append((name, scalar))
+            elif name.lower() in _INTERVAL_NAMES_S and scalar > 0:
+                rates.append((name, 1.0 / scalar))
+            continue
+        array = value if isinstance(value, np.ndarray) else None
+        if array is not None and array.ndim == 1 and array.size > 1 and np.issubdtype(array.dtype, np.number):
+            plain.append((name, array))
+    for (name_a, rate_a), (name_b, rate_b) in zip(rates, rates[1:]):
+        if abs(rate_a - rate_b) > 1e-6 * max(rate_a, rate_b):
+            raise CampaignFormatError(
+                shown,
+                None,
+                f"variable {name_b!r} gives a sample rate of {rate_b:.9g} Hz but variable "
+                f"{name_a!r} gives {rate_a:.9g} Hz",
+            )
+    interval_s = 1.0 / rates[0][1] if rates else None
+    for name, array in plain:
+        channels.append(
+            Channel(
+                name=name,
+                values=array,
+                record=f"variable {name!r}",
+                sample_interval_s=interval_s,
+                interval_source=f"variable {rates[0][0]!r}" if rates else None,
+            )
+        )
+    return FileChannels(f"{format_name} (Test.Lab export)" if testlab else format_name, channels)

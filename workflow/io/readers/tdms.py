@@ -1,0 +1,78 @@
+"""NI TDMS files (LabVIEW, NI DAQ), read by npTDMS.
+
+Every channel of numbers is a channel named ``group/channel`` (its bare name also selects
+it when no other group has one of that name). Sample interval, start time and unit are the
+waveform properties ``wf_increment`` (s), ``wf_start_offset`` (s) and ``unit_string``.
+"""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from workflow.io.campaign import CampaignFormatError
+from workflow.io.readers.channels import Channel, FileChannels
+
+
+class _WarningRecords(logging.Handler):
+    """Keeps the messages of the warnings logged while a file is read."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.messages.append(record.getMessage())
+
+
+def read_tdms_channels(path: Path, shown: str) -> FileChannels:
+    """Channels of a TDMS file.
+
+    Raises
+    ------
+    CampaignFormatError
+        Not a readable TDMS file (truncated, corrupt) or no channels of numbers.
+    """
+    from nptdms import TdmsFile
+
+    # npTDMS reads what it can of a truncated last segment and only logs a warning.
+    warnings = _WarningRecords()
+    logger = logging.getLogger("nptdms")
+    logger.addHandler(warnings)
+    try:
+        tdms = TdmsFile.read(path)
+        groups = [(group, group.channels()) for group in tdms.groups()]
+        arrays = [[channel[:] for channel in group_channels] for _, group_channels in groups]
+    except Exception as error:  # npTDMS raises ValueError, EOFError, struct.error, ...
+        raise CampaignFormatError(
+            shown, None, f"cannot read as a TDMS file ({type(error).__name__}: {error})"
+        ) from None
+    finally:
+        logger.removeHandler(warnings)
+    truncated = [message for message in warnings.messages if "less data than expected" in message]
+    if truncated:
+        raise CampaignFormatError(shown, None, f"truncated TDMS file: {truncated[0]}")
+    channels = []
+    for (group, group_channels), group_arrays in zip(groups, arrays, strict=True):
+        for channel, values in zip(group_channels, group_arrays, strict=True):
+            if not (isinstance(values, np.ndarray) and np.issubdtype(values.dtype, np.number)):
+                continue  # strings and timestamps are not samples
+            properties = channel.properties
+            increment = properties.get("wf_increment")
+            start = properties.get("wf_start_offset")
+            name = f"{group.name}/{channel.name}"
+            channels.append(
+                Channel(
+                    name=name,
+                    values=values,
+                    record=f"channel {name!r}",
+                    unit=properties.get("unit_string"),
+                    sample_interval_s=None if increment is None else float(increment),
+                    interval_source="wf_increment",
+                    start_s=None if start is None else float(start),
+                    aliases=(channel.name,),
+                )
+            )
+    return FileChannels("TDMS", channels)
