@@ -157,7 +157,15 @@ def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
 def test_config_typo_stops_with_the_key_named(tmp_path):
     result = snakemake(tmp_path, "-n", "all", "--config", "analysis={segment_cylces: 8}")
     assert result.returncode != 0
-    assert "analysis.segment_cylces" in result.stdout + result.stderr
+    output = result.stdout + result.stderr
+    assert "command line (--config): analysis.segment_cylces: unknown key" in output
+    assert "valid keys here: filter_order" in output and "segment_cycles" in output
+
+
+def test_missing_campaign_folder_is_said_as_such(tmp_path):
+    result = snakemake(tmp_path, "-n", "all", "--config", f"campaign={tmp_path / 'no_such_campaign'}")
+    assert result.returncode != 0
+    assert f"campaign folder {tmp_path / 'no_such_campaign'} does not exist" in result.stdout + result.stderr
 
 
 def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
