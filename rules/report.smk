@@ -34,6 +34,7 @@ rule report_summary:
     input:
         diagnosis="results/diagnosis.json",
         runs="results/tables/runs.parquet",
+        segments="results/tables/segments.parquet",
         rejected="results/tables/segments_rejected.parquet",
         quality="results/tables/quality.parquet",
         hypotheses="results/tables/hypotheses.parquet",

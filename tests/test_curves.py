@@ -317,7 +317,7 @@ def test_h2_contradicted_when_areas_are_reversed_and_inconclusive_when_flat():
 def test_h2_needs_two_configurations_with_areas():
     data = _configurations(np.random.default_rng(34), 0.001)
     table = _h2(data, {"no_washer": 1.36})
-    assert len(table) == 1 and table.verdict.iloc[0] == "inconclusive"
+    assert len(table) == 1 and table.verdict.iloc[0] == "not applicable"
     assert "two configurations" in table.note.iloc[0]
 
 

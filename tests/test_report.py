@@ -16,6 +16,7 @@ import os
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from helpers import run_snakemake, write_run_with_bad_cell
@@ -377,3 +378,106 @@ def test_report_holds_the_key_tables(built_report):
         assert key in results, f"{name} is not in the report"
         assert results[key]["mime_type"] == "text/html"
         assert "<table>" in decoded(results[key]) or name == "rejected_segments.html"
+
+
+# ------------------------------------------------------------------ sentences true of their numbers
+def segments_with(zeta_slope: float, frequency_slope: float) -> pd.DataFrame:
+    """One configuration's segments: damping and frequency linear in log10(amplitude)."""
+    amplitude = np.logspace(-1.5, 1.0, 200)
+    x = np.log10(amplitude)
+    return pd.DataFrame(
+        {
+            "configuration": "t5nm",
+            "velocity_amplitude_in_s": amplitude,
+            "zeta": 0.005 * (1 + zeta_slope * x),
+            "frequency_hz": 18.7 * (1 + frequency_slope * x),
+        }
+    )
+
+
+@pytest.mark.parametrize(
+    ("zeta_slope", "words"),
+    [(-0.1, "the damping falls"), (0.2, "the damping rises"), (0.0, "the damping stays level")],
+)
+def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
+    trend = report.measured_trends(segments_with(zeta_slope, -0.004))["t5nm"]
+    sentence = report.trend_sentence(trend)
+    assert words in sentence and "the frequency falls" in sentence
+    # the numbers in the sentence are the two ends it compares
+    assert (
+        report.fmt(100 * trend["zeta_low"]) in sentence and report.fmt(100 * trend["zeta_high"]) in sentence
+    )
+    assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
+
+
+def test_cause_words_claim_no_trend_the_data_may_contradict():
+    # the mechanism only: 'damping grows as a power of amplitude' was said of falling data
+    assert not any("grows" in words or "proportional" in words for words in report.CAUSE_WORDS.values())
+
+
+@pytest.mark.parametrize(
+    ("margin", "confidence", "words"),
+    [
+        (1.09, 0.95, "only marginally ahead of"),
+        (1.3, 0.95, "ahead of"),
+        (2.0, 0.95, "clearly ahead of"),
+        (2.0, 0.6, "ahead of"),
+        (0.9, 0.95, "behind"),
+    ],
+)
+def test_margin_words_scale_with_the_margin_and_the_confidence(margin, confidence, words):
+    assert report.margin_words(margin, confidence) == words
+
+
+def test_clearly_better_only_with_a_large_gain_and_a_clear_margin():
+    assert report.gain_words(0.3, 2.0, 0.9) == "clearly better"
+    assert report.gain_words(0.57, 2.0, 0.9) == "better"  # gain too small
+    assert report.gain_words(0.3, 1.09, 0.9) == "better"  # next candidate too close
+    assert report.gain_words(1.0, 2.0, 0.9) == "no better"
+
+
+def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
+    close = entry(
+        "microslip_power_law",
+        base_err=4.29,
+        ext_err=2.44,
+        ranking=[
+            {"cause": "microslip_power_law", "score": 2.44},
+            {"cause": "stiffness_nonlinearity", "score": 2.65},
+            {"cause": "none", "score": 4.29},
+        ],
+    )
+    close["extended_model"]["flags"] = ["chi = -0.95 at its lower bound"]
+    document = {"campaign": "unesp", "cause": "microslip_power_law", "configurations": {"t5nm": close}}
+    text = html.unescape(
+        report.verdict_html(document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004))
+    )
+    assert "clearly" not in text.split("How sure we are")[0]
+    assert "only marginally ahead of the next-best candidate" in text and "1.09 times" in text
+    assert "the damping falls" in text
+    assert "chi = -0.95 at its lower bound" in text
+    landing = report.verdict_rst(
+        document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
+    )
+    assert "only marginally ahead of the next best" in landing and "clearly" not in landing
+    assert "chi = -0.95 at its lower bound" in landing
+
+
+def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
+    table = pd.DataFrame(
+        {
+            "hypothesis": ["H2: damping rises with bearing area"],
+            "configuration": ["all"],
+            "statistic": ["slope"],
+            "estimate": [np.nan],
+            "ci_low": [np.nan],
+            "ci_high": [np.nan],
+            "verdict": ["not applicable"],
+            "amplitude_low_in_s": [np.nan],
+            "amplitude_high_in_s": [np.nan],
+            "note": ["needs at least two configurations with different bearing areas"],
+        }
+    )
+    row = report.hypothesis_summary(table)[0]
+    assert "not applicable" in row[3] and "two configurations" in row[5]
+    assert not any("–" in cell for cell in row)

@@ -123,7 +123,7 @@ def test_figures_and_fit_tables_exist(finished_run):
     ]:
         assert (figures / name).stat().st_size > 10_000, name
     hypotheses = pd.read_parquet(workdir / "results/tables/hypotheses.parquet")
-    assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive"}
+    assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive", "not applicable"}
 
 
 def test_nothing_to_do_after_a_complete_run(finished_run):

@@ -39,6 +39,9 @@ from scipy import special
 #: Names of the two hypotheses, as they appear in the ``hypothesis`` column.
 H1_NAME = "H1: damping rises with amplitude at low amplitude"
 H2_NAME = "H2: damping rises with bearing area"
+NOT_APPLICABLE = "not applicable"
+"""Verdict of a test the campaign cannot run (H2 without two bearing areas), as opposed
+to ``inconclusive``: a test that ran and could not decide."""
 
 #: Columns of the hypothesis table, in order.
 HYPOTHESIS_COLUMNS = [
@@ -768,7 +771,7 @@ def area_hypothesis(
             **base,
             statistic=statistic_combined,
             supported=False,
-            verdict="inconclusive",
+            verdict=NOT_APPLICABLE,
             n_runs=0,
             n_boot_valid=0,
             note="needs at least two configurations with different bearing areas",
@@ -783,7 +786,7 @@ def area_hypothesis(
             **base,
             statistic=statistic_combined,
             supported=False,
-            verdict="inconclusive",
+            verdict=NOT_APPLICABLE,
             n_runs=n_runs_total,
             n_boot_valid=0,
             note="the configurations share no common velocity-amplitude range",
