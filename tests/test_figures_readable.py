@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
-from helpers import REPO, run_snakemake  # noqa: E402
+from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
 
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
@@ -26,11 +26,6 @@ from workflow.outputs.readability import readability_problems  # noqa: E402
 
 snakemake = functools.partial(run_snakemake, timeout=1800)
 
-CHEAP = [
-    "models={global_samples: 4, local_starts: 1, local_iterations: 1, steps_per_period: 8}",
-    "discovery={global_samples: 32, local_starts: 1, folds: 3}",
-    "fits={bootstrap_samples: 50}",
-]
 REALDATA = REPO.parent / "shared" / "realdata"
 
 

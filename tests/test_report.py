@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from helpers import run_snakemake, write_run_with_bad_cell
+from browser import WINDOW_WIDTH_PX, audit_page, chromium
+from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
 from workflow.lab.virtual_lab import generate_campaign
 from workflow.outputs import report
@@ -246,11 +247,6 @@ def test_tables_render(hypotheses, runs):
 snakemake = functools.partial(run_snakemake, timeout=1800)
 
 
-CHEAP = [
-    "models={global_samples: 4, local_starts: 1, local_iterations: 1, steps_per_period: 8}",
-    "discovery={global_samples: 32, local_starts: 1, folds: 3}",
-    "fits={bootstrap_samples: 50}",
-]
 CONFIGURATIONS = ["no_washer", "small_washer"]
 FIGURES = [
     "fig07_dahl_loops.png",
@@ -481,3 +477,36 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
     row = report.hypothesis_summary(table)[0]
     assert "not applicable" in row[3] and "two configurations" in row[5]
     assert not any("–" in cell for cell in row)
+
+
+# ------------------------------------------------------------------ in a real browser
+needs_chromium = pytest.mark.skipif(
+    chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
+)
+
+
+@needs_chromium
+@pytest.mark.parametrize("page", ["results/report.html", "results/report/verdict.html"])
+def test_page_renders_in_chromium_without_errors_or_overflow(built_report, page, tmp_path):
+    found = audit_page(built_report[0] / page, tmp_path)
+    assert found["window_width"] == WINDOW_WIDTH_PX
+    assert found["errors"] == []
+    assert found["broken_images"] == []
+    assert found["wide_tables"] == []
+    assert found["page_width"] <= WINDOW_WIDTH_PX
+
+
+@needs_chromium
+def test_first_page_in_chromium_shows_the_verdict_and_names_real_menu_entries(built_report, tmp_path):
+    text = audit_page(built_report[0] / "results/report.html", tmp_path)["text"]
+    assert "Verdict:" in text
+    menu = text.split("RESULTS", 1)[0]
+    assert "Workflow" in menu and "Statistics" in menu and "Configuration" not in menu
+    assert "under *Configuration*" not in text and "Configuration in the menu" not in text
+
+
+@needs_chromium
+def test_verdict_page_in_chromium_names_the_bad_run_and_shows_no_dashes_for_tests(built_report, tmp_path):
+    text = audit_page(built_report[0] / "results/report/verdict.html", tmp_path)["text"]
+    assert "small_washer/run03.txt" in text
+    assert "––" not in text
