@@ -58,7 +58,7 @@ def test_checker_finds_power_and_offset_notation():
 
 
 def test_amplitude_axis_labels_are_plain_and_do_not_crowd():
-    for low, high in ((0.3, 0.6), (0.05, 3.0), (0.01, 400.0)):
+    for low, high in ((0.3, 0.6), (1.9, 7.4), (0.1, 1.0), (0.05, 3.0), (0.01, 400.0)):
         with plt.rc_context(figures.STYLE):
             figure, axis = plt.subplots()
             axis.plot([low, high], [1.0, 2.0])

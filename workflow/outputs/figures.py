@@ -58,8 +58,8 @@ def save(figure: plt.Figure, path: Path | str) -> None:
 
 class PlainLogFormatter(ticker.Formatter):
     """Plain numbers (0.2, 1, 50) on a logarithmic axis, minor ticks labelled only where
-    they do not crowd: every one within half a decade, 2 and 5 within two decades, none
-    beyond (the decades alone then carry the scale)."""
+    they do not crowd: every one within half a decade, 2, 3 and 5 within one, 2 and 5
+    within two, none beyond (the decades alone then carry the scale)."""
 
     def __init__(self, minor: bool = False):
         self.minor = minor
@@ -71,7 +71,9 @@ class PlainLogFormatter(ticker.Formatter):
             low, high = sorted(self.axis.get_view_interval())
             decades = np.log10(high / low) if low > 0 else np.inf
             mantissa = round(value / 10 ** np.floor(np.log10(value) + 1e-9), 6)
-            if decades > 2.0 or (decades > 0.5 and mantissa not in (2.0, 5.0)):
+            if decades > 2.0 or (decades > 1.0 and mantissa not in (2.0, 5.0)):
+                return ""
+            if decades > 0.5 and mantissa not in (2.0, 3.0, 5.0):
                 return ""
         return f"{value:g}"
 
