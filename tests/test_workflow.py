@@ -176,6 +176,15 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert counts["analyse_runs"] == 6  # 3 configurations x 10 runs, 5 per job
     assert counts["identify_mode"] == 3
     assert counts["figures_damping"] == 1 and counts["figures_backbone"] == 1
+    assert counts["run_summary"] == 1  # the summary closes `all`
+
+
+def test_runs_table_is_also_a_csv_file(finished_run):
+    _, workdir, _ = finished_run
+    runs = pd.read_parquet(workdir / "results/tables/runs.parquet")
+    as_csv = pd.read_csv(workdir / "results/tables/runs.csv", keep_default_na=False)
+    pd.testing.assert_frame_equal(as_csv, runs.astype(str), check_dtype=False)
+    assert "excluded" in set(as_csv["status"])
 
 
 def test_quality_table_has_every_check_of_every_run_and_agrees_with_runs(finished_run):
