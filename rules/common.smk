@@ -11,7 +11,10 @@ from workflow.io.settings import ConfigError, validate_config
 try:
     SETTINGS = validate_config(
         config,
-        source=f"config.yaml ({workflow.source_path('../config.yaml')})",
+        source=" or ".join(
+            [f"config.yaml ({Path(workflow.basedir) / 'config.yaml'})"]
+            + [f"--configfile {path}" for path in workflow.config_settings.configfiles]
+        ),
         command_line=dict(workflow.config_settings.config),
     )
 except ConfigError as error:
