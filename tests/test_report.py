@@ -452,6 +452,9 @@ def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
     assert "only marginally ahead of the next-best candidate" in text and "1.09 times" in text
     assert "the damping falls" in text
     assert "chi = -0.95 at its lower bound" in text
+    assert "Run-order trend of the damping (file-name order, which may not be" in text
+    close["evidence"]["run_order_trend"]["order"] = "file timestamps"
+    assert "Run-order trend of the damping (file timestamps)" in report.verdict_html(document)
     landing = report.verdict_rst(
         document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
     )

@@ -469,8 +469,11 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
         items.append(f"Fitted parameter to read with care, {flag}.")
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
+        # the order the runs were taken in: timestamps when the diagnosis found them
+        order = trend.get("order") or "file-name order, which may not be the order the runs were taken in"
         items.append(
-            f"Run-order trend of the damping: {fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
+            f"Run-order trend of the damping ({order}): "
+            f"{fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
             f"from the first run to the last, p = {fmt(trend['p'], 2)} "
             f"({'significant' if trend.get('significant') else 'not significant'})."
         )
