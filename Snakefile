@@ -29,6 +29,15 @@ rule all:
         model_outputs(),
         discovery_outputs(),
         report_outputs(),
+        "results/summary.txt",
+
+
+onsuccess:
+    # The summary closes the console output of `all`, after Snakemake's own lines,
+    # so that a reader sees the verdict and the excluded runs without scrolling.
+    summary = Path("results/summary.txt")
+    if summary.exists() and (not workflow.dag_settings.targets or "all" in workflow.dag_settings.targets):
+        print("\n" + summary.read_text(), end="", file=sys.stderr)
 
 
 rule measured:

@@ -9,7 +9,14 @@ from pathlib import Path
 from workflow.io.settings import ConfigError, validate_config
 
 try:
-    SETTINGS = validate_config(config)
+    SETTINGS = validate_config(
+        config,
+        source=" or ".join(
+            [f"config.yaml ({Path(workflow.basedir) / 'config.yaml'})"]
+            + [f"--configfile {path}" for path in workflow.config_settings.configfiles]
+        ),
+        command_line=dict(workflow.config_settings.config),
+    )
 except ConfigError as error:
     raise WorkflowError(f"invalid configuration:\n{error}") from None
 
@@ -46,6 +53,11 @@ def campaign_inventory():
         from workflow.lab.layout import planned_run_files
 
         return planned_run_files(SETTINGS.demo.runs_per_configuration), []
+    if not CAMPAIGN.is_dir():
+        raise WorkflowError(
+            f"campaign folder {CAMPAIGN} does not exist (working directory {Path.cwd()}); "
+            "set campaign in config.yaml or with --config campaign=PATH"
+        )
     try:
         campaign = load_campaign(CAMPAIGN)
         runs, excluded = scan_campaign(CAMPAIGN, campaign)
@@ -134,6 +146,7 @@ def measured_outputs():
     return [
         "results/tables/segments.parquet",
         "results/tables/runs.parquet",
+        "results/tables/runs.csv",
         "results/tables/quality.parquet",
         "results/tables/damping_fits.parquet",
         "results/tables/hypotheses.parquet",

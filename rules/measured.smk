@@ -80,6 +80,7 @@ rule collect_tables:
         segments="results/tables/segments.parquet",
         rejected="results/tables/segments_rejected.parquet",
         runs="results/tables/runs.parquet",
+        runs_csv="results/tables/runs.csv",
         quality="results/tables/quality.parquet",
         modes="results/tables/modes.parquet",
     log:

@@ -34,6 +34,7 @@ rule report_summary:
     input:
         diagnosis="results/diagnosis.json",
         runs="results/tables/runs.parquet",
+        segments="results/tables/segments.parquet",
         rejected="results/tables/segments_rejected.parquet",
         quality="results/tables/quality.parquet",
         hypotheses="results/tables/hypotheses.parquet",
@@ -119,3 +120,25 @@ rule report_model_fits:
         runtime=5,
     script:
         "../scripts/report_model_fits.py"
+
+
+rule run_summary:
+    # Last job of `all` (it waits for the report's pages and every figure); the
+    # Snakefile's onsuccess prints its file on the console.
+    input:
+        diagnosis="results/diagnosis.json",
+        runs="results/tables/runs.parquet",
+        pages=report_outputs(),
+        figures=measured_outputs() + model_outputs() + discovery_outputs(),
+    output:
+        "results/summary.txt",
+    log:
+        "results/logs/run_summary.log",
+    benchmark:
+        "results/benchmarks/run_summary.tsv"
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/run_summary.py"

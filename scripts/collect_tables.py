@@ -1,7 +1,7 @@
 """Rule collect_tables: the campaign's segments, runs and modes as Parquet tables."""
 
 from workflow.io.campaign import read_validated_campaign
-from workflow.io.tables import write_table
+from workflow.io.tables import atomic_write_bytes, write_table
 from workflow.measured.runs import collect_tables
 from workflow.runtime.logs import setup_script_logging
 
@@ -19,6 +19,8 @@ response_unit = {"response_amplitude": f"{campaign.response.unit} ({campaign.res
 for name in ("segments", "rejected", "runs", "quality", "modes"):
     write_table(tables[name], snakemake.output[name], units=response_unit)
 runs = tables["runs"]
+# beside the Parquet: the table of runs opens in any spreadsheet or text editor
+atomic_write_bytes(snakemake.output.runs_csv, runs.to_csv(index=False).encode())
 log.info(
     "%d runs used, %d excluded; %d segments kept",
     int((runs["status"] == "used").sum()),

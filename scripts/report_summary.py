@@ -11,11 +11,14 @@ log = setup_script_logging(snakemake.log[0], "report_summary")
 document = json.loads(Path(snakemake.input.diagnosis).read_text())
 runs = read_table(snakemake.input.runs)
 hypotheses = read_table(snakemake.input.hypotheses)
+segments = read_table(snakemake.input.segments)
 damping_fits = read_table(snakemake.input.damping_fits)
 areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]))
 
 pages = {
-    "verdict": report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas=areas),
+    "verdict": report.verdict_html(
+        document, runs=runs, hypotheses=hypotheses, areas=areas, segments=segments
+    ),
     "hypotheses": report.hypotheses_html(hypotheses),
     "runs": report.runs_html(runs),
     "rejected": report.rejected_segments_html(read_table(snakemake.input.rejected)),
@@ -27,7 +30,7 @@ for name, text in pages.items():
     atomic_write_bytes(snakemake.output[name], text.encode())
 # the report's first page: the verdict, then report/workflow.rst (see rules/report.smk)
 landing = report.landing_rst(
-    report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
+    report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments),
     Path(snakemake.input.description).read_text(),
 )
 atomic_write_bytes(snakemake.output.landing, landing.encode())

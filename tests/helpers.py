@@ -22,6 +22,14 @@ def run_snakemake(workdir: Path, *args: str, timeout: float) -> subprocess.Compl
     )
 
 
+CHEAP = [
+    "models={global_samples: 4, local_starts: 1, local_iterations: 1, steps_per_period: 8}",
+    "discovery={global_samples: 32, local_starts: 1, folds: 3}",
+    "fits={bootstrap_samples: 50}",
+]
+"""--config values that make the friction and candidate fits quick (tests of outputs, not of fits)."""
+
+
 def checksums(folder: Path) -> dict[str, str]:
     """SHA-256 of every file below ``folder``, by relative path."""
     return {

@@ -15,6 +15,7 @@ from workflow.discovery import diagnosis as disc
 from workflow.models.averaged import CurveGrid, model_curves
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save
+from workflow.outputs.readability import readability_problems
 
 FAST = disc.FitSettings(global_samples=64, local_starts=2)
 IWAN = {
@@ -126,13 +127,17 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
     for ax in fig.axes:
         labels = [t.get_text() for t in ax.get_yticklabels()]
         assert any("baseline" in t for t in labels) and len(labels) == 5
-        assert "held-out error" in ax.get_xlabel()
+    assert "held-out error" in fig.axes[-1].get_xlabel()
+    assert readability_problems(fig) == []
     save(fig, tmp_path / "candidates.png")
     fig = dfig.heldout_figure(document)
     assert document["across_configurations"]["applicable"]
     ax = fig.axes[0]
     assert "in²" in ax.get_xlabel() and ax.get_yscale() == "log"
-    heights = sorted(p.get_height() for p in ax.patches)
+    # one dot per model and left-out configuration, at its error
+    heights = sorted(
+        y for line in ax.get_lines() if line.get_marker() in ("s", "o") for y in line.get_ydata()
+    )
     expected = sorted(
         v
         for e in document["across_configurations"]["configurations"].values()
@@ -140,6 +145,7 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
         if k.endswith("_error")
     )
     assert heights == pytest.approx(expected)
+    assert readability_problems(fig) == []
     save(fig, tmp_path / "heldout.png")
 
 

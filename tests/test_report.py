@@ -16,9 +16,11 @@ import os
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
-from helpers import run_snakemake, write_run_with_bad_cell
+from browser import WINDOW_WIDTH_PX, audit_page, chromium
+from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
 from workflow.lab.virtual_lab import generate_campaign
 from workflow.outputs import report
@@ -245,11 +247,6 @@ def test_tables_render(hypotheses, runs):
 snakemake = functools.partial(run_snakemake, timeout=1800)
 
 
-CHEAP = [
-    "models={global_samples: 4, local_starts: 1, local_iterations: 1, steps_per_period: 8}",
-    "discovery={global_samples: 32, local_starts: 1, folds: 3}",
-    "fits={bootstrap_samples: 50}",
-]
 CONFIGURATIONS = ["no_washer", "small_washer"]
 FIGURES = [
     "fig07_dahl_loops.png",
@@ -377,3 +374,142 @@ def test_report_holds_the_key_tables(built_report):
         assert key in results, f"{name} is not in the report"
         assert results[key]["mime_type"] == "text/html"
         assert "<table>" in decoded(results[key]) or name == "rejected_segments.html"
+
+
+# ------------------------------------------------------------------ sentences true of their numbers
+def segments_with(zeta_slope: float, frequency_slope: float) -> pd.DataFrame:
+    """One configuration's segments: damping and frequency linear in log10(amplitude)."""
+    amplitude = np.logspace(-1.5, 1.0, 200)
+    x = np.log10(amplitude)
+    return pd.DataFrame(
+        {
+            "configuration": "t5nm",
+            "velocity_amplitude_in_s": amplitude,
+            "zeta": 0.005 * (1 + zeta_slope * x),
+            "frequency_hz": 18.7 * (1 + frequency_slope * x),
+        }
+    )
+
+
+@pytest.mark.parametrize(
+    ("zeta_slope", "words"),
+    [(-0.1, "the damping falls"), (0.2, "the damping rises"), (0.0, "the damping stays level")],
+)
+def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
+    trend = report.measured_trends(segments_with(zeta_slope, -0.004))["t5nm"]
+    sentence = report.trend_sentence(trend)
+    assert words in sentence and "the frequency falls" in sentence
+    # the numbers in the sentence are the two ends it compares
+    assert (
+        report.fmt(100 * trend["zeta_low"]) in sentence and report.fmt(100 * trend["zeta_high"]) in sentence
+    )
+    assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
+
+
+def test_cause_words_claim_no_trend_the_data_may_contradict():
+    # the mechanism only: 'damping grows as a power of amplitude' was said of falling data
+    assert not any("grows" in words or "proportional" in words for words in report.CAUSE_WORDS.values())
+
+
+@pytest.mark.parametrize(
+    ("margin", "confidence", "words"),
+    [
+        (1.09, 0.95, "only marginally ahead of"),
+        (1.3, 0.95, "ahead of"),
+        (2.0, 0.95, "clearly ahead of"),
+        (2.0, 0.6, "ahead of"),
+        (0.9, 0.95, "behind"),
+    ],
+)
+def test_margin_words_scale_with_the_margin_and_the_confidence(margin, confidence, words):
+    assert report.margin_words(margin, confidence) == words
+
+
+def test_clearly_better_only_with_a_large_gain_and_a_clear_margin():
+    assert report.gain_words(0.3, 2.0, 0.9) == "clearly better"
+    assert report.gain_words(0.57, 2.0, 0.9) == "better"  # gain too small
+    assert report.gain_words(0.3, 1.09, 0.9) == "better"  # next candidate too close
+    assert report.gain_words(1.0, 2.0, 0.9) == "no better"
+
+
+def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
+    close = entry(
+        "microslip_power_law",
+        base_err=4.29,
+        ext_err=2.44,
+        ranking=[
+            {"cause": "microslip_power_law", "score": 2.44},
+            {"cause": "stiffness_nonlinearity", "score": 2.65},
+            {"cause": "none", "score": 4.29},
+        ],
+    )
+    close["extended_model"]["flags"] = ["chi = -0.95 at its lower bound"]
+    document = {"campaign": "unesp", "cause": "microslip_power_law", "configurations": {"t5nm": close}}
+    text = html.unescape(
+        report.verdict_html(document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004))
+    )
+    assert "clearly" not in text.split("How sure we are")[0]
+    assert "only marginally ahead of the next-best candidate" in text and "1.09 times" in text
+    assert "the damping falls" in text
+    assert "chi = -0.95 at its lower bound" in text
+    assert "Run-order trend of the damping (file-name order, which may not be" in text
+    close["evidence"]["run_order_trend"]["order"] = "file timestamps"
+    assert "Run-order trend of the damping (file timestamps)" in report.verdict_html(document)
+    landing = report.verdict_rst(
+        document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
+    )
+    assert "only marginally ahead of the next best" in landing and "clearly" not in landing
+    assert "chi = -0.95 at its lower bound" in landing
+
+
+def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
+    table = pd.DataFrame(
+        {
+            "hypothesis": ["H2: damping rises with bearing area"],
+            "configuration": ["all"],
+            "statistic": ["slope"],
+            "estimate": [np.nan],
+            "ci_low": [np.nan],
+            "ci_high": [np.nan],
+            "verdict": ["not applicable"],
+            "amplitude_low_in_s": [np.nan],
+            "amplitude_high_in_s": [np.nan],
+            "note": ["needs at least two configurations with different bearing areas"],
+        }
+    )
+    row = report.hypothesis_summary(table)[0]
+    assert "not applicable" in row[3] and "two configurations" in row[5]
+    assert not any("–" in cell for cell in row)
+
+
+# ------------------------------------------------------------------ in a real browser
+needs_chromium = pytest.mark.skipif(
+    chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
+)
+
+
+@needs_chromium
+@pytest.mark.parametrize("page", ["results/report.html", "results/report/verdict.html"])
+def test_page_renders_in_chromium_without_errors_or_overflow(built_report, page, tmp_path):
+    found = audit_page(built_report[0] / page, tmp_path)
+    assert found["window_width"] == WINDOW_WIDTH_PX
+    assert found["errors"] == []
+    assert found["broken_images"] == []
+    assert found["wide_tables"] == []
+    assert found["page_width"] <= WINDOW_WIDTH_PX
+
+
+@needs_chromium
+def test_first_page_in_chromium_shows_the_verdict_and_names_real_menu_entries(built_report, tmp_path):
+    text = audit_page(built_report[0] / "results/report.html", tmp_path)["text"]
+    assert "Verdict:" in text
+    menu = text.split("RESULTS", 1)[0]
+    assert "Workflow" in menu and "Statistics" in menu and "Configuration" not in menu
+    assert "under *Configuration*" not in text and "Configuration in the menu" not in text
+
+
+@needs_chromium
+def test_verdict_page_in_chromium_names_the_bad_run_and_shows_no_dashes_for_tests(built_report, tmp_path):
+    text = audit_page(built_report[0] / "results/report/verdict.html", tmp_path)["text"]
+    assert "small_washer/run03.txt" in text
+    assert "––" not in text

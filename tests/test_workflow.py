@@ -123,7 +123,7 @@ def test_figures_and_fit_tables_exist(finished_run):
     ]:
         assert (figures / name).stat().st_size > 10_000, name
     hypotheses = pd.read_parquet(workdir / "results/tables/hypotheses.parquet")
-    assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive"}
+    assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive", "not applicable"}
 
 
 def test_nothing_to_do_after_a_complete_run(finished_run):
@@ -157,7 +157,15 @@ def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
 def test_config_typo_stops_with_the_key_named(tmp_path):
     result = snakemake(tmp_path, "-n", "all", "--config", "analysis={segment_cylces: 8}")
     assert result.returncode != 0
-    assert "analysis.segment_cylces" in result.stdout + result.stderr
+    output = result.stdout + result.stderr
+    assert "command line (--config): analysis.segment_cylces: unknown key" in output
+    assert "valid keys here: filter_order" in output and "segment_cycles" in output
+
+
+def test_missing_campaign_folder_is_said_as_such(tmp_path):
+    result = snakemake(tmp_path, "-n", "all", "--config", f"campaign={tmp_path / 'no_such_campaign'}")
+    assert result.returncode != 0
+    assert f"campaign folder {tmp_path / 'no_such_campaign'} does not exist" in result.stdout + result.stderr
 
 
 def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
@@ -168,6 +176,15 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert counts["analyse_runs"] == 6  # 3 configurations x 10 runs, 5 per job
     assert counts["identify_mode"] == 3
     assert counts["figures_damping"] == 1 and counts["figures_backbone"] == 1
+    assert counts["run_summary"] == 1  # the summary closes `all`
+
+
+def test_runs_table_is_also_a_csv_file(finished_run):
+    _, workdir, _ = finished_run
+    runs = pd.read_parquet(workdir / "results/tables/runs.parquet")
+    as_csv = pd.read_csv(workdir / "results/tables/runs.csv", keep_default_na=False)
+    pd.testing.assert_frame_equal(as_csv, runs.astype(str), check_dtype=False)
+    assert "excluded" in set(as_csv["status"])
 
 
 def test_quality_table_has_every_check_of_every_run_and_agrees_with_runs(finished_run):

@@ -7,6 +7,7 @@ silently ignored.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -231,23 +232,56 @@ class ConfigError(ValueError):
     """A configuration value is wrong; the message names the key."""
 
 
-def format_validation_error(error: ValidationError, source: str) -> str:
-    """One line per problem: ``source: key.path: what is wrong``."""
+def valid_keys(path: tuple) -> list[str]:
+    """The keys config.yaml accepts at ``path`` (() is the top level); [] below a leaf."""
+    import typing
+
+    section: Any = WorkflowConfig
+    for part in path:
+        hints = typing.get_type_hints(section) if isinstance(section, type) else {}
+        section = hints.get(str(part))
+    if not (isinstance(section, type) and hasattr(section, "__dataclass_fields__")):
+        return []
+    return list(section.__dataclass_fields__)
+
+
+def _given(overrides: Mapping[str, Any] | None, path: tuple) -> bool:
+    """Whether ``path`` was set in ``overrides`` (the command line's --config)."""
+    level: Any = overrides or {}
+    for part in path:
+        if not isinstance(level, Mapping) or str(part) not in level:
+            return False
+        level = level[str(part)]
+    return True
+
+
+def format_validation_error(
+    error: ValidationError, source: str, command_line: Mapping[str, Any] | None = None
+) -> str:
+    """One line per problem: ``where: key.path: what is wrong``, where is the command
+    line when the key was given with ``--config``, else ``source``; an unknown key is
+    followed by the keys valid at its place."""
     lines = []
     for item in error.errors():
-        key = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        path = tuple(item["loc"])
+        key = ".".join(str(part) for part in path) or "(top level)"
+        origin = "command line (--config)" if _given(command_line, path) else source
         message = item["msg"]
         if item["type"] in UNKNOWN_KEY_ERRORS:
-            message = "unknown key (check its spelling against config.yaml's documented keys)"
-        lines.append(f"{source}: {key}: {message}")
+            keys = valid_keys(path[:-1])
+            message = "unknown key" + (f"; valid keys here: {', '.join(keys)}" if keys else "")
+        lines.append(f"{origin}: {key}: {message}")
     return "\n".join(lines)
 
 
-def validate_config(raw: dict[str, Any] | None, source: str = "config.yaml") -> WorkflowConfig:
-    """Validate the merged Snakemake config; raise ConfigError naming every bad key."""
+def validate_config(
+    raw: dict[str, Any] | None, source: str = "config.yaml", command_line: Mapping[str, Any] | None = None
+) -> WorkflowConfig:
+    """Validate the merged Snakemake config; raise ConfigError naming every bad key and
+    where it came from (``command_line``: the keys given with ``--config``)."""
     from pydantic import ValidationError
 
     try:
         return validate(WorkflowConfig, raw or {})
     except ValidationError as error:
-        raise ConfigError(format_validation_error(error, source)) from None
+        raise ConfigError(format_validation_error(error, source, command_line)) from None

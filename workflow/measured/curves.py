@@ -39,6 +39,9 @@ from scipy import special
 #: Names of the two hypotheses, as they appear in the ``hypothesis`` column.
 H1_NAME = "H1: damping rises with amplitude at low amplitude"
 H2_NAME = "H2: damping rises with bearing area"
+NOT_APPLICABLE = "not applicable"
+"""Verdict of a test the campaign cannot run (H2 without two bearing areas), as opposed
+to ``inconclusive``: a test that ran and could not decide."""
 
 #: Columns of the hypothesis table, in order.
 HYPOTHESIS_COLUMNS = [
@@ -87,6 +90,9 @@ class PolynomialFit:
         held-out run counts equally.
     cv_rmse_se : numpy.ndarray
         Standard error of ``cv_rmse`` over the folds (std / sqrt(n_folds)).
+    cv_excess_se : numpy.ndarray
+        Standard error of each degree's fold-by-fold excess over the best degree's
+        error (std / sqrt(n_folds) of the paired differences; 0 at the best degree).
     cv_scheme : str
         How the degree was chosen, in words (leave-one-run-out, blocked K-fold
         for a single run, or none).
@@ -104,6 +110,7 @@ class PolynomialFit:
     x_transform: str
     cv_rmse: np.ndarray
     cv_rmse_se: np.ndarray
+    cv_excess_se: np.ndarray
     cv_scheme: str
     n_runs: int
     n_points: int
@@ -159,15 +166,36 @@ def _polyfit(x: np.ndarray, y: np.ndarray, degree: int) -> np.ndarray:
 def _fold_rmse(
     x: np.ndarray, y: np.ndarray, folds: list[tuple[np.ndarray, np.ndarray]], degree: int
 ) -> np.ndarray | None:
-    """RMSE of held-out predictions for every fold, or None if a fold cannot be fitted."""
-    errors = np.empty(len(folds))
-    for k, (train, test) in enumerate(folds):
+    """RMSE of held-out predictions for every fold, or None if a fold cannot be fitted.
+
+    A fold is scored only on its held-out points inside the amplitude range of its
+    training points (folds with none are left out): the curves are used within the
+    measured range, and a held-out run that reaches past the others would otherwise
+    reward whichever degree extrapolates most tamely (a straight line through curved
+    data), not the one that follows the data.
+    """
+    errors = []
+    for train, test in _interpolating_folds(x, folds):
         if not _can_fit(x[train], degree):
             return None
         coefficients = _polyfit(x[train], y[train], degree)
         residual = y[test] - np.polyval(coefficients, x[test])
-        errors[k] = np.sqrt(np.mean(residual**2))
-    return errors
+        errors.append(np.sqrt(np.mean(residual**2)))
+    return np.array(errors)
+
+
+def _interpolating_folds(
+    x: np.ndarray, folds: list[tuple[np.ndarray, np.ndarray]]
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The folds with their test masks cut to the training range of ``x`` (empty ones dropped)."""
+    kept = []
+    for train, test in folds:
+        if not train.any():
+            continue
+        inside = test & (x >= x[train].min()) & (x <= x[train].max())
+        if inside.any():
+            kept.append((train, inside))
+    return kept
 
 
 def _run_folds(labels: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -191,6 +219,20 @@ def _block_folds(x: np.ndarray, n_blocks: int) -> list[tuple[np.ndarray, np.ndar
         test[block] = True
         folds.append((~test, test))
     return folds
+
+
+def _paired_standard_errors(fold_errors: Mapping[int, np.ndarray], max_degree: int) -> np.ndarray:
+    """Standard error of every degree's fold-by-fold excess over the best degree's error.
+
+    Paired by fold: runs differ in level and noise far more than degrees differ on one
+    run, so the spread of the folds' own errors would hide a gain that every fold shows.
+    """
+    se = np.full(max_degree + 1, np.nan)
+    best = min(fold_errors, key=lambda d: fold_errors[d].mean())
+    for degree, errors in fold_errors.items():
+        difference = errors - fold_errors[best]
+        se[degree] = difference.std(ddof=1) / np.sqrt(difference.size) if difference.size > 1 else 0.0
+    return se
 
 
 def fit_damping_polynomial(
@@ -241,6 +283,13 @@ def fit_damping_polynomial(
       Statistical Learning*, sec. 7.10): the smallest degree whose ``cv_rmse``
       is within one standard error of the minimum is chosen. Degrees that the
       data cannot tell apart from the best are not worth their extra wiggle.
+      A degree that fold after fold predicts worse than the best (excess beyond two
+      standard errors of the paired differences, ``cv_excess_se``) is not taken even
+      so: runs differing in level and noise inflate the folds' spread and would
+      otherwise let a straight line pass for curved data.
+    * Held-out points outside their training folds' amplitude range are not
+      scored (no extrapolation); when fewer than two runs keep points so, the
+      runs' segments are pooled into contiguous amplitude blocks as for one run.
     * When no cross-validation is possible (fewer than three points, or no
       degree could be scored), degree 0 (a constant) is used.
 
@@ -253,14 +302,19 @@ def fit_damping_polynomial(
     x = _transform(amplitude, x_transform)
     n_runs = int(np.unique(labels).size)
 
-    if n_runs >= 2:
+    run_folds = _interpolating_folds(x, _run_folds(labels)) if n_runs >= 2 else []
+    if len(run_folds) >= 2:
         folds = _run_folds(labels)
-        scheme = f"leave-one-run-out cross-validation over {n_runs} runs, one-SE rule"
+        scheme = (
+            f"leave-one-run-out cross-validation over {n_runs} runs, each held-out run scored "
+            "within the others' amplitude range, one-SE rule"
+        )
     elif x.size >= 3 and n_blocks >= 3:
         blocks = min(n_blocks, x.size)
         folds = _block_folds(x, blocks)
         scheme = (
-            "single run: blocked cross-validation over contiguous amplitude blocks "
+            ("single run" if n_runs == 1 else "runs over disjoint amplitude ranges")
+            + ": blocked cross-validation over contiguous amplitude blocks "
             f"({blocks} blocks, the {len(folds)} interior ones held out in turn), one-SE rule"
         )
     else:
@@ -269,18 +323,23 @@ def fit_damping_polynomial(
 
     cv_rmse = np.full(max_degree + 1, np.nan)
     cv_rmse_se = np.full(max_degree + 1, np.nan)
+    cv_excess_se = np.full(max_degree + 1, np.nan)
+    fold_errors: dict[int, np.ndarray] = {}
     if folds:
         for degree in range(max_degree + 1):
             errors = _fold_rmse(x, damping, folds, degree)
-            if errors is None:
+            if errors is None or errors.size == 0:
                 continue
+            fold_errors[degree] = errors
             cv_rmse[degree] = errors.mean()
             cv_rmse_se[degree] = errors.std(ddof=1) / np.sqrt(errors.size) if errors.size > 1 else 0.0
 
-    if np.any(np.isfinite(cv_rmse)):
+    if fold_errors:
+        cv_excess_se = _paired_standard_errors(fold_errors, max_degree)
         best = int(np.nanargmin(cv_rmse))
-        threshold = cv_rmse[best] + cv_rmse_se[best]
-        degree = int(np.flatnonzero(np.isfinite(cv_rmse) & (cv_rmse <= threshold))[0])
+        excess = cv_rmse - cv_rmse[best]
+        within = np.isfinite(cv_rmse) & (excess <= cv_rmse_se[best]) & (excess <= 2.0 * cv_excess_se)
+        degree = int(np.flatnonzero(within)[0])
     else:
         degree = 0
         if folds:
@@ -295,6 +354,7 @@ def fit_damping_polynomial(
         x_transform=x_transform,
         cv_rmse=cv_rmse,
         cv_rmse_se=cv_rmse_se,
+        cv_excess_se=cv_excess_se,
         cv_scheme=scheme,
         n_runs=n_runs,
         n_points=int(x.size),
@@ -711,7 +771,7 @@ def area_hypothesis(
             **base,
             statistic=statistic_combined,
             supported=False,
-            verdict="inconclusive",
+            verdict=NOT_APPLICABLE,
             n_runs=0,
             n_boot_valid=0,
             note="needs at least two configurations with different bearing areas",
@@ -726,7 +786,7 @@ def area_hypothesis(
             **base,
             statistic=statistic_combined,
             supported=False,
-            verdict="inconclusive",
+            verdict=NOT_APPLICABLE,
             n_runs=n_runs_total,
             n_boot_valid=0,
             note="the configurations share no common velocity-amplitude range",

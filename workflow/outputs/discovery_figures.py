@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
-from workflow.outputs.figures import STYLE, VELOCITY_LABEL  # noqa: E402
+from workflow.outputs.figures import STYLE, VELOCITY_LABEL, add_note, plain_log_axis  # noqa: E402
 
 __all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
@@ -55,6 +55,24 @@ def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4) -> tuple[np
     return np.array(centres), np.array(means)
 
 
+def plain_number(value: float) -> str:
+    """3 significant digits without exponent notation: 0.0123, 1.41, 1,410."""
+    if abs(value) >= 1000:
+        return f"{value:,.0f}"
+    return f"{value:.3g}"
+
+
+def residual_ticks(limit: float) -> list[float]:
+    """Residual-axis ticks: 0, +-2 (the scatter band) and +-10, 100 ... up to ``limit``;
+    spaced so that their labels cannot meet on the linear-then-logarithmic axis."""
+    ticks = [2.0]
+    power = 10.0
+    while power <= limit:
+        ticks.append(power)
+        power *= 10.0
+    return sorted([0.0, *ticks, *(-tick for tick in ticks)])
+
+
 def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapping) -> plt.Figure:
     """Residuals vs amplitude of the baseline and the extended model of one configuration.
 
@@ -81,7 +99,7 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
     models = {"baseline": entry["baseline"]["model"], "extended": entry["extended_model"]["model"]}
     gain = entry.get("gain", {}).get("ratio")
     with plt.rc_context(STYLE):
-        fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7.0, 6.4))
+        fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9.0, 6.4))
         roles = ["baseline"] if models["extended"] == models["baseline"] else ["baseline", "extended"]
         for ax, curve in zip(axes, ("zeta", "frequency_hz")):
             ax.axhspan(-2, 2, color="0.85", alpha=0.6, lw=0, label="±2 scatter")
@@ -103,6 +121,7 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
                     label=f"{role}: {models[role]} (binned mean)",
                 )
             ax.set_xscale("log")
+            plain_log_axis(ax.xaxis)
             ax.set_ylabel(CURVE_LABELS[curve])
             finite = rows.loc[rows["curve"] == curve, "residual"].to_numpy(float)
             finite = finite[np.isfinite(finite)]
@@ -110,7 +129,12 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
             # linear within +-4 (the scatter band stays readable), logarithmic beyond
             ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
             ax.set_ylim(-lim, lim)
-        axes[0].legend(loc="best")
+            ax.yaxis.set_major_locator(ticker.FixedLocator(residual_ticks(lim)))
+            ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
+            ax.yaxis.set_minor_locator(ticker.NullLocator())
+            if not len(rows[rows["curve"] == curve]):
+                ax.text(0.5, 0.5, "no residuals", ha="center", va="center", transform=ax.transAxes)
+        axes[0].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
         axes[-1].set_xlabel(VELOCITY_LABEL)
         ratio = f", gain ratio {gain:.2f}" if gain is not None else ""
         fig.suptitle(f"{configuration}: cause {cause}{ratio}")
@@ -129,15 +153,24 @@ def candidates_figure(document: Mapping) -> plt.Figure:
     Returns
     -------
     Figure
-        One horizontal bar chart per configuration (log error axis): the ranking's
-        scores, ``none`` being the baseline model (hatched), the verdict outlined.
+        A dot plot per configuration (one panel each, stacked): each candidate's
+        held-out error on a logarithmic axis (ratios between candidates read as
+        distances), the baseline ``none`` as a grey dot and a dashed line, the verdict
+        as a large outlined dot. Dots, not bars: a bar on a log axis starts nowhere.
     """
     entries = document.get("configurations", {})
     names = list(entries)
     with plt.rc_context(STYLE):
-        n = max(len(names), 1)
-        fig, axes = plt.subplots(1, n, figsize=(max(4.2 * n, 5.0), 3.8), squeeze=False)
-        axes = axes[0]
+        rows = [len(entries[name].get("ranking", [])) for name in names] or [1]
+        heights = [max(count, 1) * 0.32 + 0.9 for count in rows]
+        fig, axes = plt.subplots(
+            len(rows),
+            1,
+            figsize=(8.4, sum(heights) + 0.6),
+            squeeze=False,
+            gridspec_kw={"height_ratios": heights},
+        )
+        axes = axes[:, 0]
         if not names:
             axes[0].text(
                 0.5, 0.5, "no configuration diagnosed", ha="center", va="center", transform=axes[0].transAxes
@@ -158,26 +191,34 @@ def candidates_figure(document: Mapping) -> plt.Figure:
                 else f"{c} ({candidates.get(c, {}).get('model', '?')})"
                 for c in causes
             ]
-            colours = ["0.6" if c == "none" else "tab:blue" for c in causes]
-            bars = ax.barh(np.arange(len(causes)), scores, color=colours)
-            for bar, c in zip(bars, causes):
-                if c == "none":
-                    bar.set_hatch("//")
-                if c == entry.get("cause"):
-                    bar.set_edgecolor("black")
-                    bar.set_linewidth(2.0)
-            if np.isfinite(scores).any():
-                base = scores[causes.index("none")] if "none" in causes else np.nan
-                if np.isfinite(base):
-                    ax.axvline(
-                        base, color="tab:red", ls="--", lw=1, label=f"baseline {base_model}: {base:.2f}"
-                    )
+            positions = np.arange(len(causes))
+            finite = np.isfinite(scores)
+            for position, cause, score in zip(positions, causes, scores):
+                if not np.isfinite(score):
+                    continue
+                verdict = cause == entry.get("cause")
+                ax.plot(
+                    score,
+                    position,
+                    "o",
+                    ms=10 if verdict else 6,
+                    color="0.55" if cause == "none" else "tab:blue",
+                    mec="black" if verdict else "none",
+                    mew=2.0 if verdict else 0.0,
+                )
+            if "none" in causes and np.isfinite(scores[causes.index("none")]):
+                ax.axvline(scores[causes.index("none")], color="tab:red", ls="--", lw=1)
+            if finite.any():
                 ax.set_xscale("log")
-                ax.legend(loc="lower right")
-            ax.set_yticks(np.arange(len(causes)), labels)
-            ax.set_xlabel(ERROR_LABEL)
-            ax.set_title(f"{name}: verdict {entry.get('cause', '?')}")
-        fig.suptitle("Candidate causes: held-out error (outlined: verdict)")
+                plain_log_axis(ax.xaxis)
+                low, high = np.nanmin(scores), np.nanmax(scores)
+                ax.set_xlim(low / 1.3, high * 1.3)
+            else:
+                ax.text(0.5, 0.5, "no candidate scored", ha="center", va="center", transform=ax.transAxes)
+            ax.set_yticks(positions, labels)
+            ax.set_ylim(-0.6, len(causes) - 0.4)
+            ax.set_title(f"{name}: verdict {entry.get('cause', '?')} (large outlined dot)", loc="left")
+        axes[-1].set_xlabel(ERROR_LABEL + "; dashed: baseline")
         fig.tight_layout()
     return fig
 
@@ -199,7 +240,7 @@ def heldout_figure(document: Mapping) -> plt.Figure:
     """
     across = document.get("across_configurations") or {}
     with plt.rc_context(STYLE):
-        fig, ax = plt.subplots(figsize=(7.0, 4.2))
+        fig, ax = plt.subplots(figsize=(9.0, 4.6))
         if not across.get("applicable"):
             reason = across.get("reason", "no across-configuration prediction in the document")
             ax.text(
@@ -219,26 +260,46 @@ def heldout_figure(document: Mapping) -> plt.Figure:
         names = sorted(configs, key=lambda n: configs[n].get("bearing_area_in2") or 0.0)
         x = np.arange(len(names))
         roles = [r for r in ("baseline", "extended") if r in models]
-        width = 0.8 / max(len(roles), 1)
-        for k, role in enumerate(roles):
+        markers = {"baseline": "s", "extended": "o"}
+        worst = []
+        for role in roles:
             errors = [configs[n].get(f"{role}_error") for n in names]
             errors = np.array([e if e is not None else np.nan for e in errors], dtype=float)
+            worst.append(errors)
             mean = across.get(f"{role}_mean_error")
-            label = f"{role}: {models[role]}" + (f" (mean {mean:.2f})" if mean is not None else "")
-            ax.bar(
-                x + (k - (len(roles) - 1) / 2) * width, errors, width, color=ROLE_COLOURS[role], label=label
-            )
+            label = f"{role}: {models[role]}" + (f" (mean {plain_number(mean)})" if mean is not None else "")
+            ax.plot(x, errors, markers[role], ms=8, color=ROLE_COLOURS[role], label=label)
+        for position in x:
+            values = [errors[position] for errors in worst if np.isfinite(errors[position])]
+            if len(values) == 2:
+                ax.plot([position, position], values, color="0.6", lw=1, zorder=0)
+        ax.axhspan(0, 2, color="0.85", alpha=0.6, lw=0, label="within ±2 scatter")
         ax.set_xticks(x, [f"{n}\n{configs[n].get('bearing_area_in2', float('nan')):.2f} in²" for n in names])
+        ax.set_xlim(-0.5, len(names) - 0.5)
         ax.set_yscale("log")
-        ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
-        ax.yaxis.set_minor_formatter(ticker.FormatStrFormatter("%g"))
+        plain_log_axis(ax.yaxis)
+        finite = np.concatenate(worst) if worst else np.array([])
+        finite = finite[np.isfinite(finite)]
+        if finite.size:
+            ax.set_ylim(min(0.5, finite.min() / 1.5), finite.max() * 1.5)
         ax.set_xlabel("left-out configuration (bearing area, in²)")
-        ax.set_ylabel("prediction error of the left-out configuration\n(RMS residual / scatter, 1)")
+        ax.set_ylabel("prediction error of the left-out\nconfiguration (RMS residual / scatter, 1)")
         ratio = across.get("ratio")
         title = "Prediction of a left-out bearing area from the others' ln(area) law"
         if ratio is not None:
             title += f"\nextended / baseline mean error = {ratio:.2f}"
-        ax.set_title(title)
-        ax.legend(loc="best")
+        ax.set_title(title, loc="left")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
         fig.tight_layout()
+        if finite.size and finite.min() > 10:
+            add_note(
+                fig,
+                [
+                    "Both predictions miss every left-out configuration by more than "
+                    f"{plain_number(finite.min())} "
+                    "times the measured scatter: neither model predicts a new bearing area, and the "
+                    "ratio of their errors says little."
+                ],
+                width=100,
+            )
     return fig

@@ -4,6 +4,8 @@ logarithmic amplitude axes (amplitudes span decades), legible at report size.
 
 from __future__ import annotations
 
+import logging
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -13,7 +15,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
-from matplotlib.ticker import FuncFormatter, LogLocator  # noqa: E402
+from matplotlib import ticker  # noqa: E402
+
+from workflow.outputs.readability import readability_problems  # noqa: E402
+
+log = logging.getLogger(__name__)
 
 STYLE = {
     "figure.figsize": (7.0, 4.6),
@@ -27,6 +33,8 @@ STYLE = {
     "grid.alpha": 0.3,
     "axes.spines.top": False,
     "axes.spines.right": False,
+    # plain tick labels: 123.30 rather than "+1.233e2" beside the axis
+    "axes.formatter.useoffset": False,
 }
 
 VELOCITY_LABEL = "velocity amplitude (in/s)"
@@ -35,8 +43,12 @@ FREQUENCY_LABEL = "damped frequency of the mode (Hz)"
 
 
 def save(figure: plt.Figure, path: Path | str) -> None:
-    """Save ``figure`` as PNG (through a temporary name, so no half-written file stays)."""
+    """Save ``figure`` as PNG (through a temporary name, so no half-written file stays);
+    log a warning naming every readability problem found
+    (:func:`workflow.outputs.readability.readability_problems`)."""
     target = Path(path)
+    for problem in readability_problems(figure):
+        log.warning("figure %s is hard to read: %s", target.name, problem)
     target.parent.mkdir(parents=True, exist_ok=True)
     temporary = target.with_name(f".{target.stem}.tmp.png")
     figure.savefig(temporary, bbox_inches="tight")
@@ -44,15 +56,142 @@ def save(figure: plt.Figure, path: Path | str) -> None:
     temporary.replace(target)
 
 
+class PlainLogFormatter(ticker.Formatter):
+    """Plain numbers (0.2, 1, 50) on a logarithmic axis, minor ticks labelled only where
+    they do not crowd: every one within half a decade, 2, 3 and 5 within one, 2 and 5
+    within two, none beyond (the decades alone then carry the scale)."""
+
+    def __init__(self, minor: bool = False):
+        self.minor = minor
+
+    def __call__(self, value: float, pos: int | None = None) -> str:
+        if value <= 0:
+            return ""
+        if self.minor:
+            low, high = sorted(self.axis.get_view_interval())
+            decades = np.log10(high / low) if low > 0 else np.inf
+            mantissa = round(value / 10 ** np.floor(np.log10(value) + 1e-9), 6)
+            if decades > 2.0 or (decades > 1.0 and mantissa not in (2.0, 5.0)):
+                return ""
+            if decades > 0.5 and mantissa not in (2.0, 3.0, 5.0):
+                return ""
+        return f"{value:g}"
+
+
+def plain_log_axis(axis: matplotlib.axis.Axis) -> None:
+    """A logarithmic axis (already set so) labelled by :class:`PlainLogFormatter`."""
+    axis.set_major_formatter(PlainLogFormatter())
+    axis.set_minor_locator(ticker.LogLocator(subs=np.arange(2.0, 10.0)))
+    axis.set_minor_formatter(PlainLogFormatter(minor=True))
+
+
 def amplitude_axis(axis: plt.Axes) -> None:
     """Logarithmic velocity-amplitude x axis with plain tick labels (0.2, 0.5, 1, 2 ...),
     which stay legible whether the data span a fraction of a decade or several."""
-    plain = FuncFormatter(lambda value, _: f"{value:g}")
     axis.set_xscale("log")
-    axis.xaxis.set_major_formatter(plain)
-    axis.xaxis.set_minor_locator(LogLocator(subs=(2.0, 5.0)))
-    axis.xaxis.set_minor_formatter(plain)
+    plain_log_axis(axis.xaxis)
     axis.set_xlabel(VELOCITY_LABEL)
+
+
+def legend_beside(axis: plt.Axes, **options) -> None:
+    """The legend right of the panel, where it covers no data (runs can be many)."""
+    handles, _ = axis.get_legend_handles_labels()
+    if handles:
+        columns = 2 if len(handles) > 16 else 1
+        axis.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, ncol=columns, **options)
+
+
+def add_note(figure: plt.Figure, sentences: list[str], width: int = 110) -> None:
+    """Sentences under the figure (below every panel, outside the data)."""
+    if not sentences:
+        return
+    text = "\n".join(textwrap.fill(sentence, width) for sentence in sentences)
+    lines = text.count("\n") + 1
+    height_in = figure.get_size_inches()[1]
+    bottom = min(0.4, (0.2 + 0.16 * lines) / height_in)
+    figure.tight_layout(rect=(0.0, bottom, 1.0, 1.0))
+    figure.text(0.01, 0.01, text, fontsize=8, ha="left", va="bottom", color="0.15")
+
+
+def misfit_ranges(
+    amplitude: np.ndarray,
+    measured: np.ndarray,
+    predicted: np.ndarray,
+    *,
+    per_decade: int = 8,
+    min_points: int = 5,
+) -> list[tuple[float, float, float]]:
+    """Amplitude bins where a fitted curve misses the data by more than their scatter.
+
+    Parameters
+    ----------
+    amplitude : array
+        Velocity amplitude of each segment, in/s (> 0).
+    measured, predicted : array
+        The quantity measured and the curve's value at the same amplitudes (same unit;
+        pass logarithms for damping, whose scatter grows with its size).
+    per_decade : int
+        Bins per decade of amplitude.
+    min_points : int
+        Fewest segments for a bin to count (a scatter needs a few).
+
+    Returns
+    -------
+    list of (low_in_s, high_in_s, offset_in_scatter)
+        Contiguous bins merged; ``offset_in_scatter`` is the largest |mean residual| /
+        (standard deviation of the residuals in that bin) over the merged bins. A bin
+        counts when that ratio exceeds 2: the curve passes outside most of the points
+        there, a misfit no scatter explains.
+    """
+    amplitude = np.asarray(amplitude, dtype=float)
+    residual = np.asarray(measured, dtype=float) - np.asarray(predicted, dtype=float)
+    keep = (amplitude > 0) & np.isfinite(residual)
+    amplitude, residual = amplitude[keep], residual[keep]
+    ranges: list[tuple[float, float, float]] = []
+    if amplitude.size == 0:
+        return ranges
+    code = np.floor(per_decade * np.log10(amplitude)).astype(int)
+    previous = None
+    for bin_code in np.unique(code):
+        inside = residual[code == bin_code]
+        if inside.size < min_points:
+            continue
+        scatter = np.std(inside, ddof=1)
+        offset = abs(np.mean(inside)) / scatter if scatter > 0 else np.inf
+        if offset <= 2.0:
+            continue
+        low, high = 10 ** (bin_code / per_decade), 10 ** ((bin_code + 1) / per_decade)
+        low, high = max(low, amplitude[code == bin_code].min()), min(high, amplitude[code == bin_code].max())
+        if previous is not None and previous == bin_code - 1:
+            start, _, worst = ranges.pop()
+            ranges.append((start, high, max(worst, offset)))
+        else:
+            ranges.append((low, high, offset))
+        previous = bin_code
+    return ranges
+
+
+def misfit_sentence(name: str, quantity: str, ranges: list[tuple[float, float, float]]) -> str | None:
+    """'NAME misses the measured QUANTITY at 0.2-0.5 in/s (by 3.1 scatter) ...' or None."""
+    if not ranges:
+        return None
+    parts = [f"{low:.3g}-{high:.3g} in/s" for low, high, _ in ranges]
+    worst = max(offset for _, _, offset in ranges)
+    return (
+        f"{name} misses the measured {quantity} at {', '.join(parts)}: there its mean is off by up to "
+        f"{worst:.1f} times the segments' scatter."
+    )
+
+
+def curve_at(frame: pd.DataFrame, column: str, amplitude: np.ndarray) -> np.ndarray:
+    """A curve's ``column`` interpolated (in log amplitude) at ``amplitude``; NaN outside it."""
+    grid = frame["velocity_amplitude_in_s"].to_numpy(float)
+    values = frame[column].to_numpy(float)
+    order = np.argsort(grid)
+    grid, values = grid[order], values[order]
+    if grid.size < 2:
+        return np.full(np.shape(amplitude), np.nan)
+    return np.interp(np.log10(amplitude), np.log10(grid), values, left=np.nan, right=np.nan)
 
 
 def run_colours(runs: list[str]) -> dict[str, tuple]:
@@ -153,8 +292,10 @@ def damping_vs_amplitude(
         Model name -> DataFrame with ``velocity_amplitude_in_s`` and ``zeta``.
     """
     with plt.rc_context(STYLE):
-        figure, axis = plt.subplots()
-        runs = _plot_runs(axis, segments, "zeta", scale=100)
+        figure, axis = plt.subplots(figsize=(8.4, 4.6))
+        _plot_runs(axis, segments, "zeta", scale=100)
+        notes = []
+        fitted = {}
         if curve is not None and len(curve):
             axis.fill_between(
                 curve["velocity_amplitude_in_s"],
@@ -171,14 +312,39 @@ def damping_vs_amplitude(
                 linewidth=1.6,
                 label="polynomial fit",
             )
+            fitted["The polynomial fit"] = curve
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
             axis.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style, linewidth=2.0, label=name)
+            fitted[name] = frame
+        for name, frame in fitted.items():
+            notes.append(damping_misfit(segments, frame, name))
+        if segments.empty:
+            axis.text(0.5, 0.5, "no usable segment", ha="center", va="center", transform=axis.transAxes)
         amplitude_axis(axis)
         axis.set_ylabel(DAMPING_LABEL)
         axis.set_title(title)
-        axis.legend(ncol=2 if len(runs) > 6 else 1, loc="best")
+        legend_beside(axis)
         figure.tight_layout()
+        add_note(figure, [note for note in notes if note])
     return figure
+
+
+def damping_misfit(segments: pd.DataFrame, frame: pd.DataFrame, name: str) -> str | None:
+    """The sentence saying where a fitted damping curve misses the segments (or None)."""
+    amplitude = segments["velocity_amplitude_in_s"].to_numpy(float)
+    zeta = segments["zeta"].to_numpy(float)
+    predicted = curve_at(frame, "zeta", amplitude)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ranges = misfit_ranges(amplitude, np.log(zeta), np.log(predicted))
+    return misfit_sentence(name, "damping", ranges)
+
+
+def frequency_misfit(segments: pd.DataFrame, frame: pd.DataFrame, name: str) -> str | None:
+    """The sentence saying where a fitted frequency curve misses the segments (or None)."""
+    amplitude = segments["velocity_amplitude_in_s"].to_numpy(float)
+    predicted = curve_at(frame, "frequency_hz", amplitude)
+    ranges = misfit_ranges(amplitude, segments["frequency_hz"].to_numpy(float), predicted)
+    return misfit_sentence(name, "frequency", ranges)
 
 
 def frequency_vs_amplitude(
@@ -189,17 +355,22 @@ def frequency_vs_amplitude(
 ) -> plt.Figure:
     """Backbone: local damped frequency vs velocity amplitude, per run (and models)."""
     with plt.rc_context(STYLE):
-        figure, axis = plt.subplots()
-        runs = _plot_runs(axis, segments, "frequency_hz")
+        figure, axis = plt.subplots(figsize=(8.4, 4.6))
+        _plot_runs(axis, segments, "frequency_hz")
+        notes = []
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
             axis.plot(
                 frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, linewidth=2.0, label=name
             )
+            notes.append(frequency_misfit(segments, frame, name))
+        if segments.empty:
+            axis.text(0.5, 0.5, "no usable segment", ha="center", va="center", transform=axis.transAxes)
         amplitude_axis(axis)
         axis.set_ylabel(FREQUENCY_LABEL)
         axis.set_title(title)
-        axis.legend(ncol=2 if len(runs) > 6 else 1, loc="best")
+        legend_beside(axis)
         figure.tight_layout()
+        add_note(figure, [note for note in notes if note])
     return figure
 
 
@@ -233,7 +404,10 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
         amplitude_axis(left)
         left.set_ylabel(DAMPING_LABEL)
         left.set_title("polynomial fits with 95 % bands")
-        left.legend(loc="best")
+        if curves.empty:
+            left.text(0.5, 0.5, "no damping fit", ha="center", va="center", transform=left.transAxes)
+        else:
+            left.legend(loc="best")
         amplitudes = list(dict.fromkeys(area_table["velocity_amplitude_in_s"]))
         colours = run_colours([f"{value:.3g}" for value in amplitudes])
         for amplitude in amplitudes:
@@ -264,6 +438,17 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
         right.set_title("damping vs bearing area at common amplitudes")
         if amplitudes:
             right.legend(loc="best", title="velocity amplitude")
+        else:
+            right.text(
+                0.5,
+                0.5,
+                "not applicable: damping vs bearing area needs\n"
+                "two or more configurations with bearing_area_in2\nin campaign.yaml",
+                ha="center",
+                va="center",
+                transform=right.transAxes,
+            )
+            right.set_axis_off()
         figure.suptitle(title)
         figure.tight_layout()
     return figure
@@ -306,9 +491,10 @@ def model_comparison(
     """Paper figures 14 and 15: measured damping and frequency vs velocity amplitude
     with the fitted simulations (two panels sharing the amplitude axis)."""
     with plt.rc_context(STYLE):
-        figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 7.0), sharex=True)
-        runs = _plot_runs(top, segments, "zeta", scale=100, markersize=2.5, alpha=0.6)
+        figure, (top, bottom) = plt.subplots(2, 1, figsize=(8.4, 7.0), sharex=True)
+        _plot_runs(top, segments, "zeta", scale=100, markersize=2.5, alpha=0.6)
         _plot_runs(bottom, segments, "frequency_hz", markersize=2.5, alpha=0.6, labels=False)
+        notes = []
         for (name, frame), style in zip(models.items(), ("-", "--", "-.", ":")):
             top.plot(
                 frame["velocity_amplitude_in_s"],
@@ -326,14 +512,21 @@ def model_comparison(
                 linewidth=2.0,
                 label=name,
             )
+            notes += [damping_misfit(segments, frame, name), frequency_misfit(segments, frame, name)]
+        if any(notes):
+            notes.append(
+                "Such a misfit is a finding, not a failed fit: it is what the diagnosis "
+                "(verdict page, discovery figures) sets out to explain."
+            )
         amplitude_axis(top)
         top.set_xlabel("")
         top.set_ylabel(DAMPING_LABEL)
         top.set_title(title)
-        top.legend(ncol=3 if len(runs) > 6 else 2, loc="best", fontsize=7)
+        legend_beside(top, fontsize=7)
         amplitude_axis(bottom)
         bottom.set_ylabel(FREQUENCY_LABEL)
         if models:
-            bottom.legend(loc="best")
+            legend_beside(bottom)
         figure.tight_layout()
+        add_note(figure, [note for note in notes if note])
     return figure

@@ -27,17 +27,26 @@ import pandas as pd
 CAUSE_WORDS: dict[str, str] = {
     "none": "none — the paper's friction model explains the data within the run-to-run scatter",
     "microslip_power_law": "micro-slip — slip spreads gradually over the contact "
-    "(Iwan-type, many slip thresholds), so damping grows as a power of "
-    "amplitude and the frequency drops as slip spreads",
-    "quadratic_damping": "quadratic damping — a velocity-squared loss (air or fluid drag, radiation): damping "
-    "proportional to amplitude while the frequency stays put",
-    "stiffness_nonlinearity": "stiffness nonlinearity — an amplitude-dependent stiffness that dissipates nothing "
-    "(contact opening, geometry): the frequency shifts more than "
-    "friction can explain",
-    "run_drift": "run drift — the joint changed between runs (preload relaxation, settling): the runs' "
-    "damping shifts steadily with run order",
+    "(Iwan-type, many slip thresholds)",
+    "quadratic_damping": "quadratic damping — a velocity-squared loss (air or fluid drag, radiation)",
+    "stiffness_nonlinearity": "stiffness nonlinearity — an amplitude-dependent stiffness that dissipates "
+    "nothing (contact opening, geometry)",
+    "run_drift": "run drift — the joint changed between runs (preload relaxation, settling)",
     "unknown": "unknown — the paper's model fails, but none of the candidate causes fixes it",
 }
+"""The physical mechanism of each cause. What the data show is said from the numbers
+(:func:`trend_sentence`), never from the cause's textbook signature."""
+
+CLEAR_MARGIN = 1.5
+"""The verdict is called *clearly* ahead of the next candidate only when that candidate's
+held-out error is at least this many times the verdict's ..."""
+
+CLEAR_CONFIDENCE = 0.8
+"""... and at least this fraction of the resamples name the same cause."""
+
+FLAT_CHANGE = 0.05
+"""A measured trend smaller than this relative change (5 %) over the amplitude range is
+called flat."""
 
 #: Short names of the causes, for tables and headlines.
 CAUSE_NAMES: dict[str, str] = {
@@ -89,7 +98,8 @@ tr.excluded td { background: #fff3f0; }
        font-size: 0.85em; white-space: nowrap; }
 .tag.supported, .tag.used, .tag.none { background: #d9f2e3; color: #22543d; }
 .tag.contradicted, .tag.excluded { background: #fde2dd; color: #822727; }
-.tag.inconclusive, .tag.skipped { background: #eee; color: #444; }
+.tag.inconclusive, .tag.skipped, .tag.not-applicable { background: #eee; color: #444; }
+.tag.flag { background: #fdf0c8; color: #744210; }
 .tag.cause { background: #dbe7f7; color: #1a365d; }
 """
 
@@ -143,7 +153,7 @@ def candidate_name(cause: str | None) -> str:
 
 
 def tag(text: str, kind: str) -> str:
-    return f'<span class="tag {esc(kind)}">{esc(text)}</span>'
+    return f'<span class="tag {esc(kind.replace(" ", "-"))}">{esc(text)}</span>'
 
 
 def page(title: str, body: str) -> str:
@@ -213,6 +223,104 @@ def candidate_margin(entry: Mapping) -> dict | None:
     }
 
 
+def margin_words(margin_ratio: float | None, confidence: float | None) -> str:
+    """How far ahead of the next candidate the verdict is, in words that scale with it.
+
+    ``clearly ahead`` needs a margin of :data:`CLEAR_MARGIN` and a confidence of
+    :data:`CLEAR_CONFIDENCE`; ``ahead`` a margin of 1.2; below that ``only marginally
+    ahead``; below 1 (the other candidate predicts better) ``behind``.
+    """
+    if margin_ratio is None or not math.isfinite(margin_ratio):
+        return "not compared with"
+    if margin_ratio < 1.0:
+        return "behind"
+    if margin_ratio >= CLEAR_MARGIN and (confidence or 0.0) >= CLEAR_CONFIDENCE:
+        return "clearly ahead of"
+    if margin_ratio >= 1.2:
+        return "ahead of"
+    return "only marginally ahead of"
+
+
+def gain_words(gain_ratio: float | None, margin_ratio: float | None, confidence: float | None) -> str:
+    """'clearly better' / 'better' / 'no better': the extended model's held-out prediction
+    against the baseline's. 'clearly' only when the gain is at least a halving of the
+    error and the verdict is clearly ahead of the next candidate (:func:`margin_words`)."""
+    if gain_ratio is None or not math.isfinite(gain_ratio) or gain_ratio >= 1.0:
+        return "no better"
+    if gain_ratio <= 0.5 and margin_words(margin_ratio, confidence) == "clearly ahead of":
+        return "clearly better"
+    return "better"
+
+
+def measured_trends(segments: pd.DataFrame, share: float = 0.15) -> dict[str, dict]:
+    """Damping and frequency at the low and the high end of each configuration's amplitudes.
+
+    Parameters
+    ----------
+    segments : DataFrame
+        results/tables/segments.parquet (``configuration``, ``velocity_amplitude_in_s``,
+        ``zeta``, ``frequency_hz``).
+    share : float
+        Fraction of a configuration's segments (lowest and highest amplitudes) whose
+        medians stand for each end: medians of many segments, not single noisy points.
+
+    Returns
+    -------
+    dict
+        Configuration -> ``amplitude_low_in_s``, ``amplitude_high_in_s`` (medians of each
+        end), ``zeta_low``, ``zeta_high`` (fraction of critical), ``frequency_low_hz``,
+        ``frequency_high_hz``; configurations with fewer than 6 segments are left out.
+    """
+    trends = {}
+    if segments is None or segments.empty:
+        return trends
+    for name, part in segments.groupby("configuration", sort=False):
+        part = part.sort_values("velocity_amplitude_in_s")
+        count = max(int(round(share * len(part))), 3)
+        if len(part) < 2 * count:
+            continue
+        low, high = part.iloc[:count], part.iloc[-count:]
+        trends[str(name)] = {
+            "amplitude_low_in_s": float(low["velocity_amplitude_in_s"].median()),
+            "amplitude_high_in_s": float(high["velocity_amplitude_in_s"].median()),
+            "zeta_low": float(low["zeta"].median()),
+            "zeta_high": float(high["zeta"].median()),
+            "frequency_low_hz": float(low["frequency_hz"].median()),
+            "frequency_high_hz": float(high["frequency_hz"].median()),
+        }
+    return trends
+
+
+def _direction(low: float, high: float, flat: float) -> str:
+    change = high / low - 1.0 if low else math.inf
+    if abs(change) < flat:
+        return "stays level"
+    return "rises" if change > 0 else "falls"
+
+
+def trend_sentence(trend: Mapping) -> str:
+    """What the measured damping and frequency do from low to high amplitude, in words
+    taken from the numbers (direction, both ends, the frequency's relative change)."""
+    zeta = _direction(trend["zeta_low"], trend["zeta_high"], FLAT_CHANGE)
+    frequency_change = trend["frequency_high_hz"] / trend["frequency_low_hz"] - 1.0
+    # a joint's frequency moves by a fraction of a percent: 0.1 % is already a trend
+    frequency = _direction(trend["frequency_low_hz"], trend["frequency_high_hz"], 1e-3)
+    return (
+        f"Measured from {fmt(trend['amplitude_low_in_s'])} to {fmt(trend['amplitude_high_in_s'])} in/s, "
+        f"the damping {zeta} ({fmt(100 * trend['zeta_low'])} % to {fmt(100 * trend['zeta_high'])} %) "
+        f"and the frequency {frequency} ({fmt(trend['frequency_low_hz'], 5)} Hz to "
+        f"{fmt(trend['frequency_high_hz'], 5)} Hz, {100 * frequency_change:+.2f} %)."
+    )
+
+
+def _flags(entry: Mapping) -> list[str]:
+    """Warnings on the fitted parameters (at a bound, unidentifiable), when the diagnosis gives them."""
+    flags = []
+    for role, key in (("baseline", "baseline"), ("extended model", "extended_model")):
+        flags += [f"{role}: {flag}" for flag in (entry.get(key) or {}).get("flags") or []]
+    return flags
+
+
 def campaign_headline(document: Mapping) -> str:
     """One or two plain sentences: the campaign's verdict."""
     entries = document.get("configurations", {})
@@ -235,11 +343,17 @@ def campaign_headline(document: Mapping) -> str:
             f"{'s' if len(names) != 1 else ''} ({which}), and none of the candidate causes "
             "fixes it: the cause is unknown."
         )
+    words = []
+    for n in failing:
+        margin = candidate_margin(entries[n]) or {}
+        confidence = (entries[n].get("confidence") or {}).get(entries[n].get("cause"))
+        words.append(gain_words((entries[n].get("gain") or {}).get("ratio"), margin.get("ratio"), confidence))
+    word = "clearly better" if words and all(w == "clearly better" for w in words) else "better"
     text = (
         f"The paper's friction model (the better of Dahl and LuGre) falls short in "
         f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
         f"({which}): a model with the missing physics predicts runs held out of the fit "
-        "clearly better. "
+        f"{word}. "
     )
     ratios = [
         entries[n]["gain"].get("ratio")
@@ -334,10 +448,15 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
                 f"times its held-out error ({fmt(margin['next_score'])})."
             )
         elif margin["ratio"] >= 1:
+            confidence = (entry.get("confidence") or {}).get(cause)
+            sure = (
+                f"; {fmt(100 * confidence, 2)} % of the resamples name it" if confidence is not None else ""
+            )
             items.append(
-                f"Margin over the next-best candidate, {candidate_name(margin['next'])}: its "
-                f"held-out error ({fmt(margin['next_score'])}) is "
-                f"{ratio(margin['ratio'])} times the verdict's."
+                f"The verdict is {margin_words(margin['ratio'], confidence)} the next-best candidate, "
+                f"{candidate_name(margin['next'])}: its held-out error ({fmt(margin['next_score'])}) is "
+                f"{ratio(margin['ratio'])} times the verdict's{sure} (clearly ahead needs "
+                f"{CLEAR_MARGIN:g} times and {100 * CLEAR_CONFIDENCE:.0f} %)."
             )
         else:
             items.append(
@@ -346,10 +465,15 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
                 f"ratio {ratio(margin['ratio'])}) but was not accepted: "
                 f"{evidence.get('decision_rule', 'see the decision rule')}."
             )
+    for flag in _flags(entry):
+        items.append(f"Fitted parameter to read with care, {flag}.")
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
+        # the order the runs were taken in: timestamps when the diagnosis found them
+        order = trend.get("order") or "file-name order, which may not be the order the runs were taken in"
         items.append(
-            f"Run-order trend of the damping: {fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
+            f"Run-order trend of the damping ({order}): "
+            f"{fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
             f"from the first run to the last, p = {fmt(trend['p'], 2)} "
             f"({'significant' if trend.get('significant') else 'not significant'})."
         )
@@ -371,6 +495,19 @@ def hypothesis_summary(hypotheses: pd.DataFrame) -> list[list[str]]:
             verdicts = " ".join(
                 tag(f"{verdict} at {count} of {len(part)}", verdict) for verdict, count in counts.items()
             )
+        if (part["verdict"] == "not applicable").all():
+            note = str(part["note"].iloc[0]) if "note" in part and part["note"].iloc[0] else "cannot run here"
+            rows.append(
+                [
+                    esc(hypothesis),
+                    esc(configuration),
+                    verdicts,
+                    "not applicable",
+                    esc(part["statistic"].iloc[0]),
+                    esc(f"not applicable: {note}"),
+                ]
+            )
+            continue
         if len(part) == 1:
             r = part.iloc[0]
             estimates = f"{fmt(r.estimate)} [{fmt(r.ci_low)}, {fmt(r.ci_high)}]"
@@ -413,6 +550,7 @@ def verdict_html(
     runs: pd.DataFrame | None = None,
     hypotheses: pd.DataFrame | None = None,
     areas: Mapping[str, float] | None = None,
+    segments: pd.DataFrame | None = None,
 ) -> str:
     """The report's first page: the verdict of ``results/diagnosis.json`` in plain words.
 
@@ -426,6 +564,8 @@ def verdict_html(
         ``results/tables/hypotheses.parquet``.
     areas : mapping, optional
         Configuration -> bearing area (in²), for the table.
+    segments : DataFrame, optional
+        ``results/tables/segments.parquet``: the measured trends are said from it.
 
     Returns
     -------
@@ -434,6 +574,7 @@ def verdict_html(
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
+    trends = measured_trends(segments) if segments is not None else {}
     areas = dict(areas or {})
     across = document.get("across_configurations") or {}
     if not areas:
@@ -452,7 +593,10 @@ def verdict_html(
             "<ul>"
             + "".join(
                 f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
-                f"{esc(e.get('discrepancy', ''))}</li>"
+                f"{esc(e.get('discrepancy', ''))}"
+                + (f" {esc(trend_sentence(trends[n]))}" if n in trends else "")
+                + "".join(f" {tag('check: ' + flag, 'flag')}" for flag in _flags(e))
+                + "</li>"
                 for n, e in entries.items()
             )
             + "</ul>"
@@ -471,24 +615,25 @@ def verdict_html(
         html_table(
             [
                 "configuration",
-                "bearing area (in²)",
-                "baseline (best of Dahl, LuGre)",
+                "area (in²)",
+                "baseline",
                 "cause",
                 "extended model",
-                "held-out error, baseline",
-                "held-out error, extended",
-                "gain ratio (extended / baseline)",
+                "held-out error: baseline",
+                "extended",
+                "ratio",
                 "next-best candidate",
-                "its held-out error (× the verdict's)",
+                "its error (× verdict's)",
             ],
             [_configuration_row(n, e, areas.get(n)) for n, e in entries.items()],
             numeric=(1, 5, 6, 7, 9),
         )
     )
     parts.append(
-        f'<p class="note">{esc(ERROR_UNIT)}. A gain ratio below 1 means the extended '
-        "model predicts better; with cause none the extended model is the baseline and "
-        "the ratio is 1.</p>"
+        f'<p class="note">{esc(ERROR_UNIT)}. Ratio: extended / baseline held-out error; below 1 '
+        "the extended model predicts better; with cause none the extended model is the "
+        "baseline and the ratio is 1. Last column: the best other candidate's held-out error "
+        "and how many times the verdict's it is.</p>"
     )
     for name, entry in entries.items():
         if entry.get("cause") not in ("none", "unknown"):
@@ -809,7 +954,11 @@ def rst_escape(text: Any) -> str:
 
 
 def verdict_rst(
-    document: Mapping, *, runs: pd.DataFrame | None = None, hypotheses: pd.DataFrame | None = None
+    document: Mapping,
+    *,
+    runs: pd.DataFrame | None = None,
+    hypotheses: pd.DataFrame | None = None,
+    segments: pd.DataFrame | None = None,
 ) -> str:
     """The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
@@ -819,6 +968,7 @@ def verdict_rst(
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
+    trends = measured_trends(segments) if segments is not None else {}
     title = f"Verdict: {cause_name(cause)}"
     lines = [title, "=" * len(title), "", rst_escape(campaign_headline(document)), ""]
     for name, entry in entries.items():
@@ -836,10 +986,16 @@ def verdict_rst(
                 )
                 margin = candidate_margin(entry)
                 if margin and margin["ratio"] is not None and margin["ratio"] >= 1:
+                    confidence = (entry.get("confidence") or {}).get(entry.get("cause"))
                     text += (
-                        f" Next best: {candidate_name(margin['next'])}, with "
-                        f"{ratio(margin['ratio'])} times that error."
+                        f" It is {margin_words(margin['ratio'], confidence)} the next best, "
+                        f"{candidate_name(margin['next'])}, which has {ratio(margin['ratio'])} times "
+                        "its error."
                     )
+        if name in trends:
+            text += " " + trend_sentence(trends[name])
+        for flag in _flags(entry):
+            text += f" Check the fitted {flag}."
         lines += [
             f"* **{rst_escape(name)}**: *{rst_escape(cause_name(entry.get('cause')))}*. " + rst_escape(text),
             "",

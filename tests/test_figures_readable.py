@@ -1,0 +1,159 @@
+"""Every figure a reader sees can be taken in at a glance: no overlapping text, plain tick
+labels, no empty panel without a note, and a note wherever a fitted curve misses the data.
+
+The checker (workflow/outputs/readability.py) is first shown to catch each problem; then
+every figure of the demo campaign and of a one-configuration campaign is rendered by the
+real workflow, whose ``figures.save`` logs each problem it finds in the rule's log.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+import pytest  # noqa: E402
+from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
+
+from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
+from workflow.outputs import figures  # noqa: E402
+from workflow.outputs.readability import readability_problems  # noqa: E402
+
+snakemake = functools.partial(run_snakemake, timeout=1800)
+
+REALDATA = REPO.parent / "shared" / "realdata"
+
+
+# ------------------------------------------------------------------ the checker itself
+def test_checker_finds_overlapping_tick_labels():
+    figure, axis = plt.subplots(figsize=(2.0, 2.0))
+    axis.plot([1, 2], [1, 2])
+    axis.set_xticks([1.0, 1.05], ["a long label", "another long label"])
+    problems = readability_problems(figure)
+    assert any("overlap" in problem and "another long label" in problem for problem in problems)
+
+
+def test_checker_finds_an_empty_panel_and_accepts_a_note():
+    figure, (left, right) = plt.subplots(1, 2)
+    left.plot([1, 2], [1, 2])
+    assert any("no data" in problem for problem in readability_problems(figure))
+    right.text(0.5, 0.5, "not applicable: one configuration", transform=right.transAxes, ha="center")
+    right.set_axis_off()
+    assert readability_problems(figure) == []
+
+
+def test_checker_finds_power_and_offset_notation():
+    figure, axis = plt.subplots()
+    axis.plot([0.01, 100.0], [1000.0, 1000.001])
+    axis.set_xscale("log")
+    with plt.rc_context({"axes.formatter.useoffset": True}):
+        problems = readability_problems(figure)
+    assert any("power notation" in problem for problem in problems)
+    assert any("offset notation" in problem for problem in problems)
+
+
+def test_amplitude_axis_labels_are_plain_and_do_not_crowd():
+    for low, high in ((0.3, 0.6), (1.9, 7.4), (0.1, 1.0), (0.05, 3.0), (0.01, 400.0)):
+        with plt.rc_context(figures.STYLE):
+            figure, axis = plt.subplots()
+            axis.plot([low, high], [1.0, 2.0])
+            figures.amplitude_axis(axis)
+            assert readability_problems(figure) == [], (low, high)
+            labels = [label.get_text() for label in axis.get_xticklabels(which="both") if label.get_text()]
+            assert len(labels) >= 2, (low, high, labels)
+
+
+def test_misfit_ranges_find_a_curve_that_misses_and_pass_one_that_fits():
+    rng = np.random.default_rng(3)
+    amplitude = np.logspace(-1, 1, 400)
+    truth = 1.0 + 0.5 * np.log10(amplitude) ** 2
+    measured = truth + rng.normal(0.0, 0.02, amplitude.size)
+    assert figures.misfit_ranges(amplitude, measured, truth) == []
+    # a straight line through the parabola misses its ends and its middle
+    line = np.full_like(amplitude, truth.mean())
+    ranges = figures.misfit_ranges(amplitude, measured, line)
+    assert ranges and ranges[0][0] == pytest.approx(0.1, rel=0.01)
+    assert all(offset > 2.0 for _, _, offset in ranges)
+
+
+def test_damping_figure_says_where_its_fit_misses():
+    amplitude = np.logspace(-1, 0.5, 300)
+    zeta = 0.001 * (1.0 + amplitude**2)
+    segments = pd.DataFrame(
+        {
+            "run": np.repeat(["run01", "run02", "run03"], 100),
+            "velocity_amplitude_in_s": amplitude,
+            "zeta": zeta * (1 + np.random.default_rng(1).normal(0, 0.01, amplitude.size)),
+        }
+    )
+    flat = pd.DataFrame(
+        {"velocity_amplitude_in_s": amplitude, "zeta": np.full_like(amplitude, zeta.mean())}
+    ).assign(zeta_low=lambda frame: frame["zeta"] * 0.99, zeta_high=lambda frame: frame["zeta"] * 1.01)
+    figure = figures.damping_vs_amplitude(segments, title="t", curve=flat)
+    notes = " ".join(text.get_text() for text in figure.texts)
+    assert "The polynomial fit misses the measured damping" in notes
+    assert readability_problems(figure) == []
+    figure = figures.damping_vs_amplitude(segments, title="t", curve=flat.assign(zeta=zeta))
+    assert not figure.texts
+
+
+# ------------------------------------------------------------------ the workflow's figures
+def hard_to_read(workdir) -> list[str]:
+    """The readability warnings ``figures.save`` logged in any rule's log."""
+    return [
+        line
+        for path in sorted((workdir / "results" / "logs").rglob("*.log"))
+        for line in path.read_text().splitlines()
+        if "is hard to read" in line
+    ]
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    workdir = tmp_path_factory.mktemp("demo")
+    result = snakemake(workdir, "-c2", "all", "--config", "demo={runs_per_configuration: 3}", *CHEAP)
+    assert result.returncode == 0, result.stderr[-4000:]
+    return workdir
+
+
+@pytest.fixture(scope="module")
+def one_configuration(tmp_path_factory):
+    root = tmp_path_factory.mktemp("single")
+    campaign = root / "campaign"
+    generate_campaign(campaign, seed=5, runs_per_configuration=3, configurations={"no_washer": 1.36})
+    workdir = root / "work"
+    workdir.mkdir()
+    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP)
+    assert result.returncode == 0, result.stderr[-4000:]
+    return workdir
+
+
+@pytest.mark.parametrize(("campaign", "configurations"), [("demo", 3), ("one_configuration", 1)])
+def test_every_workflow_figure_is_readable(campaign, configurations, request):
+    workdir = request.getfixturevalue(campaign)
+    drawn = sorted(path.name for path in (workdir / "results" / "figures").glob("*.png"))
+    # figures 7, 8, 9, 13, candidates, held-out; per configuration figures 10-12, 14, 15,
+    # backbone and residuals
+    assert len(drawn) == 6 + 5 * configurations, drawn
+    assert hard_to_read(workdir) == []
+
+
+@pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason=f"no real data at {REALDATA}")
+def test_unesp_figures_are_readable(tmp_path):
+    campaign = REALDATA / "unesp-bolted-beam"
+    targets = [
+        "results/figures/fig10_damping_t5nm.png",
+        "results/figures/fig13_area_fits.png",
+        "results/figures/backbone_t5nm.png",
+        "results/figures/discovery_residuals_t5nm.png",
+        "results/figures/discovery_candidates.png",
+        "results/figures/discovery_heldout.png",
+    ]
+    result = snakemake(tmp_path, "-c2", *targets, "--config", f"campaign={campaign}", *CHEAP)
+    assert result.returncode == 0, result.stderr[-4000:]
+    assert hard_to_read(tmp_path) == []

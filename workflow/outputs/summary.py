@@ -1,0 +1,54 @@
+"""The few lines a person reads when a run ends (console and results/summary.txt): the
+verdict, how many runs were used and why the others were excluded, and where the report is.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import pandas as pd
+
+from workflow.outputs.report import cause_name
+
+REASONS_SHOWN = 3
+"""Excluded runs whose reason is printed; the rest are counted (runs.csv has them all)."""
+
+
+def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> str:
+    """Plain-text summary of a finished analysis.
+
+    Parameters
+    ----------
+    document : mapping
+        results/diagnosis.json.
+    runs : DataFrame
+        results/tables/runs.parquet (``configuration``, ``run``, ``path``, ``status``,
+        ``reason``).
+    width : int
+        Longest line, characters (a reason is cut there, with an ellipsis).
+
+    Returns
+    -------
+    str
+        Lines ending in a newline.
+    """
+    lines = [f"lapjoint: campaign {document.get('campaign', '?')}"]
+    lines.append(f"Verdict: {cause_name(document.get('cause'))} ({document.get('cause')})")
+    for name, entry in document.get("configurations", {}).items():
+        gain = (entry.get("gain") or {}).get("ratio")
+        gain_text = f", held-out error ratio {gain:.2f}" if isinstance(gain, int | float) else ""
+        lines.append(f"  {name}: {cause_name(entry.get('cause'))}{gain_text}")
+    used = runs[runs["status"] == "used"]
+    excluded = runs[runs["status"] != "used"]
+    lines.append(f"Runs: {len(used)} used, {len(excluded)} excluded (of {len(runs)} files)")
+    for row in excluded.head(REASONS_SHOWN).itertuples():
+        reason = " ".join(str(row.reason).split())
+        line = f"  excluded {row.path}: {reason}"
+        lines.append(line if len(line) <= width else line[: width - 1] + "…")
+    if len(excluded) > REASONS_SHOWN:
+        lines.append(f"  ... and {len(excluded) - REASONS_SHOWN} more")
+    if len(excluded):
+        lines.append("  every run and its reason: results/tables/runs.csv")
+    lines.append("Report: results/report/verdict.html (verdict page)")
+    lines.append("  one-file report: snakemake --report results/report.html")
+    return "\n".join(lines) + "\n"
