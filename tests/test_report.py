@@ -513,3 +513,20 @@ def test_verdict_page_in_chromium_names_the_bad_run_and_shows_no_dashes_for_test
     text = audit_page(built_report[0] / "results/report/verdict.html", tmp_path)["text"]
     assert "small_washer/run03.txt" in text
     assert "––" not in text
+
+
+def test_the_verdict_says_where_the_model_does_not_explain_the_data():
+    failing = {"curve": "frequency", "v_low_in_s": 1.67, "v_high_in_s": 5.28, "mean_over_scatter": -10.1}
+    entry = {
+        "explains_data": False,
+        "extended_model": {"model": "iwan"},
+        "evidence": {"explains_data": {"limit": 2.0, "failing_bins": [failing]}},
+    }
+    (sentence,) = report.explains_sentences(entry)
+    assert (
+        "does not explain" in sentence and "frequency at 1.67-5.28 in/s" in sentence and "-10.1" in sentence
+    )
+    entry["explains_data"] = True
+    (sentence,) = report.explains_sentences(entry)
+    assert "explains the data" in sentence and "not" not in sentence
+    assert report.explains_sentences({"extended_model": {"model": "iwan"}}) == []

@@ -223,6 +223,28 @@ def candidate_margin(entry: Mapping) -> dict | None:
     }
 
 
+def explains_sentences(entry: dict) -> list[str]:
+    """Whether the model the verdict rests on explains the data, and where it does not
+    (``explains_data`` and ``evidence.explains_data`` of diagnosis.json)."""
+    explained = (entry.get("evidence") or {}).get("explains_data") or {}
+    if entry.get("explains_data") is None:
+        return []
+    model = model_name((entry.get("extended_model") or {}).get("model"))
+    limit = fmt(explained.get("limit", 2))
+    if entry["explains_data"]:
+        return [f"{model} explains the data: every half decade of amplitude is within {limit} scatters."]
+    failing = explained.get("failing_bins") or []
+    where = "; ".join(
+        f"{b['curve']} at {fmt(b['v_low_in_s'])}-{fmt(b['v_high_in_s'])} in/s "
+        f"({fmt(b['mean_over_scatter'])} scatters)"
+        for b in failing[:4]
+    )
+    more = f" and {len(failing) - 4} more" if len(failing) > 4 else ""
+    return [
+        f"{model} does not explain all the data: it misses by more than {limit} scatters in {where}{more}."
+    ]
+
+
 def margin_words(margin_ratio: float | None, confidence: float | None) -> str:
     """How far ahead of the next candidate the verdict is, in words that scale with it.
 
@@ -467,6 +489,7 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
             )
     for flag in _flags(entry):
         items.append(f"Fitted parameter to read with care, {flag}.")
+    items.extend(explains_sentences(entry))
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
         # the order the runs were taken in: timestamps when the diagnosis found them
