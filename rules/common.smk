@@ -1,8 +1,6 @@
 # Helpers shared by the rules: validated config, the campaign's runs, target lists.
 
 import re
-import sys
-from dataclasses import asdict
 from pathlib import Path
 
 

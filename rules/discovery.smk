@@ -24,9 +24,8 @@ rule diagnose:
         mem_mb=3000,
         runtime=30,
     params:
-        campaign=str(CAMPAIGN),
-        segment_cycles=SETTINGS.analysis.segment_cycles,
-        discovery=asdict(SETTINGS.discovery),
+        analysis=SETTINGS.analysis,
+        discovery=SETTINGS.discovery,
     script:
         "../scripts/diagnose.py"
 

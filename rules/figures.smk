@@ -25,8 +25,7 @@ rule figure_time_history:
     params:
         campaign=str(CAMPAIGN),
         configuration=CONFIGURATIONS[0],
-        filter_order=SETTINGS.analysis.filter_order,
-        analysis=SETTINGS.analysis.run_parameters(),
+        analysis=SETTINGS.analysis,
     script:
         "../scripts/figure_time_history.py"
 

@@ -35,10 +35,8 @@ rule identify_mode:
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
-        band_half_width=SETTINGS.analysis.band_half_width,
-        mode_search_hz=SETTINGS.analysis.mode_search_hz,
-        mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
-        quality=asdict(SETTINGS.quality),
+        analysis=SETTINGS.analysis,
+        quality=SETTINGS.quality,
     script:
         "../scripts/identify_mode.py"
 
@@ -63,8 +61,8 @@ rule analyse_runs:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        analysis=SETTINGS.analysis.run_parameters(),
-        quality=asdict(SETTINGS.quality),
+        analysis=SETTINGS.analysis,
+        quality=SETTINGS.quality,
     script:
         "../scripts/analyse_runs.py"
 
@@ -90,8 +88,6 @@ rule collect_tables:
     resources:
         mem_mb=2000,
         runtime=10,
-    params:
-        campaign=str(CAMPAIGN),
     script:
         "../scripts/collect_tables.py"
 
@@ -114,7 +110,6 @@ rule fit_curves:
         mem_mb=2000,
         runtime=20,
     params:
-        campaign=str(CAMPAIGN),
-        fits=asdict(SETTINGS.fits),
+        fits=SETTINGS.fits,
     script:
         "../scripts/fit_curves.py"

@@ -46,12 +46,8 @@ rule fit_friction_models:
         mem_mb=3000,
         runtime=30,
     params:
-        campaign=str(CAMPAIGN),
-        analysis={
-            key: getattr(SETTINGS.analysis, key)
-            for key in ("filter_order", "segment_cycles", "segment_overlap", "edge_time_constants")
-        },
-        models=asdict(SETTINGS.models),
+        analysis=SETTINGS.analysis,
+        models=SETTINGS.models,
     script:
         "../scripts/fit_friction_models.py"
 

@@ -1,7 +1,7 @@
 """Rule fit_friction_models: Dahl and LuGre (plus zeta0 and the linear frequency)
 fitted to one configuration's measured damping and frequency curves."""
 
-from workflow.io.campaign import read_validated_campaign
+from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json
 from workflow.models.paper import (
     MIN_SEGMENTS_TO_FIT,
@@ -12,7 +12,7 @@ from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_friction_models")
 configuration = snakemake.wildcards.configuration
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
 modes = read_table(snakemake.input.modes).set_index("configuration")
 segments = read_table(snakemake.input.segments)
 mine = segments[segments["configuration"] == configuration]
@@ -28,7 +28,6 @@ if len(mine) < MIN_SEGMENTS_TO_FIT:
 else:
     areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
     coordinate = choose_modal_coordinate(modes["mode_hz"].dropna().to_dict(), areas)
-    settings = snakemake.params.models
     mode = modes.loc[configuration]
     document = fit_configuration(
         mine,
@@ -39,11 +38,7 @@ else:
         response_quantity=campaign.response.quantity,
         coordinate=coordinate,
         analysis=snakemake.params.analysis,
-        global_samples=settings["global_samples"],
-        local_starts=settings["local_starts"],
-        local_iterations=settings["local_iterations"],
-        steps_per_period=settings["steps_per_period"],
-        seed=settings["seed"],
+        settings=snakemake.params.models,
     )
     for model, fit in document["models"].items():
         log.info(

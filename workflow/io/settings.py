@@ -62,10 +62,10 @@ class AnalysisSettings:
     envelope settling time, 1 / (pi * bandwidth)) to the excitation peak or to
     the end of the record are dropped as filter end effects."""
 
-    def run_parameters(self) -> dict[str, Any]:
+    def decay_parameters(self) -> dict[str, Any]:
         """The settings of one run's decay analysis, as keyword arguments of
-        :func:`workflow.measured.runs.analyse_run_with_quality` (the mode search and the
-        band are settled per configuration, before)."""
+        :func:`workflow.measured.decay.analyse_decay` (the mode search and the band are
+        settled per configuration, before)."""
         per_configuration = {"band_half_width", "mode_search_hz", "mode_search_fraction"}
         return {key: value for key, value in asdict(self).items() if key not in per_configuration}
 
@@ -117,7 +117,7 @@ class QualitySettings:
 
 
 @dataclass(frozen=True)
-class FitSettings:
+class DampingFitSettings:
     """Polynomial fits of damping vs velocity amplitude and area."""
 
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
@@ -212,7 +212,7 @@ class WorkflowConfig:
 
     analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
     quality: QualitySettings = field(default_factory=QualitySettings)
-    fits: FitSettings = field(default_factory=FitSettings)
+    fits: DampingFitSettings = field(default_factory=DampingFitSettings)
     models: ModelSettings = field(default_factory=ModelSettings)
     discovery: DiscoverySettings = field(default_factory=DiscoverySettings)
     demo: DemoSettings = field(default_factory=DemoSettings)

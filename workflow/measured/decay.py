@@ -57,6 +57,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from workflow.io.settings import AnalysisSettings
+
 __all__ = [
     "DecayResult",
     "REJECT_CODES",
@@ -308,8 +310,8 @@ def segment_bounds(
     stop_index: int,
     fs_hz: float,
     mode_hz: float,
-    segment_cycles: float = 10.0,
-    segment_overlap: float = 0.5,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Overlapping segments of a fixed number of cycles.
 
@@ -702,11 +704,11 @@ def analyse_decay(
     band_hz: tuple[float, float],
     *,
     mode_hz: float | None = None,
-    filter_order: int = 10,
-    segment_cycles: float = 10.0,
-    segment_overlap: float = 0.5,
-    noise_floor_factor: float = 10.0,
-    edge_time_constants: float = 3.0,
+    filter_order: int = AnalysisSettings.filter_order,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
+    noise_floor_factor: float = AnalysisSettings.noise_floor_factor,
+    edge_time_constants: float = AnalysisSettings.edge_time_constants,
     start_index: int | None = None,
     stop_index: int | None = None,
     bias_tolerance: float = 0.01,
