@@ -1,5 +1,6 @@
 # Helpers shared by the rules: validated config, the campaign's runs, target lists.
 
+import os
 import re
 from pathlib import Path
 
@@ -12,6 +13,18 @@ except ConfigError as error:
     raise WorkflowError(f"invalid configuration:\n{error}") from None
 
 CAMPAIGN = Path(SETTINGS.campaign)
+
+LAPJOINT_ENV = "../envs/lapjoint.yaml"
+"""Every rule's software, for ``--software-deployment-method conda``: the project's
+dependencies, and the project itself installed from this source tree by
+envs/lapjoint.post-deploy.sh, which finds it through ``LAPJOINT_SOURCE``."""
+os.environ["LAPJOINT_SOURCE"] = workflow.basedir
+
+
+envvars:
+    "LAPJOINT_SOURCE",
+
+
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
 if workflow.is_main_process:
@@ -133,4 +146,23 @@ def discovery_outputs():
         *[f"results/figures/discovery_residuals_{name}.png" for name in CONFIGURATIONS],
         "results/figures/discovery_candidates.png",
         "results/figures/discovery_heldout.png",
+    ]
+
+
+LANDING_PAGE = Path("results/report/landing.rst")
+"""The report's first page once report_summary has written it (rules/report.smk)."""
+
+
+def report_outputs():
+    """The report's own pages (the figures and tables they describe come from the others)."""
+    return [
+        str(LANDING_PAGE),
+        "results/report/verdict.html",
+        "results/report/hypotheses.html",
+        "results/report/runs.html",
+        "results/report/quality.html",
+        "results/report/rejected_segments.html",
+        "results/report/damping_fits.html",
+        "results/report/model_fits.html",
+        "results/report/diagnosis_candidates.html",
     ]

@@ -19,6 +19,8 @@ rule diagnose:
         "results/logs/diagnose.log",
     benchmark:
         "results/benchmarks/diagnose.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=3000,
@@ -46,6 +48,8 @@ rule figure_discovery_residuals:
         "results/logs/figure_discovery_residuals/{configuration}.log",
     benchmark:
         "results/benchmarks/figure_discovery_residuals/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -76,6 +80,8 @@ rule figure_discovery_summary:
         "results/logs/figure_discovery_summary.log",
     benchmark:
         "results/benchmarks/figure_discovery_summary.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

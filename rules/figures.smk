@@ -18,6 +18,8 @@ rule figure_time_history:
         "results/logs/figure_time_history.log",
     benchmark:
         "results/benchmarks/figure_time_history.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -60,6 +62,8 @@ rule figures_damping:
         "results/logs/figures_damping.log",
     benchmark:
         "results/benchmarks/figures_damping.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -90,6 +94,8 @@ rule figures_backbone:
         "results/logs/figures_backbone.log",
     benchmark:
         "results/benchmarks/figures_backbone.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

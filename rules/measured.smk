@@ -11,6 +11,8 @@ rule campaign_settings:
         "results/logs/campaign_settings.log",
     benchmark:
         "results/benchmarks/campaign_settings.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=500,
@@ -29,6 +31,8 @@ rule identify_mode:
         "results/logs/identify_mode/{configuration}.log",
     benchmark:
         "results/benchmarks/identify_mode/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=2000,
@@ -54,6 +58,8 @@ rule analyse_runs:
         "results/logs/analyse_runs/{configuration}/{group}.log",
     benchmark:
         "results/benchmarks/analyse_runs/{configuration}/{group}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -84,6 +90,8 @@ rule collect_tables:
         "results/logs/collect_tables.log",
     benchmark:
         "results/benchmarks/collect_tables.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=2000,
@@ -105,6 +113,8 @@ rule fit_curves:
         "results/logs/fit_curves.log",
     benchmark:
         "results/benchmarks/fit_curves.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=2000,
