@@ -102,7 +102,10 @@ values, under 5 sigma for N < 20)."""
 
 
 def butterworth_bandpass_power(
-    frequency_hz: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10
+    frequency_hz: np.ndarray,
+    fs_hz: float,
+    band_hz: tuple[float, float],
+    order: int = AnalysisSettings.filter_order,
 ) -> np.ndarray:
     """Squared magnitude |H|^2 of the digital Butterworth band-pass, at given frequencies.
 
@@ -172,7 +175,9 @@ def _zero_phase_spectrum(
     return spectrum * butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order), extension, padded
 
 
-def bandpass(x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10) -> np.ndarray:
+def bandpass(
+    x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = AnalysisSettings.filter_order
+) -> np.ndarray:
     """Zero-phase Butterworth band-pass.
 
     Parameters
@@ -219,7 +224,9 @@ def filter_time_constant_s(band_hz: tuple[float, float]) -> float:
     return 1.0 / (np.pi * (high_hz - low_hz))
 
 
-def slowest_pole_time_constant_s(band_hz: tuple[float, float], order: int = 10) -> float:
+def slowest_pole_time_constant_s(
+    band_hz: tuple[float, float], order: int = AnalysisSettings.filter_order
+) -> float:
     """Decay time of the band-pass impulse response's slowest pole, seconds.
 
     The Butterworth prototype of order ``N = order // 2`` has its pole closest to
@@ -268,7 +275,7 @@ def envelope(x: np.ndarray) -> np.ndarray:
 
 
 def analytic_bandpass(
-    x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10
+    x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = AnalysisSettings.filter_order
 ) -> np.ndarray:
     """Analytic signal of the band-passed response.
 
@@ -648,7 +655,7 @@ def startup_bias(
     stops: np.ndarray,
     *,
     onset_index: int,
-    filter_order: int = 10,
+    filter_order: int = AnalysisSettings.filter_order,
 ) -> dict[str, np.ndarray]:
     """Bias the analysis chain itself puts on each segment of a known linear decay.
 

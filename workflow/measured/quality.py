@@ -244,7 +244,7 @@ def check_mode_found(
     magnitude: ArrayLike,
     mode_hz: float,
     search_hz: tuple[float, float],
-    min_prominence: float = 2.0,
+    min_prominence: float = QualitySettings.min_mode_prominence,
 ) -> str | None:
     """The peak found in the search range is a resonance, not the flank of a mode outside it.
 

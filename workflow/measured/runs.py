@@ -67,7 +67,7 @@ def identify_mode(
     band_half_width: float,
     mode_search_hz: tuple[float, float] | None,
     mode_search_fraction: float,
-    min_mode_prominence: float = 2.0,
+    min_mode_prominence: float = QualitySettings.min_mode_prominence,
 ) -> ModeInfo:
     """First-mode frequency of a configuration from all its readable runs.
 

@@ -391,7 +391,7 @@ def fit_friction_model(
     global_samples: int = 256,
     local_starts: int = 4,
     max_iterations: int = 12,
-    seed: int = 1976,
+    seed: int = ModelSettings.seed,
     start_margin: float = 1.3,
     initial_points=None,
 ) -> RingdownFitResult:
