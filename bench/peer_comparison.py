@@ -33,11 +33,14 @@ def main() -> None:
     options = {
         "configuration": run_file.configuration,
         "campaign": campaign,
-        "analysis": AnalysisSettings(),
         "quality_settings": QualitySettings(),
     }
-    found = identify_configuration_mode(folder, [run_file.path], **options)
-    result = analyse_run_file(folder, run_file.path, mode=found, **options)
+    found = identify_configuration_mode(
+        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), **options
+    )
+    result = analyse_run_file(
+        folder, run_file.path, mode=found, decay_settings=AnalysisSettings().decay(), **options
+    )
     assert result.status["status"] == "used", result.status
     mode = found.mode
     segments = pd.DataFrame(result.segments)

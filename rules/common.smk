@@ -2,11 +2,15 @@
 
 import os
 import re
+from dataclasses import asdict
 from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
 
+# Rules pass each settings section (or the keys of it their step reads) as a plain dict,
+# asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
+# dataclass. Each script rebuilds the dataclass from it.
 try:
     SETTINGS = validate_config(config)
 except ConfigError as error:

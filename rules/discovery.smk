@@ -26,8 +26,8 @@ rule diagnose:
         mem_mb=3000,
         runtime=30,
     params:
-        analysis=SETTINGS.analysis,
-        discovery=SETTINGS.discovery,
+        decay=asdict(SETTINGS.analysis.decay()),
+        discovery=asdict(SETTINGS.discovery),
     script:
         "../scripts/diagnose.py"
 

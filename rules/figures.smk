@@ -27,7 +27,7 @@ rule figure_time_history:
     params:
         campaign=str(CAMPAIGN),
         configuration=CONFIGURATIONS[0],
-        analysis=SETTINGS.analysis,
+        decay=asdict(SETTINGS.analysis.decay()),
     script:
         "../scripts/figure_time_history.py"
 

@@ -39,8 +39,8 @@ rule identify_mode:
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
-        analysis=SETTINGS.analysis,
-        quality=SETTINGS.quality,
+        mode_search=asdict(SETTINGS.analysis.mode_search()),
+        quality=asdict(SETTINGS.quality),
     script:
         "../scripts/identify_mode.py"
 
@@ -67,8 +67,8 @@ rule analyse_runs:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        analysis=SETTINGS.analysis,
-        quality=SETTINGS.quality,
+        decay=asdict(SETTINGS.analysis.decay()),
+        quality=asdict(SETTINGS.quality),
     script:
         "../scripts/analyse_runs.py"
 
@@ -120,6 +120,6 @@ rule fit_curves:
         mem_mb=2000,
         runtime=20,
     params:
-        fits=SETTINGS.fits,
+        fits=asdict(SETTINGS.fits),
     script:
         "../scripts/fit_curves.py"

@@ -50,8 +50,8 @@ rule fit_friction_models:
         mem_mb=3000,
         runtime=30,
     params:
-        analysis=SETTINGS.analysis,
-        models=SETTINGS.models,
+        decay=asdict(SETTINGS.analysis.decay()),
+        models=asdict(SETTINGS.models),
     script:
         "../scripts/fit_friction_models.py"
 

@@ -7,6 +7,7 @@ excluded with its reason and the others go on."""
 from pathlib import Path
 
 from workflow.io.interim import read_campaign, read_mode, write_run_statuses
+from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.io.tables import concatenate_columns, write_columns
 from workflow.measured.runs import analyse_run_file
 from workflow.runtime.logs import setup_script_logging
@@ -15,6 +16,8 @@ log = setup_script_logging(snakemake.log[0], "analyse_runs")
 campaign_dir = Path(snakemake.params.campaign)
 campaign = read_campaign(snakemake.input.campaign_settings)
 mode = read_mode(snakemake.input.mode)
+decay_settings = DecaySettings(**snakemake.params.decay)
+quality_settings = QualitySettings(**snakemake.params.quality)
 
 results = []
 for run_file in snakemake.input.runs:
@@ -25,8 +28,8 @@ for run_file in snakemake.input.runs:
         configuration=snakemake.wildcards.configuration,
         campaign=campaign,
         mode=mode,
-        quality_settings=snakemake.params.quality,
-        analysis=snakemake.params.analysis,
+        quality_settings=quality_settings,
+        decay_settings=decay_settings,
     )
     if result.status["status"] == "excluded":
         log.warning("excluded %s", result.status["reason"])

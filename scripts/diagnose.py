@@ -1,9 +1,8 @@
 """Rule diagnose: results/diagnosis.json and the residuals behind it."""
 
-from dataclasses import asdict
-
 from workflow.discovery.diagnosis import FitSettings, diagnose_campaign, residual_table
 from workflow.io.interim import read_campaign
+from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table, write_json, write_table
 from workflow.runtime.logs import setup_script_logging
 
@@ -14,8 +13,8 @@ document, details = diagnose_campaign(
     segments,
     campaign.name,
     response_quantity=campaign.response.quantity,
-    settings=FitSettings(**asdict(snakemake.params.discovery)),
-    segment_cycles=snakemake.params.analysis.segment_cycles,
+    settings=FitSettings(**snakemake.params.discovery),
+    segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
     return_details=True,
 )
 write_table(residual_table(details), snakemake.output.residuals)

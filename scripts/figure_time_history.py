@@ -1,11 +1,13 @@
 """Rule figure_time_history: paper figure 9 for the first used run of the first configuration."""
 
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
 from workflow.io.campaign import read_run
 from workflow.io.interim import read_campaign
+from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
 from workflow.measured import decay
 from workflow.measured.runs import analysis_window
@@ -44,7 +46,7 @@ result = decay.analyse_decay(
     mode_hz=float(modes.loc[configuration, "mode_hz"]),
     start_index=start if (start, stop) != (0, record.n_samples) else None,
     stop_index=stop,
-    **snakemake.params.analysis.decay_parameters(),
+    **asdict(DecaySettings(**snakemake.params.decay)),
 )
 time_s = np.arange(record.n_samples) / record.sample_rate_hz
 figure = figures.time_history(

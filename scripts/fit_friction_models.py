@@ -2,6 +2,7 @@
 fitted to one configuration's measured damping and frequency curves."""
 
 from workflow.io.interim import read_campaign
+from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
 from workflow.models.paper import (
     MIN_SEGMENTS_TO_FIT,
@@ -37,8 +38,8 @@ else:
         band_hz=(float(mode["band_low_hz"]), float(mode["band_high_hz"])),
         response_quantity=campaign.response.quantity,
         coordinate=coordinate,
-        analysis=snakemake.params.analysis,
-        settings=snakemake.params.models,
+        analysis=DecaySettings(**snakemake.params.decay),
+        settings=ModelSettings(**snakemake.params.models),
     )
     for model, fit in document["models"].items():
         log.info(

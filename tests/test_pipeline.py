@@ -25,14 +25,17 @@ def analysed(tmp_path_factory):
         options = {
             "configuration": name,
             "campaign": campaign,
-            "analysis": AnalysisSettings(),
             "quality_settings": QualitySettings(),
         }
-        found = identify_configuration_mode(folder, paths, **options)
+        found = identify_configuration_mode(
+            folder, paths, mode_search=AnalysisSettings().mode_search(), **options
+        )
         assert found.mode is not None and not found.skipped_runs, found
         frames = []
         for path in paths:
-            result = analyse_run_file(folder, path, mode=found, **options)
+            result = analyse_run_file(
+                folder, path, mode=found, decay_settings=AnalysisSettings().decay(), **options
+            )
             assert result.status["status"] == "used", result.status
             frame = pd.DataFrame(result.segments)
             frames.append(frame[frame["kept"]])
@@ -94,7 +97,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         configuration="no_washer",
         campaign=campaign,
         quality_settings=QualitySettings(),
-        analysis=AnalysisSettings(),
+        decay_settings=AnalysisSettings().decay(),
     )
     good = analyse_run_file(folder, "no_washer/run01.txt", mode=ConfigurationMode(mode), **options)
     assert good.status == {

@@ -10,7 +10,7 @@ pandas.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,7 +18,13 @@ import numpy as np
 from workflow.io import units
 from workflow.io.campaign import RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
-from workflow.io.settings import AnalysisSettings, DampingFitSettings, QualitySettings
+from workflow.io.settings import (
+    AnalysisSettings,
+    DampingFitSettings,
+    DecaySettings,
+    ModeSearchSettings,
+    QualitySettings,
+)
 from workflow.measured import decay, quality
 from workflow.measured import mode as modal_id
 
@@ -143,7 +149,7 @@ def analyse_run_with_quality(
     run: str,
     mode: ModeInfo,
     window: tuple[int, int],
-    analysis: AnalysisSettings,
+    decay_settings: DecaySettings,
     quality_settings: QualitySettings,
 ) -> tuple[dict[str, np.ndarray], list[dict]]:
     """Band-pass, envelope and segmented log decrement of one run, with its checks.
@@ -158,7 +164,7 @@ def analyse_run_with_quality(
         The configuration's mode and band.
     window : (int, int)
         Sample indices [start, stop) to analyse (:func:`analysis_window`).
-    analysis : AnalysisSettings
+    decay_settings : DecaySettings
         The decay analysis settings (filter order, segment length and overlap, noise
         floor factor, edge time constants).
     quality_settings : QualitySettings
@@ -180,7 +186,7 @@ def analyse_run_with_quality(
         record.sample_rate_hz,
         mode.band_hz,
         mode_hz=mode.mode_hz,
-        **analysis.decay_parameters(),
+        **asdict(decay_settings),
         start_index=start if window != (0, record.n_samples) else None,
         stop_index=stop,
     )
@@ -277,7 +283,7 @@ def analyse_run_file(
     campaign,
     mode: ConfigurationMode,
     quality_settings: QualitySettings,
-    analysis: AnalysisSettings,
+    decay_settings: DecaySettings,
 ) -> RunAnalysis:
     """Read, check and analyse one run file; a run that cannot be used is excluded
     with its reason, never raised.
@@ -297,7 +303,7 @@ def analyse_run_file(
         without a mode, the run is excluded with the reason none was found.
     quality_settings : QualitySettings
         Quality thresholds.
-    analysis : AnalysisSettings
+    decay_settings : DecaySettings
         The decay analysis settings.
     """
     from pathlib import PurePosixPath
@@ -316,7 +322,7 @@ def analyse_run_file(
                 run=run,
                 mode=mode.mode,
                 window=analysis_window(record, campaign.configurations[configuration].window_s),
-                analysis=analysis,
+                decay_settings=decay_settings,
                 quality_settings=quality_settings,
             )
             rows += decay_rows
@@ -337,7 +343,7 @@ def identify_configuration_mode(
     *,
     configuration: str,
     campaign,
-    analysis: AnalysisSettings,
+    mode_search: ModeSearchSettings,
     quality_settings: QualitySettings,
 ) -> ConfigurationMode:
     """First mode of one configuration from its run files; never raises for bad data.
@@ -357,7 +363,7 @@ def identify_configuration_mode(
         The configuration.
     campaign : Campaign
         The validated campaign.yaml.
-    analysis : AnalysisSettings
+    mode_search : ModeSearchSettings
         Mode search range and band width.
     quality_settings : QualitySettings
         Record-level checks and the least prominence of a mode.
@@ -379,9 +385,9 @@ def identify_configuration_mode(
             windows=windows,
             campaign_mode_hz=campaign.mode_hz,
             campaign_band_hz=campaign.band_hz,
-            band_half_width=analysis.band_half_width,
-            mode_search_hz=analysis.mode_search_hz,
-            mode_search_fraction=analysis.mode_search_fraction,
+            band_half_width=mode_search.band_half_width,
+            mode_search_hz=mode_search.mode_search_hz,
+            mode_search_fraction=mode_search.mode_search_fraction,
             min_mode_prominence=quality_settings.min_mode_prominence,
         )
     except ValueError as error:
@@ -411,10 +417,12 @@ def analyse_campaign(
     frames = []
     for name, spec in campaign.configurations.items():
         paths = [run_file.path for run_file in run_files if run_file.configuration == name]
-        options = {"campaign": campaign, "analysis": analysis, "quality_settings": quality_settings}
-        mode = identify_configuration_mode(campaign_dir, paths, configuration=name, **options)
+        options = {"configuration": name, "campaign": campaign, "quality_settings": quality_settings}
+        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis.mode_search(), **options)
         for path in paths:
-            result = analyse_run_file(campaign_dir, path, configuration=name, mode=mode, **options)
+            result = analyse_run_file(
+                campaign_dir, path, mode=mode, decay_settings=analysis.decay(), **options
+            )
             if result.status["status"] != "used":
                 continue
             segments = pd.DataFrame(result.segments)

@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
-from workflow.io.settings import AnalysisSettings, ModelSettings
+from workflow.io.settings import AnalysisSettings, DecaySettings, ModelSettings
 from workflow.measured import decay
 from workflow.models.ringdown import simulate_ringdown
 
@@ -87,7 +87,7 @@ class RingdownFitContext:
         Sensor displacement per unit modal coordinate, in (1: same absorption).
     response : {"acceleration", "velocity", "displacement"}
         Measured quantity, so the simulated one is analysed in the same form.
-    analysis : AnalysisSettings
+    analysis : DecaySettings
         The decay analysis the measurements went through (filter order, segment length
         and overlap, edge time constants); the simulations go through the same.
     steps_per_period : int
@@ -100,7 +100,7 @@ class RingdownFitContext:
     slip_per_modal: float = 1.0
     response_per_modal: float = 1.0
     response: str = "acceleration"
-    analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
+    analysis: DecaySettings = field(default_factory=lambda: AnalysisSettings().decay())
     steps_per_period: int = ModelSettings.steps_per_period
 
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from workflow.io.settings import AnalysisSettings, ModelSettings
+from workflow.io.settings import DecaySettings, ModelSettings
 
 #: Paper figure 7 (Dahl) and figure 8 (LuGre) parameter values, in the paper's units.
 PAPER_DAHL = {"sigma": (2 * np.pi) ** 2, "fc": 38.0}
@@ -122,7 +122,7 @@ def fit_configuration(
     band_hz: tuple[float, float],
     response_quantity: str,
     coordinate: ModalCoordinate,
-    analysis: AnalysisSettings,
+    analysis: DecaySettings,
     settings: ModelSettings,
 ) -> dict:
     """Fit each friction model to one configuration's damping and frequency curves.
