@@ -19,7 +19,7 @@ include: "rules/measured.smk"
 include: "rules/figures.smk"
 include: "rules/models.smk"
 include: "rules/discovery.smk"
-include: "rules/report.smk"  # last: it reads the names the others define
+include: "rules/report.smk"
 
 
 rule all:

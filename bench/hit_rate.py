@@ -1,7 +1,7 @@
 """Hit rate of the model discovery over hidden-effect campaigns and seeds.
 
 For every cause of the vocabulary, ``--seeds`` campaigns from the virtual lab (effect
-size and bearing area drawn per seed, see tests/test_hidden_effects.py) go through the
+size and bearing area drawn per seed, see workflow/studies/hidden_effects.py) go through the
 measured-data chain and the diagnosis; the script prints the confusion table (rows:
 hidden cause, columns: verdict, as rates), the hit rate per cause, the gain ratios, and
 the runtime.
@@ -12,16 +12,12 @@ the runtime.
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from tests.test_hidden_effects import CASES, run_case  # noqa: E402
+from workflow.studies.hidden_effects import CASES, run_case
 
 VERDICTS = [
     "none",

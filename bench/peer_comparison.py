@@ -17,7 +17,7 @@ import pandas as pd
 
 from workflow.io.campaign import list_runs, load_campaign
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_run, analysis_window, identify_mode, read_and_check
+from workflow.measured.runs import analyse_run_file, identify_configuration_mode
 
 
 def main() -> None:
@@ -30,29 +30,20 @@ def main() -> None:
     reference = pd.read_csv(args.realdata / "pff-lms-sample.reference.csv")
     campaign = load_campaign(folder)
     run_file = list_runs(folder, campaign)[0]
-    record, problems = read_and_check(folder, run_file.path, campaign, QualitySettings())
-    assert not problems, problems
-    window = analysis_window(record, None)
-    mode = identify_mode(
-        [record],
-        windows=[window],
-        campaign_mode_hz=campaign.mode_hz,
-        campaign_band_hz=campaign.band_hz,
-        band_half_width=0.2,
-        mode_search_hz=None,
-        mode_search_fraction=0.3,
+    options = {
+        "configuration": run_file.configuration,
+        "campaign": campaign,
+        "quality_settings": QualitySettings(),
+    }
+    found = identify_configuration_mode(
+        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), **options
     )
-    analysis = AnalysisSettings().run_parameters()
-    segments, _ = analyse_run(
-        record,
-        configuration="decay",
-        run=run_file.run,
-        mode=mode,
-        window=window,
-        min_snr_db=20.0,
-        min_segments=3,
-        **analysis,
+    result = analyse_run_file(
+        folder, run_file.path, mode=found, decay_settings=AnalysisSettings().decay(), **options
     )
+    assert result.status["status"] == "used", result.status
+    mode = found.mode
+    segments = pd.DataFrame(result.segments)
     kept = segments[segments["kept"]]
     valid = reference[(reference["time_s"] > 0.2) & (reference["time_s"] < reference["time_s"].max() - 0.2)]
     overlap = kept[(kept["t_s"] >= valid["time_s"].min()) & (kept["t_s"] <= valid["time_s"].max())]

@@ -1,13 +1,16 @@
 # Helpers shared by the rules: validated config, the campaign's runs, target lists.
 
+import os
 import re
-import sys
 from dataclasses import asdict
 from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
 
+# Rules pass each settings section (or the keys of it their step reads) as a plain dict,
+# asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
+# dataclass. Each script rebuilds the dataclass from it.
 try:
     SETTINGS = validate_config(
         config,
@@ -21,6 +24,18 @@ except ConfigError as error:
     raise WorkflowError(f"invalid configuration:\n{error}") from None
 
 CAMPAIGN = Path(SETTINGS.campaign)
+
+LAPJOINT_ENV = "../envs/lapjoint.yaml"
+"""Every rule's software, for ``--software-deployment-method conda``: the project's
+dependencies, and the project itself installed from this source tree by
+envs/lapjoint.post-deploy.sh, which finds it through ``LAPJOINT_SOURCE``."""
+os.environ["LAPJOINT_SOURCE"] = workflow.basedir
+
+
+envvars:
+    "LAPJOINT_SOURCE",
+
+
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
 if workflow.is_main_process:
@@ -176,4 +191,23 @@ def discovery_outputs():
         *[f"results/figures/discovery_residuals_{name}.png" for name in CONFIGURATIONS],
         "results/figures/discovery_candidates.png",
         "results/figures/discovery_heldout.png",
+    ]
+
+
+LANDING_PAGE = Path("results/report/landing.rst")
+"""The report's first page once report_summary has written it (rules/report.smk)."""
+
+
+def report_outputs():
+    """The report's own pages (the figures and tables they describe come from the others)."""
+    return [
+        str(LANDING_PAGE),
+        "results/report/verdict.html",
+        "results/report/hypotheses.html",
+        "results/report/runs.html",
+        "results/report/quality.html",
+        "results/report/rejected_segments.html",
+        "results/report/damping_fits.html",
+        "results/report/model_fits.html",
+        "results/report/diagnosis_candidates.html",
     ]

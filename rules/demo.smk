@@ -12,6 +12,8 @@ if USES_DEMO:
             "results/logs/demo_campaign.log",
         benchmark:
             "results/benchmarks/demo_campaign.tsv"
+        conda:
+            LAPJOINT_ENV
         threads: 1
         resources:
             mem_mb=1000,

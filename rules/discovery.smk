@@ -19,13 +19,14 @@ rule diagnose:
         "results/logs/diagnose.log",
     benchmark:
         "results/benchmarks/diagnose.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=3000,
         runtime=30,
     params:
-        campaign=str(CAMPAIGN),
-        segment_cycles=SETTINGS.analysis.segment_cycles,
+        decay=asdict(SETTINGS.analysis.decay()),
         discovery=asdict(SETTINGS.discovery),
     script:
         "../scripts/diagnose.py"
@@ -47,6 +48,8 @@ rule figure_discovery_residuals:
         "results/logs/figure_discovery_residuals/{configuration}.log",
     benchmark:
         "results/benchmarks/figure_discovery_residuals/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -77,6 +80,8 @@ rule figure_discovery_summary:
         "results/logs/figure_discovery_summary.log",
     benchmark:
         "results/benchmarks/figure_discovery_summary.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

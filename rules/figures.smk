@@ -18,6 +18,8 @@ rule figure_time_history:
         "results/logs/figure_time_history.log",
     benchmark:
         "results/benchmarks/figure_time_history.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -25,8 +27,7 @@ rule figure_time_history:
     params:
         campaign=str(CAMPAIGN),
         configuration=CONFIGURATIONS[0],
-        filter_order=SETTINGS.analysis.filter_order,
-        analysis=SETTINGS.analysis.run_parameters(),
+        decay=asdict(SETTINGS.analysis.decay()),
     script:
         "../scripts/figure_time_history.py"
 
@@ -61,6 +62,8 @@ rule figures_damping:
         "results/logs/figures_damping.log",
     benchmark:
         "results/benchmarks/figures_damping.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -91,6 +94,8 @@ rule figures_backbone:
         "results/logs/figures_backbone.log",
     benchmark:
         "results/benchmarks/figures_backbone.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

@@ -11,6 +11,8 @@ rule campaign_settings:
         "results/logs/campaign_settings.log",
     benchmark:
         "results/benchmarks/campaign_settings.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=500,
@@ -29,15 +31,15 @@ rule identify_mode:
         "results/logs/identify_mode/{configuration}.log",
     benchmark:
         "results/benchmarks/identify_mode/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=2000,
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
-        band_half_width=SETTINGS.analysis.band_half_width,
-        mode_search_hz=SETTINGS.analysis.mode_search_hz,
-        mode_search_fraction=SETTINGS.analysis.mode_search_fraction,
+        mode_search=asdict(SETTINGS.analysis.mode_search()),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/identify_mode.py"
@@ -56,6 +58,8 @@ rule analyse_runs:
         "results/logs/analyse_runs/{configuration}/{group}.log",
     benchmark:
         "results/benchmarks/analyse_runs/{configuration}/{group}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1500,
@@ -63,7 +67,7 @@ rule analyse_runs:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        analysis=SETTINGS.analysis.run_parameters(),
+        decay=asdict(SETTINGS.analysis.decay()),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/analyse_runs.py"
@@ -87,12 +91,13 @@ rule collect_tables:
         "results/logs/collect_tables.log",
     benchmark:
         "results/benchmarks/collect_tables.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=2000,
         runtime=10,
     params:
-        campaign=str(CAMPAIGN),
         excluded_paths=[entry.status() for entry in EXCLUDED_PATHS],
     script:
         "../scripts/collect_tables.py"
@@ -111,12 +116,13 @@ rule fit_curves:
         "results/logs/fit_curves.log",
     benchmark:
         "results/benchmarks/fit_curves.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=2000,
         runtime=20,
     params:
-        campaign=str(CAMPAIGN),
         fits=asdict(SETTINGS.fits),
     script:
         "../scripts/fit_curves.py"

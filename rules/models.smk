@@ -22,6 +22,8 @@ rule figure_friction_loops:
         "results/logs/figure_friction_loops.log",
     benchmark:
         "results/benchmarks/figure_friction_loops.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -41,16 +43,14 @@ rule fit_friction_models:
         "results/logs/fit_friction_models/{configuration}.log",
     benchmark:
         "results/benchmarks/fit_friction_models/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=3000,
         runtime=30,
     params:
-        campaign=str(CAMPAIGN),
-        analysis={
-            key: getattr(SETTINGS.analysis, key)
-            for key in ("filter_order", "segment_cycles", "segment_overlap", "edge_time_constants")
-        },
+        decay=asdict(SETTINGS.analysis.decay()),
         models=asdict(SETTINGS.models),
     script:
         "../scripts/fit_friction_models.py"
@@ -65,6 +65,8 @@ rule model_table:
         "results/logs/model_table.log",
     benchmark:
         "results/benchmarks/model_table.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -96,6 +98,8 @@ rule figure_models:
         "results/logs/figure_models/{configuration}.log",
     benchmark:
         "results/benchmarks/figure_models/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

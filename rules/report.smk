@@ -6,28 +6,11 @@
 # then report/workflow.rst), that file is the first page instead, so the reader opens
 # the report on the verdict.
 
-LANDING_PAGE = Path("results/report/landing.rst")
-
 if LANDING_PAGE.exists():
     workflow.report(str(LANDING_PAGE.resolve()))
 else:
 
     report: "../report/workflow.rst"
-
-
-def report_outputs():
-    """The report's own pages (the figures and tables they describe come from the others)."""
-    return [
-        str(LANDING_PAGE),
-        "results/report/verdict.html",
-        "results/report/hypotheses.html",
-        "results/report/runs.html",
-        "results/report/quality.html",
-        "results/report/rejected_segments.html",
-        "results/report/damping_fits.html",
-        "results/report/model_fits.html",
-        "results/report/diagnosis_candidates.html",
-    ]
 
 
 rule report_summary:
@@ -91,6 +74,8 @@ rule report_summary:
         "results/logs/report_summary.log",
     benchmark:
         "results/benchmarks/report_summary.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
@@ -114,6 +99,8 @@ rule report_model_fits:
         "results/logs/report_model_fits.log",
     benchmark:
         "results/benchmarks/report_model_fits.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

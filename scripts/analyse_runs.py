@@ -4,20 +4,20 @@ runs of one configuration (``runs_per_job`` of them), with their quality checks.
 Each run is read, checked and analysed on its own: a run that cannot be used is
 excluded with its reason and the others go on."""
 
-import json
 from pathlib import Path
 
-from workflow.io.campaign import read_validated_campaign
-from workflow.io.settings import QualitySettings
-from workflow.io.tables import concatenate_columns, write_columns, write_json
+from workflow.io.interim import read_campaign, read_mode, write_run_statuses
+from workflow.io.settings import DecaySettings, QualitySettings
+from workflow.io.tables import concatenate_columns, write_columns
 from workflow.measured.runs import analyse_run_file
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "analyse_runs")
 campaign_dir = Path(snakemake.params.campaign)
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
+mode = read_mode(snakemake.input.mode)
+decay_settings = DecaySettings(**snakemake.params.decay)
 quality_settings = QualitySettings(**snakemake.params.quality)
-mode_document = json.loads(Path(snakemake.input.mode).read_text())
 
 results = []
 for run_file in snakemake.input.runs:
@@ -27,9 +27,9 @@ for run_file in snakemake.input.runs:
         run_path,
         configuration=snakemake.wildcards.configuration,
         campaign=campaign,
-        mode_document=mode_document,
+        mode=mode,
         quality_settings=quality_settings,
-        analysis=snakemake.params.analysis,
+        decay_settings=decay_settings,
     )
     if result.status["status"] == "excluded":
         log.warning("excluded %s", result.status["reason"])
@@ -42,4 +42,4 @@ for run_file in snakemake.input.runs:
 
 write_columns(snakemake.output.segments, concatenate_columns([result.segments for result in results]))
 write_columns(snakemake.output.quality, concatenate_columns([result.quality for result in results]))
-write_json(snakemake.output.status, [result.status for result in results])
+write_run_statuses(snakemake.output.status, [result.status for result in results])

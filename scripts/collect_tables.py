@@ -1,12 +1,12 @@
 """Rule collect_tables: the campaign's segments, runs and modes as Parquet tables."""
 
-from workflow.io.campaign import read_validated_campaign
+from workflow.io.interim import read_campaign
 from workflow.io.tables import atomic_write_bytes, write_table
 from workflow.measured.runs import collect_tables
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "collect_tables")
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
 tables = collect_tables(
     segment_paths=snakemake.input.segments,
     quality_paths=snakemake.input.quality,

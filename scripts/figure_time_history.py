@@ -1,10 +1,13 @@
 """Rule figure_time_history: paper figure 9 for the first used run of the first configuration."""
 
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
-from workflow.io.campaign import read_run, read_validated_campaign
+from workflow.io.campaign import read_run
+from workflow.io.interim import read_campaign
+from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
 from workflow.measured import decay
 from workflow.measured.runs import analysis_window
@@ -13,7 +16,7 @@ from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_time_history")
 campaign_dir = Path(snakemake.params.campaign)
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
 configuration = snakemake.params.configuration
 runs = read_table(snakemake.input.runs_table)
 used = runs[(runs["configuration"] == configuration) & (runs["status"] == "used")]
@@ -36,7 +39,6 @@ row = used.iloc[0]
 record = read_run(campaign_dir, row["path"], campaign)
 band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))
 start, stop = analysis_window(record, campaign.configurations[configuration].window_s)
-analysis = snakemake.params.analysis
 result = decay.analyse_decay(
     record.response,
     record.sample_rate_hz,
@@ -44,7 +46,7 @@ result = decay.analyse_decay(
     mode_hz=float(modes.loc[configuration, "mode_hz"]),
     start_index=start if (start, stop) != (0, record.n_samples) else None,
     stop_index=stop,
-    **analysis,
+    **asdict(DecaySettings(**snakemake.params.decay)),
 )
 time_s = np.arange(record.n_samples) / record.sample_rate_hz
 figure = figures.time_history(

@@ -1,7 +1,7 @@
 """Rule figures_damping: paper figures 10-12 (damping vs velocity amplitude, one per
 configuration) and paper figure 13 (damping fits against bearing area)."""
 
-from workflow.io.campaign import read_validated_campaign
+from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table
 from workflow.outputs import figures
 from workflow.runtime.logs import setup_script_logging
@@ -18,7 +18,7 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     )
     figures.save(figure, path)
     log.info("%s: %d segments plotted", configuration, len(mine))
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
 figure = figures.area_fits(
     curves,
     read_table(snakemake.input.area),

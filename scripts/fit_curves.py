@@ -1,15 +1,16 @@
 """Rule fit_curves: damping polynomial fits, bootstrap bands, hypotheses, area fits."""
 
-from workflow.io.campaign import read_validated_campaign
+from workflow.io.interim import read_campaign
+from workflow.io.settings import DampingFitSettings
 from workflow.io.tables import read_table, write_table
 from workflow.measured.runs import fit_damping_curves
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_curves")
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
 areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
 segments = read_table(snakemake.input.segments)
-tables = fit_damping_curves(segments, areas, **snakemake.params.fits)
+tables = fit_damping_curves(segments, areas, DampingFitSettings(**snakemake.params.fits))
 for name in ("fits", "curves", "hypotheses", "area"):
     write_table(tables[name], snakemake.output[name])
 for row in tables["hypotheses"].itertuples():

@@ -1,7 +1,8 @@
 """Rule fit_friction_models: Dahl and LuGre (plus zeta0 and the linear frequency)
 fitted to one configuration's measured damping and frequency curves."""
 
-from workflow.io.campaign import read_validated_campaign
+from workflow.io.interim import read_campaign
+from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
 from workflow.models.paper import (
     MIN_SEGMENTS_TO_FIT,
@@ -12,7 +13,7 @@ from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_friction_models")
 configuration = snakemake.wildcards.configuration
-campaign = read_validated_campaign(snakemake.input.campaign_settings)
+campaign = read_campaign(snakemake.input.campaign_settings)
 modes = read_table(snakemake.input.modes).set_index("configuration")
 segments = read_table(snakemake.input.segments)
 mine = segments[segments["configuration"] == configuration]
@@ -28,7 +29,6 @@ if len(mine) < MIN_SEGMENTS_TO_FIT:
 else:
     areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
     coordinate = choose_modal_coordinate(modes["mode_hz"].dropna().to_dict(), areas)
-    settings = snakemake.params.models
     mode = modes.loc[configuration]
     document = fit_configuration(
         mine,
@@ -38,12 +38,8 @@ else:
         band_hz=(float(mode["band_low_hz"]), float(mode["band_high_hz"])),
         response_quantity=campaign.response.quantity,
         coordinate=coordinate,
-        analysis=snakemake.params.analysis,
-        global_samples=settings["global_samples"],
-        local_starts=settings["local_starts"],
-        local_iterations=settings["local_iterations"],
-        steps_per_period=settings["steps_per_period"],
-        seed=settings["seed"],
+        analysis=DecaySettings(**snakemake.params.decay),
+        settings=ModelSettings(**snakemake.params.models),
     )
     for model, fit in document["models"].items():
         log.info(

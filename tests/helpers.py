@@ -50,3 +50,12 @@ def write_run_with_bad_cell(source: Path, target: Path, line: int = 40) -> None:
     cells = lines[line - 1].split("\t")
     lines[line - 1] = lines[line - 1].replace(cells[1], BAD_CELL, 1)
     Path(target).write_text("\n".join(lines) + "\n")
+
+
+def failed_check_reasons(record, settings, mode_hz=None) -> list[str]:
+    """Reasons of the failed record-level quality checks of one run (empty: it passes),
+    from the rows the workflow writes into quality.parquet."""
+    from workflow.measured.quality import quality_rows
+
+    rows = quality_rows(record, settings, mode_hz=mode_hz)
+    return [row["reason"] for row in rows if row["applied"] and not row["passed"]]

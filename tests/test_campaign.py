@@ -1,7 +1,6 @@
 """Reading campaigns: campaign.yaml validation, run discovery, every run-file dialect
 and every malformed case of campaign-format.md."""
 
-import json
 import os
 import time
 from pathlib import Path
@@ -9,15 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from workflow.io import interim
 from workflow.io.campaign import (
     MIN_SAMPLES,
     CampaignFormatError,
     RunFile,
-    campaign_to_dict,
     list_runs,
     load_campaign,
     read_run,
-    read_validated_campaign,
 )
 
 FS_HZ = 2560.0
@@ -133,8 +131,8 @@ def test_validated_campaign_survives_its_json_copy(tmp_path, text):
     # same campaign, including what is not a key (pretrigger_given) and the tuples.
     campaign = write_campaign(tmp_path, text, {})
     path = tmp_path / "campaign.json"
-    path.write_text(json.dumps(campaign_to_dict(campaign)))
-    copy = read_validated_campaign(path)
+    interim.write_campaign(path, campaign)
+    copy = interim.read_campaign(path)
     assert copy == campaign
     assert copy.pretrigger_given == campaign.pretrigger_given
 

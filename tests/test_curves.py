@@ -12,6 +12,8 @@ variance components are known, so tolerances follow from them.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -337,6 +339,110 @@ def test_hypothesis_tests_from_a_segments_table():
 # ------------------------------------------------------------------ area fits
 
 
+# ------------------------------------------------------------------ damping vs bearing area
+# Fig. 13's damping at arbitrary bearing areas, from the configurations' polynomial fits: used
+# only here (the workflow tabulates damping at the measured areas, fit_damping_curves).
+
+
+def _by_area(
+    fits_by_configuration: Mapping[str, curves.PolynomialFit], areas_in2: Mapping[str, float]
+) -> tuple[list[str], np.ndarray]:
+    """Configurations having both a fit and a finite area, sorted by area (then name)."""
+    names = [
+        name
+        for name in fits_by_configuration
+        if name in areas_in2 and areas_in2[name] is not None and np.isfinite(areas_in2[name])
+    ]
+    names.sort(key=lambda name: (float(areas_in2[name]), name))
+    return names, np.array([float(areas_in2[name]) for name in names])
+
+
+def area_surface(
+    fits_by_configuration: Mapping[str, curves.PolynomialFit],
+    areas_in2: Mapping[str, float],
+    amplitude_grid_in_s: np.ndarray,
+) -> np.ndarray:
+    """Fitted damping ratio of every configuration on an amplitude grid (paper fig. 13).
+
+    Parameters
+    ----------
+    fits_by_configuration : mapping
+        Configuration name -> :class:`curves.PolynomialFit`.
+    areas_in2 : mapping
+        Configuration name -> bearing area, in^2; configurations without a
+        finite area are left out.
+    amplitude_grid_in_s : array_like
+        1-D grid of velocity amplitudes, in/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``zeta[area, amplitude]`` (dimensionless); rows in order of increasing
+        bearing area (ties by name), NaN outside each configuration's measured
+        amplitude range.
+    """
+    names, _ = _by_area(fits_by_configuration, areas_in2)
+    grid = np.asarray(amplitude_grid_in_s, dtype=float).ravel()
+    if not names:
+        return np.empty((0, grid.size))
+    return np.vstack([curves.evaluate(fits_by_configuration[name], grid) for name in names])
+
+
+def damping_vs_area(
+    fits_by_configuration: Mapping[str, curves.PolynomialFit],
+    areas_in2: Mapping[str, float],
+    amplitude_grid_in_s: np.ndarray,
+    area_grid_in2: np.ndarray,
+    *,
+    degree: int = 1,
+    extrapolate_area: bool = False,
+) -> np.ndarray:
+    """Damping ratio at arbitrary bearing areas, from a fit across configurations.
+
+    At every amplitude of the grid, the configurations' fitted damping ratios
+    (:func:`area_surface`) are fitted by a polynomial in bearing area of degree
+    ``min(degree, n - 1)``, ``n`` being the number of configurations with a
+    value there (a straight line by default: with three areas a parabola
+    would pass through every point and say nothing about the scatter).
+
+    Parameters
+    ----------
+    fits_by_configuration, areas_in2, amplitude_grid_in_s
+        As in :func:`area_surface`.
+    area_grid_in2 : array_like
+        1-D grid of bearing areas, in^2.
+    degree : int, optional
+        Degree of the polynomial in area (default 1, linear).
+    extrapolate_area : bool, optional
+        False (default): NaN outside the range of areas that have a value at
+        that amplitude.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``zeta[area_grid, amplitude]`` (dimensionless); NaN where fewer than two
+        configurations have a value at the amplitude.
+    """
+    if degree < 0:
+        raise ValueError(f"degree must be >= 0, got {degree}")
+    _, areas = _by_area(fits_by_configuration, areas_in2)
+    surface = area_surface(fits_by_configuration, areas_in2, amplitude_grid_in_s)
+    area_grid = np.asarray(area_grid_in2, dtype=float).ravel()
+    out = np.full((area_grid.size, surface.shape[1]), np.nan)
+    for j in range(surface.shape[1]):
+        have = np.isfinite(surface[:, j])
+        a, z = areas[have], surface[have, j]
+        n_distinct = np.unique(a).size
+        if n_distinct < 2:
+            continue
+        coefficients = np.polyfit(a, z, min(degree, n_distinct - 1))
+        value = np.polyval(coefficients, area_grid)
+        if not extrapolate_area:
+            value = np.where((area_grid >= a.min()) & (area_grid <= a.max()), value, np.nan)
+        out[:, j] = value
+    return out
+
+
 def _exact_fit(coefficients, log_range):
     """Fit to noise-free data: recovers ``coefficients`` to rounding."""
     x = np.linspace(*log_range, 30)
@@ -350,7 +456,7 @@ def test_area_surface_rows_by_area_and_nan_outside_each_range():
         "large_washer": _exact_fit([0.003, 0.006], (-1.2, 0.3)),
     }
     grid = np.logspace(-2, 1, 31)
-    surface = curves.area_surface(fits, AREAS_IN2, grid)
+    surface = area_surface(fits, AREAS_IN2, grid)
     assert surface.shape == (3, grid.size)
     for row, name in enumerate(["small_washer", "large_washer", "no_washer"]):
         np.testing.assert_allclose(surface[row], curves.evaluate(fits[name], grid), atol=1e-12)
@@ -363,12 +469,12 @@ def test_damping_vs_area_recovers_a_linear_area_law():
     fits = {name: _exact_fit([0.001, 0.002 + 0.003 * area], (-1.5, 0.5)) for name, area in AREAS_IN2.items()}
     amplitude = np.array([0.05, 0.5, 2.0])
     area_grid = np.array([0.1, 0.17, 0.4, 1.0, 1.36, 2.0])
-    zeta = curves.damping_vs_area(fits, AREAS_IN2, amplitude, area_grid)
+    zeta = damping_vs_area(fits, AREAS_IN2, amplitude, area_grid)
     expected = 0.002 + 0.003 * area_grid[:, None] + 0.001 * np.log10(amplitude)[None, :]
     inside = (area_grid >= 0.17) & (area_grid <= 1.36)
     np.testing.assert_allclose(zeta[inside], expected[inside], atol=1e-10)
     assert np.all(np.isnan(zeta[~inside]))
-    extrapolated = curves.damping_vs_area(fits, AREAS_IN2, amplitude, area_grid, extrapolate_area=True)
+    extrapolated = damping_vs_area(fits, AREAS_IN2, amplitude, area_grid, extrapolate_area=True)
     np.testing.assert_allclose(extrapolated, expected, atol=1e-10)
 
 
@@ -379,7 +485,7 @@ def test_damping_vs_area_needs_two_configurations_at_an_amplitude():
     }
     areas = {"no_washer": 1.36, "small_washer": 0.17}
     amplitude = np.array([0.05, 0.5, 2.0])  # only 0.5 in/s lies in both ranges
-    zeta = curves.damping_vs_area(fits, areas, amplitude, np.array([0.5]), degree=3)
+    zeta = damping_vs_area(fits, areas, amplitude, np.array([0.5]), degree=3)
     assert np.isnan(zeta[0, 0]) and np.isnan(zeta[0, 2])
     # degree is capped at n - 1 = 1: the straight line through the two points
     np.testing.assert_allclose(zeta[0, 1], 0.002 + (0.5 - 0.17) * 0.002 / (1.36 - 0.17))

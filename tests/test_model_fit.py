@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from workflow.measured.decay import analyse_decay
-from workflow.models.fitting import FitContext, fit_friction_model, measurement_scatter, model_space
+from workflow.models.fitting import RingdownFitContext, fit_friction_model, measurement_scatter, model_space
 from workflow.models.ringdown import simulate_ringdown
 
 FS, T, BAND = 2560.0, 3.2, (100.0, 150.0)
@@ -45,7 +45,7 @@ def synthetic_campaign(seed=1, runs=10):
 @pytest.fixture(scope="module")
 def dahl_fit():
     truth, (v, z, f, run, peak) = synthetic_campaign()
-    ctx = FitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
+    ctx = RingdownFitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
     fit = fit_friction_model(
         "dahl", v, z, f, run, peak, ctx, global_samples=64, local_starts=2, max_iterations=20
     )
@@ -87,7 +87,7 @@ def test_lugre_space_maps_to_valid_parameters():
     v = np.array([0.01, 0.1, 1.0, 10.0])
     z = np.array([0.001, 0.003, 0.008, 0.01])
     f = np.array([125.0, 124.8, 124.0, 123.5])
-    ctx = FitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
+    ctx = RingdownFitContext(fs_hz=FS, band_hz=BAND, record_duration_s=T)
     space = model_space("lugre", v, z, f, ctx)
     rng = np.random.default_rng(0)
     theta = space.lower + rng.random((50, space.lower.size)) * (space.upper - space.lower)

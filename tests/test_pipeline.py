@@ -6,9 +6,10 @@ import pandas as pd
 import pytest
 
 from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.interim import ConfigurationMode
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.virtual_lab import generate_campaign
-from workflow.measured.runs import analyse_run, analysis_window, identify_mode, read_and_check
+from workflow.measured.runs import analyse_run_file, identify_configuration_mode
 
 
 @pytest.fixture(scope="module")
@@ -18,41 +19,27 @@ def analysed(tmp_path_factory):
         folder, seed=11, runs_per_configuration=4, configurations={"no_washer": 1.36, "small_washer": 0.17}
     )
     campaign = load_campaign(folder)
-    analysis = AnalysisSettings().run_parameters()
-    quality = QualitySettings()
     results = {}
     for name in campaign.configurations:
-        records = []
-        for run_file in list_runs(folder, campaign):
-            if run_file.configuration == name:
-                record, problems = read_and_check(folder, run_file.path, campaign, quality)
-                assert not problems, problems
-                records.append((run_file.run, record))
-        windows = [analysis_window(record, None) for _, record in records]
-        mode = identify_mode(
-            [record for _, record in records],
-            windows=windows,
-            campaign_mode_hz=campaign.mode_hz,
-            campaign_band_hz=None,
-            band_half_width=0.2,
-            mode_search_hz=None,
-            mode_search_fraction=0.3,
+        paths = [run_file.path for run_file in list_runs(folder, campaign) if run_file.configuration == name]
+        options = {
+            "configuration": name,
+            "campaign": campaign,
+            "quality_settings": QualitySettings(),
+        }
+        found = identify_configuration_mode(
+            folder, paths, mode_search=AnalysisSettings().mode_search(), **options
         )
+        assert found.mode is not None and not found.skipped_runs, found
         frames = []
-        for (run, record), window in zip(records, windows):
-            frame, problems = analyse_run(
-                record,
-                configuration=name,
-                run=run,
-                mode=mode,
-                window=window,
-                min_snr_db=quality.min_snr_db,
-                min_segments=quality.min_segments,
-                **analysis,
+        for path in paths:
+            result = analyse_run_file(
+                folder, path, mode=found, decay_settings=AnalysisSettings().decay(), **options
             )
-            assert not problems, problems
+            assert result.status["status"] == "used", result.status
+            frame = pd.DataFrame(result.segments)
             frames.append(frame[frame["kept"]])
-        results[name] = (mode, pd.concat(frames, ignore_index=True))
+        results[name] = (found.mode, pd.concat(frames, ignore_index=True))
     return truth, results
 
 
@@ -100,8 +87,6 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
     # segments; a configuration without a mode excludes its runs with that reason.
     from helpers import BAD_CELL, write_run_with_bad_cell
 
-    from workflow.measured.runs import analyse_run_file
-
     folder = tmp_path / "campaign"
     generate_campaign(folder, seed=11, runs_per_configuration=1, configurations={"no_washer": 1.36})
     write_run_with_bad_cell(folder / "no_washer/run01.txt", folder / "no_washer/run02.txt")
@@ -112,9 +97,9 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         configuration="no_washer",
         campaign=campaign,
         quality_settings=QualitySettings(),
-        analysis=AnalysisSettings().run_parameters(),
+        decay_settings=AnalysisSettings().decay(),
     )
-    good = analyse_run_file(folder, "no_washer/run01.txt", mode_document=mode.to_dict(), **options)
+    good = analyse_run_file(folder, "no_washer/run01.txt", mode=ConfigurationMode(mode), **options)
     assert good.status == {
         "configuration": "no_washer",
         "run": "run01",
@@ -134,7 +119,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         "segments",
     ]
 
-    bad = analyse_run_file(folder, "no_washer/run02.txt", mode_document=mode.to_dict(), **options)
+    bad = analyse_run_file(folder, "no_washer/run02.txt", mode=ConfigurationMode(mode), **options)
     assert bad.status["status"] == "excluded"
     assert "no_washer/run02.txt:40:" in bad.status["reason"] and BAD_CELL in bad.status["reason"]
     assert len(bad.segments["t_s"]) == 0 and list(bad.quality["check"]) == ["read"]
@@ -142,7 +127,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
     no_mode = analyse_run_file(
         folder,
         "no_washer/run01.txt",
-        mode_document={"error": "configuration no_washer: first mode not found"},
+        mode=ConfigurationMode(None, "configuration no_washer: first mode not found"),
         **options,
     )
     assert no_mode.status["status"] == "excluded"

@@ -444,15 +444,17 @@ def test_unknown_campaign_key_stops_before_any_job(tmp_path):
 
 
 def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
+    from helpers import failed_check_reasons
+
     from workflow.io.campaign import load_campaign, read_run
     from workflow.io.settings import QualitySettings
-    from workflow.measured.quality import QC_COLUMNS, quality_rows, run_quality_checks
+    from workflow.measured.quality import QC_COLUMNS, quality_rows
 
     meta = load_campaign(campaign)
     record = read_run(campaign, path, meta)
     rows = quality_rows(record, QualitySettings(), mode_hz=meta.mode_hz)
     table = pd.DataFrame(rows, columns=QC_COLUMNS).set_index("check")
-    return table, run_quality_checks(record, QualitySettings(), mode_hz=meta.mode_hz)
+    return table, failed_check_reasons(record, QualitySettings(), mode_hz=meta.mode_hz)
 
 
 @pytest.mark.parametrize(

@@ -40,7 +40,7 @@ import pandas as pd
 from scipy import optimize, special
 from scipy.stats import qmc
 
-from workflow.io.settings import DiscoverySettings
+from workflow.io.settings import AnalysisSettings, DiscoverySettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel, CurveGrid
 
 __all__ = [
@@ -1004,7 +1004,7 @@ the line fit, ``fit_rms``), as a fraction of the decay of ln-envelope across the
 (``2 pi N zeta`` for ``N`` cycles), in each run's highest-amplitude third."""
 
 
-def envelope_structure(data: ConfigurationData, *, segment_cycles: float = 10.0) -> dict | None:
+def envelope_structure(data: ConfigurationData, *, segment_cycles: float = AnalysisSettings.segment_cycles) -> dict | None:
     """Whether the log-decrement segments measure a decay at all.
 
     Every model of the vocabulary is a single mode whose damping changes slowly with
@@ -1493,7 +1493,7 @@ def diagnose_configuration(
     context: FitContext,
     *,
     settings: FitSettings = FitSettings(),
-    segment_cycles: float = 10.0,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
 ) -> ConfigurationDiagnosis:
     """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
     scatter = scatter_of(data)
@@ -1728,7 +1728,7 @@ def diagnose_campaign(
     *,
     response_quantity: str | Mapping[str, str] = "acceleration",
     settings: FitSettings | None = None,
-    segment_cycles: float = 10.0,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
     return_details: bool = False,
 ):
     """The ``results/diagnosis.json`` document of a campaign.

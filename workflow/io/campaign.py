@@ -258,7 +258,8 @@ def campaign_to_dict(campaign: Campaign) -> dict[str, Any]:
 
 
 def campaign_from_dict(data: dict[str, Any]) -> Campaign:
-    """The campaign of :func:`campaign_to_dict`'s data, which was validated when written."""
+    """The campaign of :func:`campaign_to_dict`'s data, which was validated when written
+    (:mod:`workflow.io.interim` writes and reads it between rules)."""
 
     def pair(values: list[float] | None) -> tuple[float, float] | None:
         return None if values is None else (float(values[0]), float(values[1]))
@@ -284,15 +285,6 @@ def campaign_from_dict(data: dict[str, Any]) -> Campaign:
     )
     object.__setattr__(campaign, "pretrigger_given", bool(data["pretrigger_given"]))
     return campaign
-
-
-def read_validated_campaign(path: str | Path) -> Campaign:
-    """The campaign of a JSON file holding :func:`campaign_to_dict`'s data (written by the
-    workflow's ``campaign_settings`` rule after :func:`load_campaign` validated
-    campaign.yaml)."""
-    import json
-
-    return campaign_from_dict(json.loads(Path(path).read_text(encoding="utf-8")))
 
 
 _ALLOWED_KEYS: dict[str, tuple[str, ...]] = {

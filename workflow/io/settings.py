@@ -8,7 +8,7 @@ silently ignored.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -63,12 +63,39 @@ class AnalysisSettings:
     envelope settling time, 1 / (pi * bandwidth)) to the excitation peak or to
     the end of the record are dropped as filter end effects."""
 
-    def run_parameters(self) -> dict[str, Any]:
-        """The settings of one run's decay analysis, as keyword arguments of
-        :func:`workflow.measured.runs.analyse_run_with_quality` (the mode search and the
-        band are settled per configuration, before)."""
-        per_configuration = {"band_half_width", "mode_search_hz", "mode_search_fraction"}
-        return {key: value for key, value in asdict(self).items() if key not in per_configuration}
+    def decay(self) -> DecaySettings:
+        """The keys one run's decay analysis reads."""
+        return DecaySettings(**{item.name: getattr(self, item.name) for item in fields(DecaySettings)})
+
+    def mode_search(self) -> ModeSearchSettings:
+        """The keys a configuration's mode search reads."""
+        return ModeSearchSettings(
+            **{item.name: getattr(self, item.name) for item in fields(ModeSearchSettings)}
+        )
+
+
+# A rule passes the keys its step reads (as a plain dict: Snakemake re-runs a job when such
+# a param changes, and cannot see into a dataclass); its script rebuilds these, which have
+# no defaults, so a key left out is an error, never a silent default.
+@dataclass(frozen=True)
+class DecaySettings:
+    """The ``analysis`` keys of one run's decay analysis (see :class:`AnalysisSettings`);
+    keyword arguments of :func:`workflow.measured.decay.analyse_decay` as ``asdict``."""
+
+    filter_order: int
+    segment_cycles: float
+    segment_overlap: float
+    noise_floor_factor: float
+    edge_time_constants: float
+
+
+@dataclass(frozen=True)
+class ModeSearchSettings:
+    """The ``analysis`` keys of a configuration's mode search (see :class:`AnalysisSettings`)."""
+
+    band_half_width: float
+    mode_search_hz: tuple[float, float] | None
+    mode_search_fraction: float
 
 
 @dataclass(frozen=True)
@@ -118,7 +145,7 @@ class QualitySettings:
 
 
 @dataclass(frozen=True)
-class FitSettings:
+class DampingFitSettings:
     """Polynomial fits of damping vs velocity amplitude and area."""
 
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
@@ -217,7 +244,7 @@ class WorkflowConfig:
 
     analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
     quality: QualitySettings = field(default_factory=QualitySettings)
-    fits: FitSettings = field(default_factory=FitSettings)
+    fits: DampingFitSettings = field(default_factory=DampingFitSettings)
     models: ModelSettings = field(default_factory=ModelSettings)
     discovery: DiscoverySettings = field(default_factory=DiscoverySettings)
     demo: DemoSettings = field(default_factory=DemoSettings)

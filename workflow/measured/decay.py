@@ -57,6 +57,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from workflow.io.settings import AnalysisSettings
+
 __all__ = [
     "DecayResult",
     "REJECT_CODES",
@@ -100,7 +102,10 @@ values, under 5 sigma for N < 20)."""
 
 
 def butterworth_bandpass_power(
-    frequency_hz: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10
+    frequency_hz: np.ndarray,
+    fs_hz: float,
+    band_hz: tuple[float, float],
+    order: int = AnalysisSettings.filter_order,
 ) -> np.ndarray:
     """Squared magnitude |H|^2 of the digital Butterworth band-pass, at given frequencies.
 
@@ -173,7 +178,9 @@ def _zero_phase_spectrum(
     return spectrum, extension, padded
 
 
-def bandpass(x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10) -> np.ndarray:
+def bandpass(
+    x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = AnalysisSettings.filter_order
+) -> np.ndarray:
     """Zero-phase Butterworth band-pass.
 
     Parameters
@@ -220,7 +227,9 @@ def filter_time_constant_s(band_hz: tuple[float, float]) -> float:
     return 1.0 / (np.pi * (high_hz - low_hz))
 
 
-def slowest_pole_time_constant_s(band_hz: tuple[float, float], order: int = 10) -> float:
+def slowest_pole_time_constant_s(
+    band_hz: tuple[float, float], order: int = AnalysisSettings.filter_order
+) -> float:
     """Decay time of the band-pass impulse response's slowest pole, seconds.
 
     The Butterworth prototype of order ``N = order // 2`` has its pole closest to
@@ -269,7 +278,7 @@ def envelope(x: np.ndarray) -> np.ndarray:
 
 
 def analytic_bandpass(
-    x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10
+    x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = AnalysisSettings.filter_order
 ) -> np.ndarray:
     """Analytic signal of the band-passed response.
 
@@ -315,8 +324,8 @@ def segment_bounds(
     stop_index: int,
     fs_hz: float,
     mode_hz: float,
-    segment_cycles: float = 10.0,
-    segment_overlap: float = 0.5,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Overlapping segments of a fixed number of cycles.
 
@@ -653,7 +662,7 @@ def startup_bias(
     stops: np.ndarray,
     *,
     onset_index: int,
-    filter_order: int = 10,
+    filter_order: int = AnalysisSettings.filter_order,
 ) -> dict[str, np.ndarray]:
     """Bias the analysis chain itself puts on each segment of a known linear decay.
 
@@ -709,11 +718,11 @@ def analyse_decay(
     band_hz: tuple[float, float],
     *,
     mode_hz: float | None = None,
-    filter_order: int = 10,
-    segment_cycles: float = 10.0,
-    segment_overlap: float = 0.5,
-    noise_floor_factor: float = 10.0,
-    edge_time_constants: float = 3.0,
+    filter_order: int = AnalysisSettings.filter_order,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
+    noise_floor_factor: float = AnalysisSettings.noise_floor_factor,
+    edge_time_constants: float = AnalysisSettings.edge_time_constants,
     start_index: int | None = None,
     stop_index: int | None = None,
     bias_tolerance: float = 0.01,

@@ -1,10 +1,10 @@
 """Per-run quality checks.
 
-Each check is a pure function over arrays that returns None when the run passes, or a
-short reason saying which check failed and by how much (the reason is what
-runs.parquet shows a person for an excluded run). :func:`run_quality_checks` applies
-the checks that need no decay analysis; :func:`check_snr` is applied by the analysis,
-which knows the in-band envelope and noise floor.
+Each check is a pure function over arrays that returns what it measured and a reason:
+None when the run passes, else which check failed and by how much (the reason is what
+runs.parquet shows a person for an excluded run). :func:`quality_rows` applies the
+checks that need no decay analysis; :func:`analysis_rows` those that need the in-band
+envelope and noise floor.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def _oriented_force(force_lbf: ArrayLike) -> NDArray[np.float64]:
 
 def check_clipping(
     response: ArrayLike, clip_fraction_of_peak: float, clip_max_samples: int, unit: str = ""
-) -> str | None:
+) -> CheckResult:
     """Flat-topped (clipped) response: too many samples at the record's absolute peak.
 
     Parameters
@@ -52,14 +52,10 @@ def check_clipping(
 
     Returns
     -------
-    str or None
-        None when the run passes, else the reason.
+    CheckResult
+        The measured value (the unit its quality row states) and ``reason``: None
+        when the run passes, else what failed and by how much.
     """
-    return _clipping(response, clip_fraction_of_peak, clip_max_samples, unit).reason
-
-
-def _clipping(response, clip_fraction_of_peak, clip_max_samples, unit="") -> CheckResult:
-    """:func:`check_clipping` with the number of samples at the peak."""
     magnitude = np.abs(np.asarray(response, dtype=np.float64))
     if magnitude.size == 0:
         return CheckResult(math.nan, "response is empty")
@@ -93,7 +89,7 @@ def _clipping(response, clip_fraction_of_peak, clip_max_samples, unit="") -> Che
     )
 
 
-def check_double_hit(force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float) -> str | None:
+def check_double_hit(force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: float) -> CheckResult:
     """Two hammer pulses: a second one larger than ``ratio`` of the main one.
 
     Pulses are the stretches where the force exceeds ``ratio`` times its peak; a
@@ -113,14 +109,10 @@ def check_double_hit(force_lbf: ArrayLike, fs_hz: float, ratio: float, gap_s: fl
 
     Returns
     -------
-    str or None
-        None when the run passes, else the reason.
+    CheckResult
+        The measured value (the unit its quality row states) and ``reason``: None
+        when the run passes, else what failed and by how much.
     """
-    return _double_hit(force_lbf, fs_hz, ratio, gap_s).reason
-
-
-def _double_hit(force_lbf, fs_hz, ratio, gap_s) -> CheckResult:
-    """:func:`check_double_hit` with the second pulse's peak over the main one's (0: none)."""
     force = _oriented_force(force_lbf)
     if force.size == 0:
         return CheckResult(math.nan, None)
@@ -153,7 +145,7 @@ def _double_hit(force_lbf, fs_hz, ratio, gap_s) -> CheckResult:
     )
 
 
-def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> str | None:
+def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> CheckResult:
     """Missing or tiny hammer hit.
 
     Parameters
@@ -165,14 +157,10 @@ def check_excitation(force_lbf: ArrayLike, min_peak_force_lbf: float) -> str | N
 
     Returns
     -------
-    str or None
-        None when the run passes, else the reason.
+    CheckResult
+        The measured value (the unit its quality row states) and ``reason``: None
+        when the run passes, else what failed and by how much.
     """
-    return _excitation(force_lbf, min_peak_force_lbf).reason
-
-
-def _excitation(force_lbf, min_peak_force_lbf) -> CheckResult:
-    """:func:`check_excitation` with the peak force (lbf; NaN for an empty record)."""
     force = _oriented_force(force_lbf)
     peak_lbf = float(force.max()) if force.size else 0.0
     value = peak_lbf if force.size else math.nan
@@ -187,8 +175,8 @@ def check_trigger(
     force_lbf: ArrayLike,
     pretrigger_samples: int,
     trigger_lbf: float = 1.0,
-    tolerance_samples: int = 5,
-) -> str | None:
+    tolerance_samples: int = QualitySettings.trigger_tolerance_samples,
+) -> CheckResult:
     """The force first reaches the trigger level where the pre-trigger says it should.
 
     A triggered record holds ``pretrigger_samples`` samples before the trigger, so the
@@ -209,14 +197,10 @@ def check_trigger(
 
     Returns
     -------
-    str or None
-        None when the run passes, else the reason.
+    CheckResult
+        The measured value (the unit its quality row states) and ``reason``: None
+        when the run passes, else what failed and by how much.
     """
-    return _trigger(force_lbf, pretrigger_samples, trigger_lbf, tolerance_samples).reason
-
-
-def _trigger(force_lbf, pretrigger_samples, trigger_lbf=1.0, tolerance_samples=5) -> CheckResult:
-    """:func:`check_trigger` with the distance of the first crossing, samples (inf: none)."""
     force = _oriented_force(force_lbf)
     crossings = np.flatnonzero(force >= trigger_lbf)
     if crossings.size == 0:
@@ -237,7 +221,7 @@ def _trigger(force_lbf, pretrigger_samples, trigger_lbf=1.0, tolerance_samples=5
     )
 
 
-def check_record_length(n_samples: int, fs_hz: float, mode_hz: float, min_cycles: float) -> str | None:
+def check_record_length(n_samples: int, fs_hz: float, mode_hz: float, min_cycles: float) -> CheckResult:
     """Record long enough to hold ``min_cycles`` cycles of the mode.
 
     Parameters
@@ -253,14 +237,10 @@ def check_record_length(n_samples: int, fs_hz: float, mode_hz: float, min_cycles
 
     Returns
     -------
-    str or None
-        None when the run passes, else the reason.
+    CheckResult
+        The measured value (the unit its quality row states) and ``reason``: None
+        when the run passes, else what failed and by how much.
     """
-    return _record_length(n_samples, fs_hz, mode_hz, min_cycles).reason
-
-
-def _record_length(n_samples, fs_hz, mode_hz, min_cycles) -> CheckResult:
-    """:func:`check_record_length` with the cycles of the mode in the record."""
     duration_s = n_samples / fs_hz
     cycles = duration_s * mode_hz
     if cycles >= min_cycles:
@@ -279,7 +259,7 @@ def check_mode_found(
     magnitude: ArrayLike,
     mode_hz: float,
     search_hz: tuple[float, float],
-    min_prominence: float = 2.0,
+    min_prominence: float = QualitySettings.min_mode_prominence,
 ) -> str | None:
     """The peak found in the search range is a resonance, not the flank of a mode outside it.
 
@@ -321,7 +301,7 @@ def check_mode_found(
     )
 
 
-def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> str | None:
+def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> CheckResult:
     """Peak in-band envelope over the noise floor, in dB, at least ``min_snr_db``.
 
     Parameters
@@ -335,14 +315,10 @@ def check_snr(peak_envelope: float, noise_floor: float, min_snr_db: float) -> st
 
     Returns
     -------
-    str or None
-        None when the run passes, else the reason.
+    CheckResult
+        The measured value (the unit its quality row states) and ``reason``: None
+        when the run passes, else what failed and by how much.
     """
-    return _snr(peak_envelope, noise_floor, min_snr_db).reason
-
-
-def _snr(peak_envelope, noise_floor, min_snr_db) -> CheckResult:
-    """:func:`check_snr` with the signal-to-noise ratio, dB."""
     if not peak_envelope > 0.0:
         return CheckResult(-math.inf, f"signal-to-noise: no signal (peak envelope {peak_envelope:.3g})")
     if not noise_floor > 0.0:
@@ -357,20 +333,6 @@ def _snr(peak_envelope, noise_floor, min_snr_db) -> CheckResult:
             f"(peak envelope {peak_envelope:.3g}, noise floor {noise_floor:.3g})"
         ),
     )
-
-
-def run_quality_checks(
-    record: RunRecord, settings: QualitySettings, *, mode_hz: float | None = None
-) -> list[str]:
-    """Reasons of the failed record-level checks of one run (empty: it passes).
-
-    The checks and when they apply are those of :func:`quality_rows`.
-    """
-    return [
-        row["reason"]
-        for row in quality_rows(record, settings, mode_hz=mode_hz)
-        if row["applied"] and not row["passed"]
-    ]
 
 
 QC_COLUMNS: list[str] = ["check", "applied", "passed", "value", "threshold", "unit", "reason"]
@@ -402,7 +364,7 @@ def quality_rows(
     *,
     mode_hz: float | None = None,
 ) -> list[dict]:
-    """The record-level checks of :func:`run_quality_checks`, one row per check.
+    """The record-level checks of one run, one row per check.
 
     Each row holds ``check`` (name), ``applied`` (False when the check does not apply:
     no force column, pre-trigger not stated, mode unknown, or no hit to trigger on),
@@ -432,12 +394,12 @@ def quality_rows(
     not_applied = CheckResult(math.nan, None)
     force = record.force_lbf
     has_force = force is not None
-    excitation = _excitation(force, settings.min_peak_force_lbf) if has_force else not_applied
+    excitation = check_excitation(force, settings.min_peak_force_lbf) if has_force else not_applied
     trigger_applies = has_force and excitation.reason is None and record.pretrigger_source != "default"
     return [
         row(
             "clipping",
-            _clipping(
+            check_clipping(
                 record.response,
                 settings.clip_fraction_of_peak,
                 settings.clip_max_samples,
@@ -455,7 +417,9 @@ def quality_rows(
         ),
         row(
             "double_hit",
-            _double_hit(force, record.sample_rate_hz, settings.double_hit_ratio, settings.double_hit_gap_s)
+            check_double_hit(
+                force, record.sample_rate_hz, settings.double_hit_ratio, settings.double_hit_gap_s
+            )
             if has_force
             else not_applied,
             settings.double_hit_ratio,
@@ -464,7 +428,9 @@ def quality_rows(
         ),
         row(
             "trigger",
-            _trigger(force, record.pretrigger_samples, tolerance_samples=settings.trigger_tolerance_samples)
+            check_trigger(
+                force, record.pretrigger_samples, tolerance_samples=settings.trigger_tolerance_samples
+            )
             if trigger_applies
             else not_applied,
             settings.trigger_tolerance_samples,
@@ -473,7 +439,7 @@ def quality_rows(
         ),
         row(
             "record_length",
-            _record_length(record.n_samples, record.sample_rate_hz, mode_hz, settings.min_record_cycles)
+            check_record_length(record.n_samples, record.sample_rate_hz, mode_hz, settings.min_record_cycles)
             if mode_hz is not None
             else not_applied,
             settings.min_record_cycles,
@@ -487,7 +453,7 @@ def analysis_rows(
     peak_envelope: float, noise_floor: float, n_segments: int, settings: QualitySettings
 ) -> list[dict]:
     """The decay-level checks as rows of a quality table (see :func:`quality_rows`)."""
-    snr_db, snr_reason = _snr(peak_envelope, noise_floor, settings.min_snr_db)
+    snr_db, snr_reason = check_snr(peak_envelope, noise_floor, settings.min_snr_db)
     segments_reason = None
     if n_segments < settings.min_segments:
         segments_reason = (

@@ -10,54 +10,26 @@ pandas.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from workflow.io import units
 from workflow.io.campaign import RunRecord
-from workflow.io.settings import QualitySettings
+from workflow.io.interim import ConfigurationMode, ModeInfo
+from workflow.io.settings import (
+    AnalysisSettings,
+    DampingFitSettings,
+    DecaySettings,
+    ModeSearchSettings,
+    QualitySettings,
+)
 from workflow.measured import decay, quality
+from workflow.measured import mode as modal_id
 
 if TYPE_CHECKING:
     import pandas as pd
-
-
-@dataclass(frozen=True)
-class ModeInfo:
-    """First mode of a configuration and the band used to isolate it."""
-
-    mode_hz: float
-    band_hz: tuple[float, float]
-    method: str  # "h1" (force recorded), "spectrum" (response only) or "campaign" (given)
-    coherence_at_mode: float | None
-    n_runs: int
-    sample_rate_hz: float
-    record_duration_s: float  # median over the runs used
-
-    def to_dict(self) -> dict:
-        return {
-            "mode_hz": self.mode_hz,
-            "band_hz": list(self.band_hz),
-            "method": self.method,
-            "coherence_at_mode": self.coherence_at_mode,
-            "n_runs": self.n_runs,
-            "sample_rate_hz": self.sample_rate_hz,
-            "record_duration_s": self.record_duration_s,
-        }
-
-    @classmethod
-    def from_dict(cls, document: dict) -> ModeInfo:
-        return cls(
-            mode_hz=float(document["mode_hz"]),
-            band_hz=(float(document["band_hz"][0]), float(document["band_hz"][1])),
-            method=str(document["method"]),
-            coherence_at_mode=document.get("coherence_at_mode"),
-            n_runs=int(document["n_runs"]),
-            sample_rate_hz=float(document["sample_rate_hz"]),
-            record_duration_s=float(document["record_duration_s"]),
-        )
 
 
 def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> tuple[int, int]:
@@ -101,7 +73,7 @@ def identify_mode(
     band_half_width: float,
     mode_search_hz: tuple[float, float] | None,
     mode_search_fraction: float,
-    min_mode_prominence: float = 2.0,
+    min_mode_prominence: float = QualitySettings.min_mode_prominence,
 ) -> ModeInfo:
     """First-mode frequency of a configuration from all its readable runs.
 
@@ -109,8 +81,6 @@ def identify_mode(
     recorded the force, the averaged response spectrum otherwise. The band is
     campaign.yaml's ``band_hz`` when given, else ``mode * (1 -/+ band_half_width)``.
     """
-    from workflow.measured import mode as modal_id  # scipy.signal: imported only by the rule that needs it
-
     if not records:
         raise ValueError("no readable run to identify the mode from")
     sample_rate_hz = records[0].sample_rate_hz
@@ -184,15 +154,26 @@ def analyse_run_with_quality(
     run: str,
     mode: ModeInfo,
     window: tuple[int, int],
-    filter_order: int,
-    segment_cycles: float,
-    segment_overlap: float,
-    noise_floor_factor: float,
-    edge_time_constants: float,
-    min_snr_db: float,
-    min_segments: int,
+    decay_settings: DecaySettings,
+    quality_settings: QualitySettings,
 ) -> tuple[dict[str, np.ndarray], list[dict]]:
     """Band-pass, envelope and segmented log decrement of one run, with its checks.
+
+    Parameters
+    ----------
+    record : RunRecord
+        The run, read.
+    configuration, run : str
+        Its configuration and run name (written into every row).
+    mode : ModeInfo
+        The configuration's mode and band.
+    window : (int, int)
+        Sample indices [start, stop) to analyse (:func:`analysis_window`).
+    decay_settings : DecaySettings
+        The decay analysis settings (filter order, segment length and overlap, noise
+        floor factor, edge time constants).
+    quality_settings : QualitySettings
+        The thresholds of the decay-level checks (signal-to-noise, usable segments).
 
     Returns
     -------
@@ -210,11 +191,7 @@ def analyse_run_with_quality(
         record.sample_rate_hz,
         mode.band_hz,
         mode_hz=mode.mode_hz,
-        filter_order=filter_order,
-        segment_cycles=segment_cycles,
-        segment_overlap=segment_overlap,
-        noise_floor_factor=noise_floor_factor,
-        edge_time_constants=edge_time_constants,
+        **asdict(decay_settings),
         start_index=start if window != (0, record.n_samples) else None,
         stop_index=stop,
     )
@@ -238,21 +215,10 @@ def analyse_run_with_quality(
         "reject_reason": np.asarray(segments["reject_reason"], dtype=str),
     }
     peak_envelope = float(np.max(result.envelope[result.start_index : stop]))
-    thresholds = QualitySettings(min_snr_db=min_snr_db, min_segments=min_segments)
-    rows = quality.analysis_rows(peak_envelope, result.noise_floor, int(columns["kept"].sum()), thresholds)
+    rows = quality.analysis_rows(
+        peak_envelope, result.noise_floor, int(columns["kept"].sum()), quality_settings
+    )
     return columns, rows
-
-
-def analyse_run(record: RunRecord, **arguments) -> tuple[pd.DataFrame, list[str]]:
-    """:func:`analyse_run_with_quality`, with the segments as a DataFrame and the failed
-    checks as messages.
-
-    Returns the segments and the list of problems (empty when the run is usable).
-    """
-    import pandas as pd
-
-    columns, rows = analyse_run_with_quality(record, **arguments)
-    return pd.DataFrame(columns), [row["reason"] for row in rows if not row["passed"]]
 
 
 def read_with_quality(
@@ -320,9 +286,9 @@ def analyse_run_file(
     *,
     configuration: str,
     campaign,
-    mode_document: dict,
+    mode: ConfigurationMode,
     quality_settings: QualitySettings,
-    analysis: dict,
+    decay_settings: DecaySettings,
 ) -> RunAnalysis:
     """Read, check and analyse one run file; a run that cannot be used is excluded
     with its reason, never raised.
@@ -337,13 +303,13 @@ def analyse_run_file(
         Its configuration.
     campaign : Campaign
         The validated campaign.yaml.
-    mode_document : dict
-        The configuration's mode (:meth:`ModeInfo.to_dict`), or ``{"error": reason}``
-        when no mode was found.
+    mode : ConfigurationMode
+        The configuration's mode search result (:func:`identify_configuration_mode`);
+        without a mode, the run is excluded with the reason none was found.
     quality_settings : QualitySettings
         Quality thresholds.
-    analysis : dict
-        The decay analysis settings (:meth:`workflow.io.settings.AnalysisSettings.run_parameters`).
+    decay_settings : DecaySettings
+        The decay analysis settings.
     """
     from pathlib import PurePosixPath
 
@@ -352,18 +318,17 @@ def analyse_run_file(
     record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
     problems = failed_checks(run_path, rows)
     if record is not None and not problems:
-        if "error" in mode_document:
-            problems = [mode_document["error"]]
+        if mode.mode is None:
+            problems = [mode.error]
         else:
             segments, decay_rows = analyse_run_with_quality(
                 record,
                 configuration=configuration,
                 run=run,
-                mode=ModeInfo.from_dict(mode_document),
+                mode=mode.mode,
                 window=analysis_window(record, campaign.configurations[configuration].window_s),
-                min_snr_db=quality_settings.min_snr_db,
-                min_segments=quality_settings.min_segments,
-                **analysis,
+                decay_settings=decay_settings,
+                quality_settings=quality_settings,
             )
             rows += decay_rows
             problems = failed_checks(run_path, decay_rows)
@@ -377,14 +342,115 @@ def analyse_run_file(
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
 
 
+def identify_configuration_mode(
+    campaign_dir,
+    run_paths: list[str],
+    *,
+    configuration: str,
+    campaign,
+    mode_search: ModeSearchSettings,
+    quality_settings: QualitySettings,
+) -> ConfigurationMode:
+    """First mode of one configuration from its run files; never raises for bad data.
+
+    Runs that cannot be read or fail a record-level check are left out (listed in
+    ``skipped_runs`` with their reasons); when no mode is found, ``error`` says why, and
+    every run of the configuration is later excluded with that reason while the other
+    configurations go on.
+
+    Parameters
+    ----------
+    campaign_dir : path
+        The campaign folder.
+    run_paths : list of str
+        The configuration's run files, relative to ``campaign_dir``.
+    configuration : str
+        The configuration.
+    campaign : Campaign
+        The validated campaign.yaml.
+    mode_search : ModeSearchSettings
+        Mode search range and band width.
+    quality_settings : QualitySettings
+        Record-level checks and the least prominence of a mode.
+    """
+    from pathlib import PurePosixPath
+
+    window_s = campaign.configurations[configuration].window_s
+    records, windows, skipped = [], [], {}
+    for run_path in run_paths:
+        record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
+        if problems:
+            skipped[PurePosixPath(run_path).stem] = problems
+            continue
+        records.append(record)
+        windows.append(analysis_window(record, window_s))
+    try:
+        mode = identify_mode(
+            records,
+            windows=windows,
+            campaign_mode_hz=campaign.mode_hz,
+            campaign_band_hz=campaign.band_hz,
+            band_half_width=mode_search.band_half_width,
+            mode_search_hz=mode_search.mode_search_hz,
+            mode_search_fraction=mode_search.mode_search_fraction,
+            min_mode_prominence=quality_settings.min_mode_prominence,
+        )
+    except ValueError as error:
+        return ConfigurationMode(
+            None, f"configuration {configuration}: first mode not found: {error}", skipped
+        )
+    return ConfigurationMode(mode, "", skipped)
+
+
+def analyse_campaign(
+    campaign_dir, analysis: AnalysisSettings, quality_settings: QualitySettings
+) -> pd.DataFrame:
+    """Kept segments of every usable run of a campaign, in one process.
+
+    The workflow's rules ``identify_mode``, ``analyse_runs`` and ``collect_tables`` make
+    the same calls, split over jobs; this is the whole chain for studies over many
+    campaigns (``bench/hit_rate.py``).
+
+    Returns the rows ``results/tables/segments.parquet`` would hold.
+    """
+    import pandas as pd
+
+    from workflow.io.campaign import list_runs, load_campaign
+
+    campaign = load_campaign(campaign_dir)
+    run_files = list_runs(campaign_dir, campaign)
+    frames = []
+    for name, spec in campaign.configurations.items():
+        paths = [run_file.path for run_file in run_files if run_file.configuration == name]
+        options = {"configuration": name, "campaign": campaign, "quality_settings": quality_settings}
+        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis.mode_search(), **options)
+        for path in paths:
+            result = analyse_run_file(
+                campaign_dir, path, mode=mode, decay_settings=analysis.decay(), **options
+            )
+            if result.status["status"] != "used":
+                continue
+            segments = pd.DataFrame(result.segments)
+            kept = segments[segments["kept"]].drop(columns=["kept", "reject_reason"])
+            kept["bearing_area_in2"] = spec.bearing_area_in2 if spec.bearing_area_in2 is not None else np.nan
+            frames.append(kept)
+    if not frames:
+        columns = [name for name in SEGMENT_COLUMNS if name not in ("kept", "reject_reason")]
+        return pd.DataFrame(columns=[*columns, "bearing_area_in2"])
+    return pd.concat(frames, ignore_index=True)
+
+
 def collect_tables(
     *, segment_paths, quality_paths, status_paths, mode_paths, campaign, excluded_paths=()
 ) -> dict[str, pd.DataFrame]:
     """Merge the per-run outputs into the campaign's tables.
 
-    ``excluded_paths`` are runs-table rows for what the campaign's globs lead to that
-    no job reads (:meth:`workflow.io.campaign.ExcludedPath.status`): directories, links
-    leading outside the campaign, unreadable files, globs that match nothing.
+    ``mode_paths`` are the configurations' mode files (``<configuration>.json``,
+    :func:`workflow.io.interim.write_mode`); the other paths list every ``analyse_runs``
+    job's files. ``excluded_paths`` are runs-table rows for what the campaign's globs
+    lead to that no job reads (:meth:`workflow.io.campaign.ExcludedPath.status`):
+    directories, links leading outside the campaign, unreadable files, globs that match
+    nothing.
 
     Returns ``segments`` (kept segments of used runs: the output contract's
     table), ``rejected`` (every other segment, with its reason), ``runs`` (one
@@ -392,18 +458,14 @@ def collect_tables(
     row per run and quality check: value, threshold, passed) and ``modes`` (one row
     per configuration).
     """
-    import json
     from pathlib import Path
 
     import pandas as pd
 
+    from workflow.io.interim import read_mode, read_run_statuses
     from workflow.io.tables import read_columns
 
-    # Each status file holds the statuses of one job's runs.
-    statuses = pd.DataFrame(
-        [status for path in status_paths for status in json.loads(Path(path).read_text())]
-        + list(excluded_paths)
-    )
+    statuses = pd.DataFrame(read_run_statuses(status_paths) + list(excluded_paths))
     runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
     frames = [frame for frame in frames if len(frame)]
@@ -427,20 +489,20 @@ def collect_tables(
     mode_rows = []
     for path in mode_paths:
         name = Path(path).stem
-        document = json.loads(Path(path).read_text())
-        band = document.get("band_hz", [np.nan, np.nan])
+        found = read_mode(path)
+        mode = found.mode
         mode_rows.append(
             {
                 "configuration": name,
-                "mode_hz": document.get("mode_hz", np.nan),
-                "band_low_hz": band[0],
-                "band_high_hz": band[1],
-                "method": document.get("method", "not found"),
-                "sample_rate_hz": document.get("sample_rate_hz", np.nan),
-                "record_duration_s": document.get("record_duration_s", np.nan),
-                "coherence_at_mode": document.get("coherence_at_mode") or np.nan,
+                "mode_hz": mode.mode_hz if mode else np.nan,
+                "band_low_hz": mode.band_hz[0] if mode else np.nan,
+                "band_high_hz": mode.band_hz[1] if mode else np.nan,
+                "method": mode.method if mode else "not found",
+                "sample_rate_hz": mode.sample_rate_hz if mode else np.nan,
+                "record_duration_s": mode.record_duration_s if mode else np.nan,
+                "coherence_at_mode": (mode.coherence_at_mode if mode else None) or np.nan,
                 "bearing_area_in2": areas.get(name, np.nan),
-                "error": document.get("error", ""),
+                "error": found.error,
             }
         )
     return {
@@ -455,17 +517,16 @@ def collect_tables(
 def fit_damping_curves(
     segments: pd.DataFrame,
     areas_in2: dict[str, float | None],
+    settings: DampingFitSettings,
     *,
-    max_degree: int,
-    log_amplitude: bool,
-    bootstrap_samples: int,
-    confidence: float,
-    seed: int,
     grid_points: int = 60,
     area_amplitudes: int = 5,
 ) -> dict[str, pd.DataFrame]:
     """Polynomial fits of damping vs velocity amplitude per configuration, their
     bootstrap-over-runs bands, the paper's two hypotheses, and damping vs area.
+
+    ``settings`` are the ``fits`` section of config.yaml (highest degree, log amplitude,
+    bootstrap resamples, confidence, seed).
 
     Returns ``fits`` (one row per configuration), ``curves`` (fit and band on a
     grid over each configuration's amplitude range), ``hypotheses`` and ``area``
@@ -480,7 +541,9 @@ def fit_damping_curves(
         v = part["velocity_amplitude_in_s"].to_numpy(float)
         zeta = part["zeta"].to_numpy(float)
         run = part["run"].to_numpy(str)
-        fit = curves.fit_damping_polynomial(v, zeta, run, max_degree=max_degree, log_amplitude=log_amplitude)
+        fit = curves.fit_damping_polynomial(
+            v, zeta, run, max_degree=settings.max_degree, log_amplitude=settings.log_amplitude
+        )
         fits[name] = fit
         by_configuration[name] = (v, zeta, run)
         grid = np.geomspace(v.min(), v.max(), grid_points)
@@ -490,10 +553,10 @@ def fit_damping_curves(
             run,
             fit.degree,
             grid,
-            n_boot=bootstrap_samples,
-            confidence=confidence,
-            seed=seed + offset,
-            log_amplitude=log_amplitude,
+            n_boot=settings.bootstrap_samples,
+            confidence=settings.confidence,
+            seed=settings.seed + offset,
+            log_amplitude=settings.log_amplitude,
         )
         area = areas_in2.get(name)
         curve_frames.append(
@@ -527,11 +590,11 @@ def fit_damping_curves(
     hypotheses = curves.hypothesis_tests(
         segments,
         known_areas or None,
-        max_degree=max_degree,
-        log_amplitude=log_amplitude,
-        n_boot=bootstrap_samples,
-        confidence=confidence,
-        seed=seed,
+        max_degree=settings.max_degree,
+        log_amplitude=settings.log_amplitude,
+        n_boot=settings.bootstrap_samples,
+        confidence=settings.confidence,
+        seed=settings.seed,
     )
     area_rows = []
     common = curves.common_amplitude_range(by_configuration) if len(by_configuration) > 1 else None
@@ -545,10 +608,10 @@ def fit_damping_curves(
                 run,
                 fits[name].degree,
                 amplitudes,
-                n_boot=bootstrap_samples,
-                confidence=confidence,
-                seed=seed + 100 + offset,
-                log_amplitude=log_amplitude,
+                n_boot=settings.bootstrap_samples,
+                confidence=settings.confidence,
+                seed=settings.seed + 100 + offset,
+                log_amplitude=settings.log_amplitude,
             )
             for amplitude, low, mid, high in zip(amplitudes, lower, centre, upper):
                 area_rows.append(

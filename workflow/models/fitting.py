@@ -53,23 +53,24 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.stats import qmc
 
+from workflow.io.settings import AnalysisSettings, DecaySettings, ModelSettings
 from workflow.measured import decay
 from workflow.models.ringdown import simulate_ringdown
 
 __all__ = [
-    "FitContext",
-    "FitResult",
+    "RingdownFitContext",
+    "RingdownFitResult",
     "ModelSpace",
     "model_space",
     "analyse_batch",
-    "model_curves",
+    "simulated_curves",
     "fit_friction_model",
     "measurement_scatter",
 ]
 
 
 @dataclass(frozen=True)
-class FitContext:
+class RingdownFitContext:
     """Modal and analysis context shared by measurements and simulations.
 
     Attributes
@@ -86,8 +87,9 @@ class FitContext:
         Sensor displacement per unit modal coordinate, in (1: same absorption).
     response : {"acceleration", "velocity", "displacement"}
         Measured quantity, so the simulated one is analysed in the same form.
-    filter_order, segment_cycles, segment_overlap, edge_time_constants
-        As :func:`workflow.measured.decay.analyse_decay`.
+    analysis : DecaySettings
+        The decay analysis the measurements went through (filter order, segment length
+        and overlap, edge time constants); the simulations go through the same.
     steps_per_period : int
         Simulator steps per period (minimum; see :func:`simulate_ringdown`).
     """
@@ -98,15 +100,12 @@ class FitContext:
     slip_per_modal: float = 1.0
     response_per_modal: float = 1.0
     response: str = "acceleration"
-    filter_order: int = 10
-    segment_cycles: float = 10.0
-    segment_overlap: float = 0.5
-    edge_time_constants: float = 3.0
-    steps_per_period: int = 16
+    analysis: DecaySettings = field(default_factory=lambda: AnalysisSettings().decay())
+    steps_per_period: int = ModelSettings.steps_per_period
 
 
 @dataclass
-class FitResult:
+class RingdownFitResult:
     """Outcome of :func:`fit_friction_model`.
 
     Attributes
@@ -161,7 +160,7 @@ def model_space(
     velocity_amplitude_in_s: np.ndarray,
     zeta: np.ndarray,
     frequency_hz: np.ndarray,
-    ctx: FitContext,
+    ctx: RingdownFitContext,
 ) -> ModelSpace:
     """Search box derived from the measured ranges and the physical parameter map.
 
@@ -232,7 +231,7 @@ def model_space(
 
 
 # ------------------------------------------------------------------------- analysis
-def analyse_batch(responses: np.ndarray, ctx: FitContext) -> list[dict[str, np.ndarray]]:
+def analyse_batch(responses: np.ndarray, ctx: RingdownFitContext) -> list[dict[str, np.ndarray]]:
     """Segmented log decrement of simulated records, chain of :mod:`workflow.measured.decay`.
 
     Same band-pass (analytic signal first), envelope and segments as the measurements;
@@ -248,13 +247,13 @@ def analyse_batch(responses: np.ndarray, ctx: FitContext) -> list[dict[str, np.n
     """
     out = []
     tau = decay.filter_time_constant_s(ctx.band_hz)
-    edge = int(np.ceil(ctx.edge_time_constants * tau * ctx.fs_hz))
+    edge = int(np.ceil(ctx.analysis.edge_time_constants * tau * ctx.fs_hz))
     for x in np.atleast_2d(responses):
         empty = {k: np.empty(0) for k in ("velocity_amplitude_in_s", "zeta", "frequency_hz")}
         if not np.all(np.isfinite(x)) or not np.any(x):
             out.append(empty)
             continue
-        z = decay.analytic_bandpass(x, ctx.fs_hz, ctx.band_hz, ctx.filter_order)
+        z = decay.analytic_bandpass(x, ctx.fs_hz, ctx.band_hz, ctx.analysis.filter_order)
         env = np.abs(z)
         phase = np.unwrap(np.angle(z))
         start = int(np.argmax(env))
@@ -264,7 +263,12 @@ def analyse_batch(responses: np.ndarray, ctx: FitContext) -> list[dict[str, np.n
             out.append(empty)
             continue
         starts, stops = decay.segment_bounds(
-            start + edge, n - edge, ctx.fs_hz, mode_hz, ctx.segment_cycles, ctx.segment_overlap
+            start + edge,
+            n - edge,
+            ctx.fs_hz,
+            mode_hz,
+            ctx.analysis.segment_cycles,
+            ctx.analysis.segment_overlap,
         )
         seg = decay.log_decrement_segments(env, phase, ctx.fs_hz, starts, stops)
         amp, zeta, freq = seg["amplitude"], seg["zeta"], seg["frequency_hz"]
@@ -281,8 +285,13 @@ def analyse_batch(responses: np.ndarray, ctx: FitContext) -> list[dict[str, np.n
     return out
 
 
-def model_curves(
-    model: str, phys: dict[str, np.ndarray], ctx: FitContext, *, start_velocity_in_s: float, duration_s: float
+def simulated_curves(
+    model: str,
+    phys: dict[str, np.ndarray],
+    ctx: RingdownFitContext,
+    *,
+    start_velocity_in_s: float,
+    duration_s: float,
 ) -> list[dict[str, np.ndarray]]:
     """Simulate a batch of ring-downs and analyse them like the measurements.
 
@@ -291,7 +300,7 @@ def model_curves(
     model : {"dahl", "lugre"}
     phys : dict of ndarray
         Physical parameters (batch,), including ``omega_rad_s`` and ``zeta0``.
-    ctx : FitContext
+    ctx : RingdownFitContext
     start_velocity_in_s : float
         Starting velocity amplitude at the sensor, in/s.
     duration_s : float
@@ -377,15 +386,15 @@ def fit_friction_model(
     frequency_hz,
     run,
     start_velocity_in_s,
-    ctx: FitContext,
+    ctx: RingdownFitContext,
     *,
     global_samples: int = 256,
     local_starts: int = 4,
     max_iterations: int = 12,
-    seed: int = 1976,
+    seed: int = ModelSettings.seed,
     start_margin: float = 1.3,
     initial_points=None,
-) -> FitResult:
+) -> RingdownFitResult:
     """Fit Dahl or LuGre (plus zeta0 and the linear frequency) to measured curves.
 
     Parameters
@@ -397,7 +406,7 @@ def fit_friction_model(
         Run label of each segment (used for the start amplitudes and reporting).
     start_velocity_in_s : array_like
         Starting velocity amplitude of each run, in/s.
-    ctx : FitContext
+    ctx : RingdownFitContext
     global_samples, local_starts, seed
         Sobol batch size, number of refined candidates, generator seed.
     max_iterations : int
@@ -411,7 +420,7 @@ def fit_friction_model(
 
     Returns
     -------
-    FitResult
+    RingdownFitResult
     """
     v = np.asarray(velocity_amplitude_in_s, float)
     z = np.asarray(zeta, float)
@@ -436,7 +445,7 @@ def fit_friction_model(
     def evaluate(theta):
         nonlocal n_sim
         theta = np.clip(np.atleast_2d(theta), space.lower, space.upper)
-        curves = model_curves(
+        curves = simulated_curves(
             model, space.to_physical(theta), ctx, start_velocity_in_s=v_start, duration_s=duration
         )
         n_sim += theta.shape[0]
@@ -503,7 +512,7 @@ def fit_friction_model(
     k = int(np.argmin(cost))
     theta_best, r_best, j_best = theta[k], res[k], jac[k]
     n_res = r_best.size
-    s2 = 2.0 * cost[k] / max(1, n_res - p) / (1.0 - ctx.segment_overlap)
+    s2 = 2.0 * cost[k] / max(1, n_res - p) / (1.0 - ctx.analysis.segment_overlap)
     cov = s2 * np.linalg.pinv(j_best.T @ j_best)
     phys = {key: float(val[0]) for key, val in space.to_physical(theta_best).items()}
     phys["f_linear_hz"] = phys["omega_rad_s"] / (2 * np.pi)
@@ -521,7 +530,7 @@ def fit_friction_model(
     _, curves = evaluate(theta_best)
     curve = curves[0]
     zm, fm = _interp_log(v, curve, "zeta"), _interp_log(v, curve, "frequency_hz")
-    return FitResult(
+    return RingdownFitResult(
         model=model,
         params=phys,
         uncertainties=unc,

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from workflow.io.settings import DecaySettings, ModelSettings
+
 #: Paper figure 7 (Dahl) and figure 8 (LuGre) parameter values, in the paper's units.
 PAPER_DAHL = {"sigma": (2 * np.pi) ** 2, "fc": 38.0}
 PAPER_LUGRE = {
@@ -120,32 +122,28 @@ def fit_configuration(
     band_hz: tuple[float, float],
     response_quantity: str,
     coordinate: ModalCoordinate,
-    analysis: dict,
-    global_samples: int,
-    local_starts: int,
-    local_iterations: int,
-    steps_per_period: int,
-    seed: int,
+    analysis: DecaySettings,
+    settings: ModelSettings,
 ) -> dict:
     """Fit each friction model to one configuration's damping and frequency curves.
+
+    ``analysis`` is the decay analysis the segments went through (the simulated
+    ring-downs go through the same); ``settings`` the search and simulation settings.
 
     Returns a JSON-ready document: per model its parameters, one-sigma
     uncertainties, fit-quality numbers and the simulated curves.
     """
-    from workflow.models.fitting import FitContext, fit_friction_model
+    from workflow.models.fitting import RingdownFitContext, fit_friction_model
 
-    context = FitContext(
+    context = RingdownFitContext(
         fs_hz=sample_rate_hz,
         band_hz=tuple(band_hz),
         record_duration_s=record_duration_s,
         slip_per_modal=1.0,
         response_per_modal=coordinate.response_per_modal,
         response=response_quantity,
-        filter_order=analysis["filter_order"],
-        segment_cycles=analysis["segment_cycles"],
-        segment_overlap=analysis["segment_overlap"],
-        edge_time_constants=analysis["edge_time_constants"],
-        steps_per_period=steps_per_period,
+        analysis=analysis,
+        steps_per_period=settings.steps_per_period,
     )
     document = {
         "modal_coordinate": coordinate.source,
@@ -161,11 +159,11 @@ def fit_configuration(
             segments["run"].to_numpy(str),
             run_start_velocities(segments),
             context,
-            global_samples=global_samples,
-            local_starts=local_starts,
-            max_iterations=local_iterations,
-            seed=seed + offset,
-            initial_points=averaged_start(model, segments, response_quantity, seed),
+            global_samples=settings.global_samples,
+            local_starts=settings.local_starts,
+            max_iterations=settings.local_iterations,
+            seed=settings.seed + offset,
+            initial_points=averaged_start(model, segments, response_quantity, settings.seed),
         )
         document["models"][model] = {
             "params": {key: float(value) for key, value in result.params.items()},

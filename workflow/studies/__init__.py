@@ -1,0 +1,1 @@
+"""Studies over many virtual-lab campaigns, shared by tests and benchmarks."""

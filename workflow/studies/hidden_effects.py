@@ -1,0 +1,108 @@
+"""Hidden-effect campaigns: the virtual lab hides one cause, the measured-data chain and
+the diagnosis must name it.
+
+Each case generates a small campaign (one configuration, :data:`RUNS` runs) with the
+effect's size and the configuration's bearing area drawn from a range with a random seed,
+analyses it with the workflow's own chain (:func:`workflow.measured.runs.analyse_campaign`,
+default settings of config.yaml) and diagnoses the segments. ``tests/test_hidden_effects.py``
+runs one seed per cause; ``bench/hit_rate.py`` many.
+"""
+
+from __future__ import annotations
+
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from workflow.discovery.diagnosis import diagnose_campaign
+from workflow.io.settings import AnalysisSettings, QualitySettings
+from workflow.measured.runs import analyse_campaign
+
+CASES = {
+    # cause: (joint, effect, effect-size range or None)
+    # bench/hit_rate.py --seeds 40 (2026-11-22, this code): hit rate, gain ratio median/max
+    "none": ("dahl", None, None),  # 0.95 (0.03 quadratic, 0.03 stiffness false alarms)
+    "microslip_power_law": ("patches", None, None),  # 0.93 (0.07 unknown); 0.32 / 0.62
+    "quadratic_damping": ("dahl", "quadratic_damping", (0.002, 0.006)),  # 0.97; 0.47 / 0.67
+    "stiffness_nonlinearity": ("dahl", "stiffness_nonlinearity", (0.005, 0.02)),  # 0.97; 0.14 / 0.44
+    "run_drift": ("dahl", "run_drift", (0.3, 0.6)),  # 1.00; 0.35 / 0.95
+    "unknown": ("dahl", "second_mode", (0.03, 0.08)),  # 1.00
+}
+"""Expected cause -> how the virtual lab hides it. Ranges: quadratic damping adds
+0.2-0.6 % damping at 3 in/s; the softening drops the frequency by 0.5-2 % at 3 in/s;
+the friction limit falls by 30-60 % over the runs; the second mode (at 1.08 f1) starts
+at 3-8 % of the first's acceleration (larger ones leave no usable segment: the
+decay analysis rejects every segment whose envelope rises)."""
+
+AREA_RANGE_IN2 = (0.4, 1.36)
+"""Bearing areas of the Dahl-joint cases (the Dahl joint is fitted to the patch joint's
+damping over 0.1-10 in/s at every area, so its slip is in the measured range at all)."""
+
+MICROSLIP_AREA_RANGE_IN2 = (1.1, 1.40)
+"""Bearing areas of the micro-slip (patch joint) case: where the effect is in the data.
+From the virtual lab's truth curves (zeta0 = 0.08 %), the patch joint's damping above
+zeta0 first exceeds 10 % of zeta0 at 0.19 in/s for 1.10 in^2 (0.087 at 1.2, 0.026 at
+1.35) and grows from there to 3 in/s (the top of the measured range, 0.05-3.5 in/s)
+over 1.2 decades or more with a log-log slope of 0.82 (1.10 in^2) down to 0.48
+(1.40 in^2): the contract's signature, an exponent clearly below 1 over a decade or
+more, with a frequency loss of 0.42-0.48 % between 0.1 and 3 in/s (scatter: 2e-5).
+Below about 1.05 in^2 the onset moves above 0.27 in/s and the rise covers less than a
+decade (0.90 decade and slope 1.12 at 1.00 in^2; at 0.6 in^2 the damping is flat up to
+2.7 in/s): there micro-slip is not what the data show, and ``none`` or ``unknown`` is
+not a miss. 1.40 in^2 is just inside the overlap (1.413 in^2 outside the bolt hole)."""
+
+QUADRATIC_AREA_RANGE_IN2 = (0.4, 0.8)
+"""Bearing areas of the quadratic-damping case: where the effect is in the data. Below
+slip, Dahl's damping is itself proportional to amplitude, so a Dahl (or LuGre) fit can
+absorb ``c2 v|v|``; what is left is the frequency curve. Fitting the baseline models to
+the lab's noise-free truth curves (0.07-3 in/s, scatter 0.015 in ln zeta and 2e-5 in
+relative frequency, the campaigns' typical values) leaves a frequency misfit of at most
+2.7-3.2 (size 0.002), 4.4-4.7 (0.004) and 7.6-8.2 (0.006) scatters at 0.4-0.8 in^2, but
+only 0.3-0.6 at 0.9 in^2 and 1.9-2.3 at 1.0 in^2: there the Dahl joint's own slip onset
+falls in the range and the baseline reproduces the quadratic campaign within the
+scatter (the data do not show the effect). The computation is in docs/discovery.md
+("Where the hidden effects are visible")."""
+
+RUNS = 8
+
+
+def draw_case(cause: str, seed: int) -> dict:
+    """Random effect size and bearing area for a case (reproducible from the seed)."""
+    joint, effect, size_range = CASES[cause]
+    rng = np.random.default_rng([seed, zlib.crc32(cause.encode())])
+    area_range = (
+        MICROSLIP_AREA_RANGE_IN2
+        if joint == "patches"
+        else QUADRATIC_AREA_RANGE_IN2
+        if effect == "quadratic_damping"
+        else AREA_RANGE_IN2
+    )
+    area = float(rng.uniform(*area_range))
+    size = float(rng.uniform(*size_range)) if size_range else None
+    return {
+        "joint": joint,
+        "effect": effect,
+        "effect_size": size,
+        "bearing_area_in2": area,
+        "seed": int(rng.integers(1, 2**31 - 1)),
+    }
+
+
+def run_case(cause: str, seed: int, work_dir: Path) -> tuple[dict, dict]:
+    """Generate, analyse and diagnose one hidden-effect campaign; (drawn case, diagnosis)."""
+    from workflow.lab.virtual_lab import generate_campaign
+
+    case = draw_case(cause, seed)
+    out = Path(work_dir) / f"{cause}_{seed}"
+    generate_campaign(
+        out,
+        seed=case["seed"],
+        runs_per_configuration=RUNS,
+        joint=case["joint"],
+        effect=case["effect"],
+        effect_size=case["effect_size"],
+        configurations={"joint": case["bearing_area_in2"]},
+    )
+    segments = analyse_campaign(out, AnalysisSettings(), QualitySettings())
+    return case, diagnose_campaign(segments, out.name)
