@@ -1,179 +1,25 @@
 """Hidden effects: the virtual lab hides a cause, the measured-data chain and the
 discovery must name it.
 
-Each case generates a small campaign (one configuration, 8 runs) with the effect's
-size and the configuration's bearing area drawn from a range with a random seed
-(``LAPJOINT_HIDDEN_SEED`` overrides the base seed), analyses it with the real chain
-(campaign reader, mode identification, band-pass + Hilbert envelope + segmented log
-decrement from :mod:`workflow.measured.runs`), and diagnoses the segments.
+The cases (effect, size and bearing-area ranges, and the measured chain) are in
+:mod:`workflow.lab.hidden_effects` (``LAPJOINT_HIDDEN_SEED`` overrides the base seed).
 ``bench/hit_rate.py`` runs the same cases over many seeds.
 """
 
 from __future__ import annotations
 
 import os
-import zlib
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
 import pytest
 
 from workflow.discovery.diagnosis import diagnose_campaign
-from workflow.io.campaign import list_runs, load_campaign
-from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_run, analysis_window, identify_mode, read_and_check
-
-CASES = {
-    # cause: (joint, effect, effect-size range or None)
-    # bench/hit_rate.py --seeds 40 (2026-11-22, this code): hit rate, gain ratio median/max
-    "none": ("dahl", None, None),  # 0.95 (0.03 quadratic, 0.03 stiffness false alarms)
-    "microslip_power_law": ("patches", None, None),  # 0.93 (0.07 unknown); 0.32 / 0.62
-    "quadratic_damping": ("dahl", "quadratic_damping", (0.002, 0.006)),  # 0.97; 0.47 / 0.67
-    "stiffness_nonlinearity": ("dahl", "stiffness_nonlinearity", (0.005, 0.02)),  # 0.97; 0.14 / 0.44
-    "run_drift": ("dahl", "run_drift", (0.3, 0.6)),  # 1.00; 0.35 / 0.95
-    "unknown": ("dahl", "second_mode", (0.03, 0.08)),  # 1.00
-}
-"""Expected cause -> how the virtual lab hides it. Ranges: quadratic damping adds
-0.2-0.6 % damping at 3 in/s; the softening drops the frequency by 0.5-2 % at 3 in/s;
-the friction limit falls by 30-60 % over the runs; the second mode (at 1.08 f1) starts
-at 3-8 % of the first's acceleration (larger ones leave no usable segment: the
-decay analysis rejects every segment whose envelope rises)."""
-
-AREA_RANGE_IN2 = (0.4, 1.36)
-"""Bearing areas of the Dahl-joint cases (the Dahl joint is fitted to the patch joint's
-damping over 0.1-10 in/s at every area, so its slip is in the measured range at all)."""
-
-MICROSLIP_AREA_RANGE_IN2 = (1.1, 1.40)
-"""Bearing areas of the micro-slip (patch joint) case: where the effect is in the data.
-From the virtual lab's truth curves (zeta0 = 0.08 %), the patch joint's damping above
-zeta0 first exceeds 10 % of zeta0 at 0.19 in/s for 1.10 in^2 (0.087 at 1.2, 0.026 at
-1.35) and grows from there to 3 in/s (the top of the measured range, 0.05-3.5 in/s)
-over 1.2 decades or more with a log-log slope of 0.82 (1.10 in^2) down to 0.48
-(1.40 in^2): the contract's signature, an exponent clearly below 1 over a decade or
-more, with a frequency loss of 0.42-0.48 % between 0.1 and 3 in/s (scatter: 2e-5).
-Below about 1.05 in^2 the onset moves above 0.27 in/s and the rise covers less than a
-decade (0.90 decade and slope 1.12 at 1.00 in^2; at 0.6 in^2 the damping is flat up to
-2.7 in/s): there micro-slip is not what the data show, and ``none`` or ``unknown`` is
-not a miss. 1.40 in^2 is just inside the overlap (1.413 in^2 outside the bolt hole)."""
-
-QUADRATIC_AREA_RANGE_IN2 = (0.4, 0.8)
-"""Bearing areas of the quadratic-damping case: where the effect is in the data. Below
-slip, Dahl's damping is itself proportional to amplitude, so a Dahl (or LuGre) fit can
-absorb ``c2 v|v|``; what is left is the frequency curve. Fitting the baseline models to
-the lab's noise-free truth curves (0.07-3 in/s, scatter 0.015 in ln zeta and 2e-5 in
-relative frequency, the campaigns' typical values) leaves a frequency misfit of at most
-2.7-3.2 (size 0.002), 4.4-4.7 (0.004) and 7.6-8.2 (0.006) scatters at 0.4-0.8 in^2, but
-only 0.3-0.6 at 0.9 in^2 and 1.9-2.3 at 1.0 in^2: there the Dahl joint's own slip onset
-falls in the range and the baseline reproduces the quadratic campaign within the
-scatter (the data do not show the effect). The computation is in docs/discovery.md
-("Where the hidden effects are visible")."""
-
-RUNS = 8
-
-
-def campaign_segments(campaign_dir: Path) -> pd.DataFrame:
-    """Kept segments of every usable run, as results/tables/segments.parquet holds them.
-
-    The same library calls as the workflow's rules identify_mode, analyse_runs and
-    collect_tables (default settings of config.yaml).
-    """
-    campaign_dir = Path(campaign_dir)
-    campaign = load_campaign(campaign_dir)
-    quality, analysis = QualitySettings(), AnalysisSettings()
-    run_files = list_runs(campaign_dir, campaign)
-    frames = []
-    for name, spec in campaign.configurations.items():
-        usable = []
-        for run_file in run_files:
-            if run_file.configuration != name:
-                continue
-            record, problems = read_and_check(campaign_dir, run_file.path, campaign, quality)
-            if record is not None and not problems:
-                usable.append((run_file, record))
-        if not usable:
-            continue
-        windows = [analysis_window(record, spec.window_s) for _, record in usable]
-        mode = identify_mode(
-            [record for _, record in usable],
-            windows=windows,
-            campaign_mode_hz=campaign.mode_hz,
-            campaign_band_hz=campaign.band_hz,
-            band_half_width=analysis.band_half_width,
-            mode_search_hz=analysis.mode_search_hz,
-            mode_search_fraction=analysis.mode_search_fraction,
-        )
-        for (run_file, record), window in zip(usable, windows):
-            segments, problems = analyse_run(
-                record,
-                configuration=name,
-                run=run_file.run,
-                mode=mode,
-                window=window,
-                filter_order=analysis.filter_order,
-                segment_cycles=analysis.segment_cycles,
-                segment_overlap=analysis.segment_overlap,
-                noise_floor_factor=analysis.noise_floor_factor,
-                edge_time_constants=analysis.edge_time_constants,
-                min_snr_db=quality.min_snr_db,
-                min_segments=quality.min_segments,
-            )
-            if problems:
-                continue
-            kept = segments[segments["kept"]].drop(columns=["kept", "reject_reason"])
-            kept["bearing_area_in2"] = spec.bearing_area_in2 if spec.bearing_area_in2 is not None else np.nan
-            frames.append(kept)
-    if not frames:
-        return pd.DataFrame(
-            columns=[
-                "configuration",
-                "run",
-                "velocity_amplitude_in_s",
-                "zeta",
-                "frequency_hz",
-                "bearing_area_in2",
-            ]
-        )
-    return pd.concat(frames, ignore_index=True)
-
-
-def draw_case(cause: str, seed: int) -> dict:
-    """Random effect size and bearing area for a case (reproducible from the seed)."""
-    joint, effect, size_range = CASES[cause]
-    rng = np.random.default_rng([seed, zlib.crc32(cause.encode())])
-    area_range = (
-        MICROSLIP_AREA_RANGE_IN2
-        if joint == "patches"
-        else QUADRATIC_AREA_RANGE_IN2
-        if effect == "quadratic_damping"
-        else AREA_RANGE_IN2
-    )
-    area = float(rng.uniform(*area_range))
-    size = float(rng.uniform(*size_range)) if size_range else None
-    return {
-        "joint": joint,
-        "effect": effect,
-        "effect_size": size,
-        "bearing_area_in2": area,
-        "seed": int(rng.integers(1, 2**31 - 1)),
-    }
+from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case
 
 
 def run_case(cause: str, seed: int, work_dir: Path) -> tuple[dict, dict]:
     """Generate, analyse and diagnose one hidden-effect campaign; (drawn case, diagnosis)."""
-    from workflow.lab.virtual_lab import generate_campaign
-
-    case = draw_case(cause, seed)
-    out = Path(work_dir) / f"{cause}_{seed}"
-    generate_campaign(
-        out,
-        seed=case["seed"],
-        runs_per_configuration=RUNS,
-        joint=case["joint"],
-        effect=case["effect"],
-        effect_size=case["effect_size"],
-        configurations={"joint": case["bearing_area_in2"]},
-    )
+    case, out = generate_case(cause, seed, work_dir)
     segments = campaign_segments(out)
     return case, diagnose_campaign(segments, out.name)
 
