@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.discovery.diagnosis import diagnosis as disc
+from workflow.discovery import diagnosis as disc
 from workflow.models.averaged import CurveGrid
 
 FAST = disc.FitSettings(global_samples=128, local_starts=2)

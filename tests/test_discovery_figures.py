@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from tests.test_discovery import synthetic_segments
-from workflow.discovery.diagnosis import diagnosis as disc
+from workflow.discovery import diagnosis as disc
 from workflow.models.averaged import CurveGrid, model_curves
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save

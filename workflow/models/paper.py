@@ -81,7 +81,7 @@ def averaged_start(model: str, segments: pd.DataFrame, response_quantity: str, s
     stiction ratio and Stribeck velocity) and fits in seconds, so its optimum is a
     good start for the expensive time-domain refinement.
     """
-    from workflow.discovery.diagnosis import diagnosis as discovery
+    from workflow.discovery import diagnosis as discovery
     from workflow.models import averaged as describing
 
     data = discovery.prepare_configuration(
