@@ -6,8 +6,8 @@ measured-data chain and the diagnosis; the script prints the confusion table (ro
 hidden cause, columns: verdict, as rates), the hit rate per cause, the gain ratios, and
 the runtime. Runs differ from run to run as in a real lab (the lab's default
 ``LabSettings``); ``--no-variability`` makes every run of a campaign the same beam, and
-``--time-domain`` integrates the Dahl joint in time instead of the averaged model (the
-causes it can hide: none, run_drift, unknown).
+``--time-domain`` integrates the joint in time instead of the averaged model (the
+causes it can hide: none, microslip_power_law, run_drift, unknown).
 
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
 """
@@ -140,7 +140,7 @@ def main() -> None:
     parser.add_argument(
         "--time-domain",
         action="store_true",
-        help="integrate the Dahl joint in time (causes none, run_drift, unknown only)",
+        help="integrate the joint in time (causes none, microslip_power_law, run_drift, unknown)",
     )
     parser.add_argument(
         "--visibility",
