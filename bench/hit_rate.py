@@ -152,11 +152,7 @@ def main() -> None:
         visibility()
         return
     integrator = "time_domain" if args.time_domain else "averaged"
-    hideable = [
-        c
-        for c in CASES
-        if not args.time_domain or (CASES[c][0] == "dahl" and CASES[c][1] in TIME_DOMAIN_EFFECTS)
-    ]
+    hideable = [c for c in CASES if not args.time_domain or CASES[c][1] in TIME_DOMAIN_EFFECTS]
     if args.causes is None:
         args.causes = hideable
     elif set(args.causes) - set(hideable):
