@@ -374,7 +374,9 @@ def setup_configuration(name, bearing_area_in2, settings: LabSettings) -> tuple[
     A configuration without an area gets the paper's no-washer contact.
     """
     area = bearing_area_in2 if bearing_area_in2 is not None else PAPER_CONFIGURATIONS["no_washer"]
-    jm, sigma, coulomb, curves = _configuration_physics(float(area), settings)
+    # the nominal physics does not depend on the run-to-run spreads: one cache entry
+    nominal = replace(settings, frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
+    jm, sigma, coulomb, curves = _configuration_physics(float(area), nominal)
     return JointSetup(name, bearing_area_in2, jm, jm.omega_rad_s, sigma, coulomb), curves
 
 
