@@ -26,29 +26,57 @@ if workflow.is_main_process:
 
 
 def campaign_inventory():
-    """Configurations and run files of the campaign, in campaign.yaml order.
+    """Run files of the campaign, in campaign.yaml order, and the paths its globs lead to
+    that are not read (docs/input-safety.md), as runs-table rows.
 
     The demo campaign is planned from its settings (it may not exist yet: a rule
-    generates it); any other campaign is listed from its campaign.yaml.
+    generates it); any other campaign is listed from its campaign.yaml, and its band
+    and mode are checked against the sample rate its files declare before any job runs.
     """
-    from workflow.io.campaign import CampaignFormatError, list_runs, load_campaign
+    from workflow.io.campaign import (
+        CAMPAIGN_FILE,
+        CampaignFormatError,
+        declared_sample_rate_hz,
+        frequency_problem,
+        load_campaign,
+        scan_campaign,
+    )
 
     if USES_DEMO:
         from workflow.lab.layout import planned_run_files
 
-        return planned_run_files(SETTINGS.demo.runs_per_configuration)
+        return planned_run_files(SETTINGS.demo.runs_per_configuration), []
     try:
         campaign = load_campaign(CAMPAIGN)
-        return list_runs(CAMPAIGN, campaign)
+        runs, excluded = scan_campaign(CAMPAIGN, campaign)
     except (CampaignFormatError, FileNotFoundError) as error:
         raise WorkflowError(f"cannot read campaign {CAMPAIGN}: {error}") from None
+    if SETTINGS.strict and excluded:
+        raise WorkflowError(
+            "strict mode: campaign paths not read:\n" + "\n".join(entry.reason for entry in excluded)
+        )
+    rates_hz = {run.path: declared_sample_rate_hz(CAMPAIGN, run, campaign) for run in runs}
+    known_hz = {path: rate for path, rate in rates_hz.items() if rate is not None}
+    if known_hz:
+        # The fastest record decides: slower ones that cannot hold the band are
+        # excluded with the reason when read, the others analysed.
+        fastest = max(known_hz, key=known_hz.get)
+        problem = frequency_problem(campaign, known_hz[fastest], f"declared by {fastest}")
+        if problem is not None:
+            raise WorkflowError(f"invalid campaign {CAMPAIGN}: {CAMPAIGN / CAMPAIGN_FILE}: {problem}")
+    return runs, excluded
 
 
-RUN_FILES = campaign_inventory()
+RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:
-    raise WorkflowError(f"campaign {CAMPAIGN} has no run files")
+    raise WorkflowError(
+        f"campaign {CAMPAIGN} has no run files" + "".join(f"\n{entry.reason}" for entry in EXCLUDED_PATHS)
+    )
+if EXCLUDED_PATHS and workflow.is_main_process:
+    for _entry in EXCLUDED_PATHS:
+        logger.warning(f"excluded {_entry.reason}")
 
 
 wildcard_constraints:

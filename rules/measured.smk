@@ -58,7 +58,7 @@ rule analyse_runs:
         "results/benchmarks/analyse_runs/{configuration}/{group}.tsv"
     threads: 1
     resources:
-        mem_mb=1000,
+        mem_mb=1500,
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
@@ -92,6 +92,7 @@ rule collect_tables:
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
+        excluded_paths=[entry.status() for entry in EXCLUDED_PATHS],
     script:
         "../scripts/collect_tables.py"
 

@@ -13,6 +13,7 @@ tables = collect_tables(
     status_paths=snakemake.input.status,
     mode_paths=snakemake.input.modes,
     campaign=campaign,
+    excluded_paths=snakemake.params.excluded_paths,
 )
 response_unit = {"response_amplitude": f"{campaign.response.unit} ({campaign.response.quantity})"}
 for name in ("segments", "rejected", "runs", "quality", "modes"):

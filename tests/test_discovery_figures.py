@@ -80,14 +80,25 @@ def test_residual_table_predictions_are_the_fitted_curves(diagnosis):
                 grid_range=(data.velocity_in_s.min(), data.velocity_in_s.max()),
             )
             zeta, freq = grid(model, params)
-            np.testing.assert_allclose(z_rows["predicted"], zeta, rtol=1e-12)
-            np.testing.assert_allclose(f_rows["predicted"], freq, rtol=1e-12)
-            # and, independently of that grid, the model's curves (64-point grid)
+            # each run's own frequency and linear damping on the shared curves
+            res = details[name].residuals[model]
+            rel_f, ln_zeta = disc.apply_run_offsets(
+                data.frequency_hz / freq - 1,
+                np.log(data.zeta / zeta),
+                zeta,
+                res["delta_f"],
+                res["delta_zeta0"],
+                data.run_index,
+            )
+            np.testing.assert_allclose(z_rows["predicted"], data.zeta / np.exp(ln_zeta), rtol=1e-12)
+            np.testing.assert_allclose(f_rows["predicted"], data.frequency_hz / (1 + rel_f), rtol=1e-12)
+            # and the shared curves agree with the model's, independently of that grid
+            # (64-point grid)
             zeta64, freq64 = model_curves(
                 model, params, data.velocity_in_s, run_index=data.run_index, n_runs=data.n_runs
             )
-            np.testing.assert_allclose(z_rows["predicted"], zeta64, rtol=5e-3)
-            np.testing.assert_allclose(f_rows["predicted"], freq64, rtol=1e-5)
+            np.testing.assert_allclose(zeta, zeta64, rtol=5e-3)
+            np.testing.assert_allclose(freq, freq64, rtol=1e-5)
             np.testing.assert_allclose(z_rows["measured"], data.zeta)
             expected = np.log(data.zeta / z_rows["predicted"].to_numpy()) / z_rows["scatter"]
             np.testing.assert_allclose(z_rows["residual"], expected, rtol=1e-9, atol=1e-12)

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import optimize, stats
+from scipy import optimize, special
 from scipy.stats import qmc
 
 from workflow.io.settings import DiscoverySettings
@@ -65,6 +65,9 @@ __all__ = [
     "diagnose_campaign",
     "residual_table",
     "amplitude_weights",
+    "amplitude_bin",
+    "run_offsets",
+    "calibration_segments",
 ]
 
 CAUSE_MODELS: dict[str, str] = {
@@ -139,6 +142,7 @@ class FitSettings:
     """Evaluations of the short refinement from each start (the best is continued)."""
     fold_nfev: int = 12
     """Most evaluations when refitting a cross-validation fold from the all-data fit."""
+    resamples: int = DiscoverySettings.resamples
 
 
 # ------------------------------------------------------------------------- data
@@ -162,6 +166,8 @@ class ConfigurationData:
     fit_rms, response_amplitude : ndarray or None
         Per segment (when the table has them): RMS residual of the ln-envelope line
         of the log decrement, and the envelope amplitude in the record's unit.
+    anchor_velocity_in_s : float
+        Amplitude the bins are counted from (default: the largest measured).
     """
 
     name: str
@@ -175,6 +181,13 @@ class ConfigurationData:
     n_dropped: int = 0
     fit_rms: np.ndarray | None = None
     response_amplitude: np.ndarray | None = None
+    anchor_velocity_in_s: float = 0.0
+    """Top of the measured amplitudes (default: the largest), in/s: amplitude bins are
+    counted down from it, so that they do not depend on the sensor's position."""
+
+    def __post_init__(self) -> None:
+        if not self.anchor_velocity_in_s > 0:
+            self.anchor_velocity_in_s = float(np.max(self.velocity_in_s)) if self.velocity_in_s.size else 1.0
 
     @property
     def n_runs(self) -> int:
@@ -399,6 +412,115 @@ class FitResult:
     cost: float
 
 
+RUN_OFFSET_FLOOR = 0.05
+"""Smallest ``1 + delta_zeta0 / zeta_model`` kept when a run's linear-damping offset is
+applied (a run cannot have negative damping)."""
+
+
+def run_offsets(
+    rel_f: np.ndarray,
+    ln_zeta: np.ndarray,
+    zeta_model: np.ndarray,
+    s_rel_f: np.ndarray,
+    s_ln_zeta: np.ndarray,
+    run_index: np.ndarray,
+    n_runs: int,
+    use: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's own small-amplitude frequency and linear damping, given shared physics.
+
+    Runs of one configuration differ (re-hung, re-struck, a degree warmer): each has its
+    own natural frequency, ``f_lin (1 + delta_f)``, and linear damping,
+    ``zeta0 + delta_zeta0``, on top of the joint physics they share. Both enter the
+    residuals of the shared model almost linearly (``delta_f`` multiplies the model's
+    frequency exactly; ``delta_zeta0`` adds ``delta_zeta0 / zeta_model`` to
+    ``ln zeta``), so the weighted least-squares offsets of every run have a closed form.
+
+    Parameters
+    ----------
+    rel_f, ln_zeta : ndarray, shape (..., n)
+        Residuals of the shared model: ``f / f_model - 1`` and ``ln zeta - ln zeta_model``.
+    zeta_model : ndarray, shape (..., n)
+        The shared model's damping ratio at each segment.
+    s_rel_f, s_ln_zeta : ndarray, shape (n,)
+        Standard uncertainties (the fit weights are their inverse squares).
+    run_index : ndarray of int, shape (n,)
+    n_runs : int
+    use : ndarray of bool, shape (n,), optional
+        Segments the offsets are estimated from (default all).
+
+    Returns
+    -------
+    delta_f, delta_zeta0 : ndarray, shape (..., n_runs)
+        Relative frequency offset and linear-damping offset (damping ratio) of each run;
+        0 for a run with no segment in ``use``.
+    """
+    use = np.ones(run_index.size, dtype=bool) if use is None else use
+    member = ((run_index[:, None] == np.arange(n_runs)[None, :]) & use[:, None]).astype(float)
+    w_f = 1.0 / s_rel_f**2
+    count_f = w_f @ member
+    delta_f = ((rel_f * w_f) @ member) / np.maximum(count_f, 1e-300)
+    g = 1.0 / np.maximum(zeta_model, 1e-12)
+    w_z = 1.0 / s_ln_zeta**2
+    delta_z = ((ln_zeta * g * w_z) @ member) / np.maximum((g * g * w_z) @ member, 1e-300)
+    return delta_f, delta_z
+
+
+def apply_run_offsets(
+    rel_f: np.ndarray,
+    ln_zeta: np.ndarray,
+    zeta_model: np.ndarray,
+    delta_f: np.ndarray,
+    delta_zeta0: np.ndarray,
+    run_index: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals of the shared model with each run's offsets (:func:`run_offsets`) applied."""
+    df = np.take(delta_f, run_index, axis=-1)
+    dz = np.take(delta_zeta0, run_index, axis=-1)
+    rel = (1.0 + rel_f) / (1.0 + df) - 1.0
+    ln = ln_zeta - np.log(np.maximum(1.0 + dz / np.maximum(zeta_model, 1e-12), RUN_OFFSET_FLOOR))
+    return rel, ln
+
+
+def centred_run_offsets(
+    rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, run_index, n_runs, use=None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`run_offsets` minus their mean over the runs present, so that the shared
+    ``f_lin`` and ``zeta0`` are the runs' mean and stay identifiable."""
+    use = np.ones(run_index.size, dtype=bool) if use is None else use
+    present = np.zeros(n_runs, dtype=bool)
+    present[np.unique(run_index[use])] = True
+    delta_f, delta_z = run_offsets(rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, run_index, n_runs, use)
+    delta_f = np.where(present, delta_f - np.mean(delta_f[..., present], axis=-1, keepdims=True), 0.0)
+    delta_z = np.where(present, delta_z - np.mean(delta_z[..., present], axis=-1, keepdims=True), 0.0)
+    return delta_f, delta_z
+
+
+CALIBRATION_FRACTION = 0.25
+"""Share of a held-out run's segments, its lowest in amplitude, that set its own
+frequency and linear-damping offsets before the rest of the run is scored. Low in
+amplitude the joint is stuck and every model of the vocabulary reduces to the same linear
+oscillator, so these segments say what the run's beam is without saying which physics
+acts above them; they are not scored."""
+
+MIN_CALIBRATION_SEGMENTS = 3
+
+
+def calibration_segments(velocity_in_s: np.ndarray, run_index: np.ndarray, runs: np.ndarray) -> np.ndarray:
+    """Mask of each listed run's lowest-amplitude segments (:data:`CALIBRATION_FRACTION`,
+    at least :data:`MIN_CALIBRATION_SEGMENTS`, never the whole run)."""
+    mask = np.zeros(velocity_in_s.size, dtype=bool)
+    for r in np.atleast_1d(runs):
+        members = np.flatnonzero(run_index == r)
+        if members.size <= MIN_CALIBRATION_SEGMENTS:
+            continue
+        k = int(
+            np.clip(np.ceil(CALIBRATION_FRACTION * members.size), MIN_CALIBRATION_SEGMENTS, members.size - 1)
+        )
+        mask[members[np.argsort(velocity_in_s[members])[:k]]] = True
+    return mask
+
+
 class _Problem:
     """Normalised-residual function of one model on a subset of segments."""
 
@@ -423,6 +545,9 @@ class _Problem:
         self.freq = data.frequency_hz[mask]
         self.s_z = scatter.ln_zeta[mask]
         self.s_f = scatter.rel_f[mask]
+        self.run_index = data.run_index[mask]
+        self.n_runs = max(data.n_runs, 1)
+        self.per_run = np.unique(self.run_index).size >= 2
         self.fixed = {"reference_velocity_in_s": context.reference_velocity_in_s}
         self.lo, self.hi = parameter_box(model, data)
 
@@ -436,10 +561,15 @@ class _Problem:
     def residuals(self, unit: np.ndarray) -> np.ndarray:
         """Normalised residuals, shape (P, 2 n) for unit-box points (P, k)."""
         zeta, freq = self.grid(self.model, self.physical(unit))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rz = (self.ln_zeta - np.log(np.maximum(zeta, 1e-12))) / self.s_z
-            rf = (self.freq / freq - 1.0) / self.s_f
-        r = np.concatenate([rz, rf], axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            ln_res = self.ln_zeta - np.log(np.maximum(zeta, 1e-12))
+            f_res = self.freq / freq - 1.0
+            if self.per_run:
+                offsets = centred_run_offsets(
+                    f_res, ln_res, zeta, self.s_f, self.s_z, self.run_index, self.n_runs
+                )
+                f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, *offsets, self.run_index)
+            r = np.concatenate([ln_res / self.s_z, f_res / self.s_f], axis=-1)
         return np.where(np.isfinite(r), r, 1e6)
 
     def jacobian(self, unit: np.ndarray, step: float = 1e-5) -> np.ndarray:
@@ -542,18 +672,42 @@ def fit_model(
 
 
 def model_residuals(
-    fit: FitResult, data: ConfigurationData, scatter: Scatter, context: FitContext
+    fit: FitResult,
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    *,
+    offsets_from: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """Raw and normalised residuals of a fit on all segments of a configuration.
 
+    With two runs or more, every run gets its own frequency and linear-damping offset
+    (:func:`run_offsets`) estimated from its segments in ``offsets_from`` (default: all
+    of them, centred over the runs as in the fit); a run with no segment there keeps
+    the shared model.
+
     Returns ``ln_zeta`` (``ln zeta - ln zeta_model``), ``rel_f`` (``f / f_model - 1``),
-    and their normalised versions ``z_norm``, ``f_norm``.
+    their normalised versions ``z_norm``, ``f_norm`` (total uncertainty) and
+    ``z_noise``, ``f_noise`` (scatter alone), the model curves with each run's offsets
+    (``zeta_model``, ``f_model``), the offsets ``delta_f``, ``delta_zeta0`` per run, and
+    ``ln_zeta_shared``, the damping residual of the shared model before the offsets.
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
     zeta, freq = problem.grid(model, {k: np.array(v) for k, v in fit.params.items()})
     ln_res = np.log(data.zeta) - np.log(np.maximum(zeta, 1e-12))
     f_res = data.frequency_hz / freq - 1.0
+    n_runs = max(data.n_runs, 1)
+    delta_f, delta_z = np.zeros(n_runs), np.zeros(n_runs)
+    ln_shared = ln_res
+    if data.n_runs >= 2:
+        offsets = run_offsets if offsets_from is not None else centred_run_offsets
+        delta_f, delta_z = offsets(
+            f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, data.run_index, n_runs, offsets_from
+        )
+        f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, delta_f, delta_z, data.run_index)
+        zeta = zeta * np.maximum(1.0 + delta_z[data.run_index] / np.maximum(zeta, 1e-12), RUN_OFFSET_FLOOR)
+        freq = freq * (1.0 + delta_f[data.run_index])
     return {
         "ln_zeta": ln_res,
         "rel_f": f_res,
@@ -563,6 +717,9 @@ def model_residuals(
         "f_noise": f_res / scatter.noise_rel_f,
         "zeta_model": zeta,
         "f_model": freq,
+        "delta_f": delta_f,
+        "delta_zeta0": delta_z,
+        "ln_zeta_shared": ln_shared,
     }
 
 
@@ -600,7 +757,16 @@ called ``none`` in 0.75, 40 -> 0.85, no weighting -> 0.90; quadratic-damping gai
 median 0.34 / 0.50 / 0.66) and validated on seeds 21-40 (docs/discovery.md)."""
 
 
-def amplitude_weights(velocity_in_s: np.ndarray) -> np.ndarray:
+def amplitude_bin(velocity_in_s: np.ndarray, anchor_velocity_in_s: float, per_decade: int) -> np.ndarray:
+    """Bin of each amplitude, ``per_decade`` bins a decade counted down from the anchor.
+
+    Bins relative to the top of the measured range make every binned quantity the same
+    for two sensors that see one decay at different amplitudes (mode shape)."""
+    # bin -1 is (anchor / 10**(1/per_decade), anchor]: the anchor itself tops the first bin
+    return np.ceil(per_decade * np.log10(velocity_in_s / anchor_velocity_in_s) - 1e-9).astype(int) - 1
+
+
+def amplitude_weights(velocity_in_s: np.ndarray, anchor_velocity_in_s: float) -> np.ndarray:
     """Weights that give every quarter decade of amplitude the same say in an error.
 
     Segments are equally spaced in time, so a ring-down leaves segments at each
@@ -612,7 +778,7 @@ def amplitude_weights(velocity_in_s: np.ndarray) -> np.ndarray:
     equally: each segment gets ``1 / max(n_bin, MIN_BIN_SEGMENTS)`` (a nearly empty
     bin is not inflated).
     """
-    code = np.floor(AMPLITUDE_BINS_PER_DECADE * np.log10(velocity_in_s)).astype(int)
+    code = amplitude_bin(velocity_in_s, anchor_velocity_in_s, AMPLITUDE_BINS_PER_DECADE)
     _, inverse, counts = np.unique(code, return_inverse=True, return_counts=True)
     return 1.0 / np.maximum(counts[inverse], MIN_BIN_SEGMENTS)
 
@@ -633,32 +799,50 @@ def cross_validate(
 ) -> dict:
     """Held-out error of a model: refit without each fold, predict the fold.
 
+    With several runs a fold holds out whole runs. What an honest prediction of a
+    held-out run may know of it is its own beam, not its physics: the shared parameters
+    come from the other runs, and the run's own frequency and linear-damping offsets
+    from its lowest-amplitude segments (:func:`calibration_segments`), which are then
+    not scored. With one run, contiguous amplitude blocks are held out and predicted
+    from the rest.
+
     Returns
     -------
     dict
-        ``error`` (RMS residual over the scatter, all held-out segments, both curves,
+        ``error`` (RMS residual over the scatter, scored held-out segments, both curves,
         amplitude weighted by :func:`amplitude_weights`), ``error_zeta``,
-        ``error_frequency`` (per curve), ``fold_errors``, and per segment its held-out
-        squared residuals ``squared_zeta``, ``squared_frequency``.
+        ``error_frequency`` (per curve), ``fold_errors``, per segment its held-out
+        squared residuals ``squared_zeta``, ``squared_frequency``, and ``scored``
+        (False for the calibration segments).
     """
     model = MODELS[model] if isinstance(model, str) else model
     sq_z, sq_f, fold_errors = np.zeros(data.n), np.zeros(data.n), []
-    w = amplitude_weights(data.velocity_in_s)
+    scored = np.ones(data.n, dtype=bool)
+    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
     for held in folds_of(data, settings.folds):
         fit = fit_model(
             model, data, scatter, context, settings=settings, mask=~held, warm_start=full_fit.coords
         )
-        res = model_residuals(fit, data, scatter, context)
-        sq_z[held] = res[f"z_{HELD_OUT_SCALE}"][held] ** 2
-        sq_f[held] = res[f"f_{HELD_OUT_SCALE}"][held] ** 2
-        fold_errors.append(_weighted_rms(0.5 * (sq_z[held] + sq_f[held]), w[held]))
+        offsets_from = None
+        if data.n_runs >= 2:
+            calibration = calibration_segments(
+                data.velocity_in_s, data.run_index, np.unique(data.run_index[held])
+            )
+            offsets_from = ~held | calibration
+            scored &= ~calibration
+        res = model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
+        part = held & scored
+        sq_z[part] = res[f"z_{HELD_OUT_SCALE}"][part] ** 2
+        sq_f[part] = res[f"f_{HELD_OUT_SCALE}"][part] ** 2
+        fold_errors.append(_weighted_rms(0.5 * (sq_z[part] + sq_f[part]), w[part]))
     return {
-        "error": _weighted_rms(0.5 * (sq_z + sq_f), w),
-        "error_zeta": _weighted_rms(sq_z, w),
-        "error_frequency": _weighted_rms(sq_f, w),
+        "error": _weighted_rms(0.5 * (sq_z + sq_f)[scored], w[scored]),
+        "error_zeta": _weighted_rms(sq_z[scored], w[scored]),
+        "error_frequency": _weighted_rms(sq_f[scored], w[scored]),
         "fold_errors": fold_errors,
         "squared_zeta": sq_z,
         "squared_frequency": sq_f,
+        "scored": scored,
     }
 
 
@@ -670,7 +854,7 @@ def effective_observations(data: ConfigurationData) -> int:
     cells, times two curves.
     """
     cells = set(
-        zip(data.run_index.tolist(), np.floor(2.0 * np.log10(data.velocity_in_s)).astype(int).tolist())
+        zip(data.run_index.tolist(), amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2).tolist())
     )
     return 2 * max(len(cells), 2)
 
@@ -717,21 +901,24 @@ def binned_discrepancy(
         ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``standard_error``, ``t``,
         ``p``, ``n_runs``, ``n_segments``, ``significant``.
     """
-    code = np.floor(2.0 * np.log10(data.velocity_in_s)).astype(int)
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     rows = []
     for curve, key, tol in (("damping", "ln_zeta", TOL_LN_ZETA), ("frequency", "rel_f", TOL_REL_F)):
         r = residuals[key]
         for b in np.unique(code):
             in_bin = code == b
-            runs = np.unique(data.run_index[in_bin])
             if data.n_runs >= 2:
+                counts = np.bincount(data.run_index[in_bin], minlength=data.n_runs)
+                runs = np.flatnonzero(counts)
                 if runs.size < 3:
                     continue
-                means = np.array([r[in_bin & (data.run_index == j)].mean() for j in runs])
+                sums = np.bincount(data.run_index[in_bin], weights=r[in_bin], minlength=data.n_runs)
+                means = sums[runs] / counts[runs]
                 m = float(means.mean())
                 se = float(means.std(ddof=1) / np.sqrt(means.size))
                 dof = means.size - 1
             else:
+                runs = np.zeros(1, dtype=int)
                 seg = r[in_bin][np.argsort(data.velocity_in_s[in_bin])]
                 if seg.size < 4:
                     continue
@@ -743,12 +930,12 @@ def binned_discrepancy(
             rows.append(
                 {
                     "curve": curve,
-                    "v_low_in_s": float(10 ** (b / 2.0)),
-                    "v_high_in_s": float(10 ** ((b + 1) / 2.0)),
+                    "v_low_in_s": float(data.anchor_velocity_in_s * 10 ** (b / 2.0)),
+                    "v_high_in_s": float(data.anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)),
                     "mean": m,
                     "standard_error": se,
                     "t": float(t),
-                    "p": float(2.0 * stats.t.sf(abs(t), dof)),
+                    "p": float(2.0 * special.stdtr(dof, -abs(t))),
                     "n_runs": int(runs.size),
                     "n_segments": int(in_bin.sum()),
                     "tolerance": tol,
@@ -762,28 +949,52 @@ def binned_discrepancy(
 
 
 def run_order_trend(
-    data: ConfigurationData, residuals: Mapping[str, np.ndarray], *, n_tests: int, alpha: float = ALPHA
+    data: ConfigurationData,
+    residuals: Mapping[str, np.ndarray],
+    *,
+    n_tests: int,
+    alpha: float = ALPHA,
+    run_position: np.ndarray | None = None,
 ) -> dict | None:
     """Linear trend of the runs' mean damping residual with run order.
+
+    The residuals are those of the shared model (``ln_zeta_shared`` when present, i.e.
+    before each run's own offsets, which would absorb a trend): a random spread between
+    runs only widens the scatter of the runs' means, which the t test counts, while a
+    steady change with run order tilts them.
+
+    Parameters
+    ----------
+    run_position : ndarray, optional
+        Position in run order of each of the ``data.n_runs`` runs (default ``0 .. n-1``;
+        a resample of runs passes the drawn runs' positions).
 
     Returns None with fewer than 4 runs; else ``slope_per_run`` (ln zeta per run),
     ``change_over_sequence`` (slope times (n_runs - 1)), ``t``, ``p`` and
     ``significant`` (``p < alpha / n_tests`` and the change over the sequence larger
     than the model accuracy).
     """
-    if data.n_runs < 4:
+    x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
+    if data.n_runs < 4 or np.unique(x).size < 3:
         return None
-    means = np.array([residuals["ln_zeta"][data.run_index == j].mean() for j in range(data.n_runs)])
-    x = np.arange(data.n_runs, dtype=float)
-    fit = stats.linregress(x, means)
-    change = float(fit.slope * (data.n_runs - 1))
-    t = float(fit.slope / max(fit.stderr, 1e-300))
+    r = residuals.get("ln_zeta_shared", residuals["ln_zeta"])
+    counts = np.bincount(data.run_index, minlength=data.n_runs)
+    means = np.bincount(data.run_index, weights=r, minlength=data.n_runs) / np.maximum(counts, 1)
+    keep = counts > 0
+    x, y = x[keep], means[keep]
+    dx = x - x.mean()
+    slope = float(np.sum(dx * (y - y.mean())) / np.sum(dx * dx))
+    dof = x.size - 2
+    stderr = float(np.sqrt(np.sum((y - y.mean() - slope * dx) ** 2) / dof / np.sum(dx * dx)))
+    t = slope / max(stderr, 1e-300)
+    p = float(2.0 * special.stdtr(dof, -abs(t)))
+    change = slope * float(np.ptp(x))
     return {
-        "slope_per_run": float(fit.slope),
+        "slope_per_run": slope,
         "change_over_sequence": change,
-        "t": t,
-        "p": float(fit.pvalue),
-        "significant": bool(fit.pvalue < alpha / n_tests and abs(change) > TOL_LN_ZETA),
+        "t": float(t),
+        "p": p,
+        "significant": bool(p < alpha / n_tests and abs(change) > TOL_LN_ZETA),
     }
 
 
@@ -1003,6 +1214,278 @@ class ConfigurationDiagnosis:
     data: ConfigurationData
     scatter: Scatter
     residuals: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    resamples: list[dict] = field(default_factory=list)
+    """Cause and gain ratio on each bootstrap resample (:func:`resample_decisions`)."""
+
+
+EXPLAINS_LIMIT = 2.0
+"""``explains_data`` (output contract): the model's mean residual in every half decade
+of amplitude, in units of the measured scatter, stays within this limit on both curves."""
+
+
+def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) -> dict:
+    """Whether a model explains the data: binned residuals within ±2 measured scatter.
+
+    Per half decade of amplitude (counted down from the anchor) and per curve, the mean
+    of the residuals over the measured scatter (``z_noise``, ``f_noise``: each run with
+    its own offsets). The model explains the data when every such mean is within
+    :data:`EXPLAINS_LIMIT`.
+
+    Returns
+    -------
+    dict
+        ``explains_data`` (bool), ``limit``, ``worst`` (the largest bin: curve, range,
+        mean) and ``failing_bins`` (every bin outside the limit, in amplitude order).
+    """
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
+    bins = []
+    for curve, key in (("damping", "z_noise"), ("frequency", "f_noise")):
+        r = residuals[key]
+        for b in np.unique(code):
+            in_bin = code == b
+            bins.append(
+                {
+                    "curve": curve,
+                    "v_low_in_s": float(data.anchor_velocity_in_s * 10 ** (b / 2.0)),
+                    "v_high_in_s": float(data.anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)),
+                    "mean_over_scatter": float(np.mean(r[in_bin])),
+                    "n_segments": int(in_bin.sum()),
+                }
+            )
+    failing = [b for b in bins if abs(b["mean_over_scatter"]) > EXPLAINS_LIMIT]
+    failing.sort(key=lambda b: (b["curve"], b["v_low_in_s"]))
+    return {
+        "explains_data": not failing,
+        "limit": EXPLAINS_LIMIT,
+        "worst": max(bins, key=lambda b: abs(b["mean_over_scatter"]), default=None),
+        "failing_bins": failing,
+    }
+
+
+def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: ConfigurationData) -> list[str]:
+    """Parameters of a fit that sit on an edge of their fit range (not identified there)."""
+    model = MODELS[model] if isinstance(model, str) else model
+    lo, hi = parameter_box(model, data)
+    unit = (np.asarray(coords, dtype=float) - lo) / (hi - lo)
+    flags = []
+    for spec, u, c in zip(model.params, unit, coords):
+        if u <= 1e-3 or u >= 1 - 1e-3:
+            value = float(np.exp(c)) if spec.scale == "log" else float(c)
+            side = "lower" if u <= 1e-3 else "upper"
+            flags.append(
+                f"{spec.name} = {value:.3g} at the {side} edge of its fit range: not identified by the data"
+            )
+    return flags
+
+
+@dataclass
+class ModelEvidence:
+    """What the decision needs of one fitted model, per segment.
+
+    ``residuals`` are the all-data fit's (:func:`model_residuals`); ``heldout`` the
+    cross-validation's (:func:`cross_validate`); ``n_params`` the fitted parameters.
+    """
+
+    residuals: dict[str, np.ndarray]
+    heldout: dict
+    n_params: int
+
+
+def _subset(
+    data: ConfigurationData, segments: np.ndarray, run_index: np.ndarray, n_runs: int
+) -> ConfigurationData:
+    """The segments ``segments`` of a configuration, relabelled into ``n_runs`` runs."""
+    pick = lambda a: None if a is None else a[segments]  # noqa: E731
+    return ConfigurationData(
+        name=data.name,
+        velocity_in_s=data.velocity_in_s[segments],
+        zeta=data.zeta[segments],
+        frequency_hz=data.frequency_hz[segments],
+        run_index=run_index,
+        run_names=[f"r{k}" for k in range(n_runs)],
+        bearing_area_in2=data.bearing_area_in2,
+        response_order=data.response_order,
+        fit_rms=pick(data.fit_rms),
+        response_amplitude=pick(data.response_amplitude),
+        anchor_velocity_in_s=data.anchor_velocity_in_s,
+    )
+
+
+def evaluate_decision(
+    data: ConfigurationData,
+    evidence: Mapping[str, ModelEvidence],
+    *,
+    envelope_significant: bool,
+    segments: np.ndarray | None = None,
+    run_index: np.ndarray | None = None,
+    run_position: np.ndarray | None = None,
+    n_runs: int | None = None,
+) -> dict:
+    """Held-out errors, BIC, discrepancy tests and the decision, on (a resample of) the data.
+
+    Called once on all segments for the verdict, and on resamples of runs (or of
+    amplitude blocks with one run) for its confidence: the fits are those of all the
+    data, the evidence is recomputed from the resampled segments' residuals.
+
+    Parameters
+    ----------
+    data : ConfigurationData
+    evidence : mapping
+        Model id -> :class:`ModelEvidence`.
+    envelope_significant : bool
+        :func:`envelope_structure`'s verdict (not resampled).
+    segments, run_index, run_position, n_runs : optional
+        A resample: the segments drawn (with repeats), their new run labels, the drawn
+        runs' positions in run order, and the number of drawn runs.
+
+    Returns
+    -------
+    dict
+        ``cause``, ``reason``, ``baseline`` (model id), ``errors`` and ``bic`` per model,
+        ``bins`` and ``trend`` of the baseline, ``baseline_fails``, ``candidates``.
+    """
+    if segments is None:
+        segments = np.arange(data.n)
+        view = data
+    else:
+        view = _subset(data, segments, run_index, n_runs)
+    n_runs_view = view.n_runs
+    weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s)
+    n_eff = effective_observations(view)
+    errors, bic, residuals = {}, {}, {}
+    for m, ev in evidence.items():
+        scored = ev.heldout["scored"][segments]
+        square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])[segments]
+        errors[m] = {
+            "error": _weighted_rms(square[scored], weights[scored]),
+            "error_zeta": _weighted_rms(ev.heldout["squared_zeta"][segments][scored], weights[scored]),
+            "error_frequency": _weighted_rms(
+                ev.heldout["squared_frequency"][segments][scored], weights[scored]
+            ),
+        }
+        res = {
+            k: ev.residuals[k][segments] for k in ("ln_zeta", "rel_f", "ln_zeta_shared", "z_noise", "f_noise")
+        }
+        residuals[m] = res
+        in_sample = _weighted_rms(0.5 * (res["z_noise"] ** 2 + res["f_noise"] ** 2), weights) ** 2
+        offsets = 2 * (n_runs_view - 1) if n_runs_view >= 2 else 0  # frequency and zeta0 per run
+        bic[m] = information_criterion(in_sample, ev.n_params + offsets, n_eff)
+    base = min((m for m in BASELINE_MODELS if m in evidence), key=lambda m: errors[m]["error"])
+    bins = binned_discrepancy(view, residuals[base])
+    trend = run_order_trend(view, residuals[base], n_tests=len(bins) + 1, run_position=run_position)
+    baseline_fails = (
+        any(b["significant"] for b in bins) or bool(trend and trend["significant"]) or envelope_significant
+    )
+    candidates = {}
+    for cause, m in CAUSE_MODELS.items():
+        if m not in evidence:
+            continue
+        cb = binned_discrepancy(view, residuals[m])
+        ct = run_order_trend(view, residuals[m], n_tests=len(cb) + 1, run_position=run_position)
+        candidates[cause] = {
+            "model": m,
+            "heldout_error": errors[m]["error"],
+            "heldout_error_zeta": errors[m]["error_zeta"],
+            "heldout_error_frequency": errors[m]["error_frequency"],
+            "ratio_to_baseline": errors[m]["error"] / errors[base]["error"],
+            "bic": bic[m],
+            "delta_bic": bic[m] - bic[base],
+            "residual_significant": bool(
+                any(b["significant"] for b in cb) or (ct is not None and ct["significant"])
+            ),
+            "significant_bins": int(sum(b["significant"] for b in cb)),
+        }
+    cause, reason = decide(
+        errors[base]["error"], bic[base], baseline_fails, candidates, envelope_structure=envelope_significant
+    )
+    return {
+        "cause": cause,
+        "reason": reason,
+        "baseline": base,
+        "errors": errors,
+        "bic": bic,
+        "n_eff": n_eff,
+        "bins": bins,
+        "trend": trend,
+        "baseline_fails": baseline_fails,
+        "candidates": candidates,
+    }
+
+
+def resample_decisions(
+    data: ConfigurationData,
+    evidence: Mapping[str, ModelEvidence],
+    *,
+    envelope_significant: bool,
+    n_resamples: int,
+    seed: int,
+    n_folds: int,
+) -> list[dict]:
+    """The decision on ``n_resamples`` bootstrap resamples of the runs.
+
+    With two runs or more, runs are drawn with replacement (a run drawn twice counts as
+    two runs, keeping its place in run order); with one run, the amplitude blocks of the
+    cross-validation are drawn instead. Returns one :func:`evaluate_decision` result
+    (``cause``, gain ``ratio``) per resample.
+    """
+    rng = np.random.default_rng(seed)
+    if data.n_runs >= 2:
+        units = [np.flatnonzero(data.run_index == r) for r in range(data.n_runs)]
+    else:
+        units = [np.flatnonzero(m) for m in folds_of(data, n_folds)]
+    out = []
+    for _ in range(n_resamples):
+        draw = rng.integers(0, len(units), len(units))
+        segments = np.concatenate([units[k] for k in draw])
+        if data.n_runs >= 2:
+            labels = np.concatenate([np.full(units[k].size, j) for j, k in enumerate(draw)])
+            result = evaluate_decision(
+                data,
+                evidence,
+                envelope_significant=envelope_significant,
+                segments=segments,
+                run_index=labels,
+                run_position=draw.astype(float),
+                n_runs=len(units),
+            )
+        else:
+            result = evaluate_decision(
+                data,
+                evidence,
+                envelope_significant=envelope_significant,
+                segments=segments,
+                run_index=np.zeros(segments.size, dtype=int),
+                n_runs=1,
+            )
+        out.append({"cause": result["cause"], "ratio": _gain_ratio(result)})
+    return out
+
+
+def _extended_model(result: Mapping) -> str:
+    """Model id that represents the decision's cause (the baseline for ``none``; for
+    ``unknown`` the candidate with the lowest held-out error)."""
+    cause, candidates = result["cause"], result["candidates"]
+    if cause == "none" or (cause == "unknown" and not candidates):
+        return result["baseline"]
+    if cause == "unknown":
+        return candidates[min(candidates, key=lambda c: candidates[c]["heldout_error"])]["model"]
+    return CAUSE_MODELS[cause]
+
+
+def _gain_ratio(result: Mapping) -> float:
+    if result["cause"] == "none":
+        return 1.0
+    errors = result["errors"]
+    return errors[_extended_model(result)]["error"] / errors[result["baseline"]]["error"]
+
+
+def cause_fractions(causes: Sequence[str]) -> dict[str, float]:
+    """Fraction of ``causes`` naming each cause, largest first (sums to 1)."""
+    if not causes:
+        return {}
+    names, counts = np.unique(np.asarray(causes, dtype=object), return_counts=True)
+    order = np.argsort(-counts, kind="stable")
+    return {str(names[i]): float(counts[i] / len(causes)) for i in order}
 
 
 def diagnose_configuration(
@@ -1012,9 +1495,8 @@ def diagnose_configuration(
     settings: FitSettings = FitSettings(),
     segment_cycles: float = 10.0,
 ) -> ConfigurationDiagnosis:
-    """Baselines, discrepancy, candidates and verdict for one configuration."""
+    """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
     scatter = scatter_of(data)
-    n_eff = effective_observations(data)
     fits: dict[str, FitResult] = {}
     cv: dict[str, dict] = {}
     for name in BASELINE_MODELS + tuple(CAUSE_MODELS.values()):
@@ -1026,64 +1508,33 @@ def diagnose_configuration(
         fits[name] = fit_model(name, data, scatter, context, settings=settings, nested_start=nested)
         cv[name] = cross_validate(name, data, scatter, context, fits[name], settings=settings)
     residuals = {m: model_residuals(f, data, scatter, context) for m, f in fits.items()}
-    weights = amplitude_weights(data.velocity_in_s)
-    # in-sample cost per amplitude bin, like the held-out error and like n_eff (which
-    # counts (run, amplitude) cells, not segments)
-    in_sample = {
-        m: _weighted_rms(0.5 * (r[f"z_{HELD_OUT_SCALE}"] ** 2 + r[f"f_{HELD_OUT_SCALE}"] ** 2), weights) ** 2
-        for m, r in residuals.items()
-    }
-    bic = {m: information_criterion(in_sample[m], len(MODELS[m].params), n_eff) for m in fits}
-    base = min(BASELINE_MODELS, key=lambda m: cv[m]["error"])
-    bins = binned_discrepancy(data, residuals[base])
-    trend = run_order_trend(data, residuals[base], n_tests=len(bins) + 1)
+    evidence = {m: ModelEvidence(residuals[m], cv[m], len(MODELS[m].params)) for m in fits}
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
-    baseline_fails = (
-        any(b["significant"] for b in bins)
-        or bool(trend and trend["significant"])
-        or bool(envelope and envelope["significant"])
+    envelope_significant = bool(envelope and envelope["significant"])
+    result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    resamples = resample_decisions(
+        data,
+        evidence,
+        envelope_significant=envelope_significant,
+        n_resamples=settings.resamples,
+        seed=settings.seed,
+        n_folds=settings.folds,
     )
-    candidates = {}
-    for cause, m in CAUSE_MODELS.items():
-        if m not in fits:
-            continue
-        cb = binned_discrepancy(data, residuals[m])
-        ct = run_order_trend(data, residuals[m], n_tests=len(cb) + 1)
-        candidates[cause] = {
-            "model": m,
-            "heldout_error": cv[m]["error"],
-            "heldout_error_zeta": cv[m]["error_zeta"],
-            "heldout_error_frequency": cv[m]["error_frequency"],
-            "ratio_to_baseline": cv[m]["error"] / cv[base]["error"],
-            "in_sample_rms": float(np.sqrt(fits[m].cost)),
-            "bic": bic[m],
-            "delta_bic": bic[m] - bic[base],
-            "residual_significant": bool(
-                any(b["significant"] for b in cb) or (ct is not None and ct["significant"])
-            ),
-            "significant_bins": int(sum(b["significant"] for b in cb)),
-            "params": fits[m].params,
-        }
-    cause, reason = decide(
-        cv[base]["error"],
-        bic[base],
-        baseline_fails,
-        candidates,
-        envelope_structure=bool(envelope and envelope["significant"]),
-    )
-    ranking = [{"cause": "none", "score": cv[base]["error"]}]
+    cause, reason, base = result["cause"], result["reason"], result["baseline"]
+    errors, bins, trend, candidates = result["errors"], result["bins"], result["trend"], result["candidates"]
+    for entry in candidates.values():
+        m = entry["model"]
+        entry["in_sample_rms"] = float(np.sqrt(fits[m].cost))
+        entry["params"] = fits[m].params
+        entry["flags"] = bound_flags(m, fits[m].coords, data)
+    ranking = [{"cause": "none", "score": errors[base]["error"]}]
     ranking += [{"cause": c, "score": v["heldout_error"]} for c, v in candidates.items()]
     ranking.sort(key=lambda r: r["score"])
-    if cause == "none":
-        ext_model, ext_err = base, cv[base]["error"]
-    elif cause == "unknown":
-        tried = min(candidates, key=lambda c: candidates[c]["heldout_error"]) if candidates else None
-        ext_model = candidates[tried]["model"] if tried else base
-        ext_err = cv[ext_model]["error"]
-    else:
-        ext_model, ext_err = CAUSE_MODELS[cause], cv[CAUSE_MODELS[cause]]["error"]
+    ext_model = _extended_model(result)
+    ext_err = errors[ext_model]["error"]
+    explained = explains_data(data, residuals[ext_model])
     sentence = discrepancy_sentence(base, bins, trend, data.n_runs)
-    if envelope and envelope["significant"]:
+    if envelope_significant:
         sentence = (
             f"The ring-downs are not single-mode decays: even at each run's highest "
             f"amplitudes the envelope departs from an exponential within a segment by "
@@ -1091,11 +1542,18 @@ def diagnose_configuration(
             f"(median over runs; limit {100 * envelope['limit']:.0f} %), which no {base} "
             f"fit or candidate can follow; {data.n_dropped} segments had zeta <= 0. " + sentence
         )
+    run_spread = {}
+    if data.n_runs >= 2:
+        run_spread = {
+            "relative_frequency_std": float(np.std(residuals[base]["delta_f"], ddof=1)),
+            "zeta0_std": float(np.std(residuals[base]["delta_zeta0"], ddof=1)),
+        }
     document = {
         "baseline": {
             "model": base,
             "params": fits[base].params,
-            "error": {"metric": HELD_OUT_METRIC, "value": cv[base]["error"]},
+            "error": {"metric": HELD_OUT_METRIC, "value": errors[base]["error"]},
+            "flags": bound_flags(base, fits[base].coords, data),
         },
         "discrepancy": sentence,
         "cause": cause,
@@ -1104,45 +1562,51 @@ def diagnose_configuration(
             "n_runs": data.n_runs,
             "n_segments": data.n,
             "n_segments_dropped": data.n_dropped,
-            "effective_observations": n_eff,
+            "effective_observations": result["n_eff"],
             "scatter": {
                 "ln_zeta_median": float(np.median(scatter.noise_ln_zeta)),
                 "relative_frequency_median": float(np.median(scatter.noise_rel_f)),
                 "model_tolerance_ln_zeta": TOL_LN_ZETA,
                 "model_tolerance_relative_frequency": TOL_REL_F,
             },
+            "run_offsets": run_spread,
             "baselines": {
                 m: {
-                    "heldout_error": cv[m]["error"],
-                    "heldout_error_zeta": cv[m]["error_zeta"],
-                    "heldout_error_frequency": cv[m]["error_frequency"],
+                    "heldout_error": errors[m]["error"],
+                    "heldout_error_zeta": errors[m]["error_zeta"],
+                    "heldout_error_frequency": errors[m]["error_frequency"],
                     "in_sample_rms": float(np.sqrt(fits[m].cost)),
-                    "bic": bic[m],
+                    "bic": result["bic"][m],
                 }
                 for m in BASELINE_MODELS
             },
-            "baseline_misfit_significant": baseline_fails,
+            "baseline_misfit_significant": result["baseline_fails"],
             "binned_residuals": bins,
             "run_order_trend": trend,
             "envelope_structure": envelope,
             "candidates": candidates,
             "clear_gain_threshold": CLEAR_GAIN,
             "residual_gain_threshold": RESIDUAL_GAIN,
+            "explains_data": explained,
+            "resamples": len(resamples),
         },
         "ranking": ranking,
         "extended_model": {
             "model": ext_model,
             "params": fits[ext_model].params,
-            "removes_misfit": cause not in ("unknown",),
+            "removes_misfit": cause != "unknown" and explained["explains_data"],
+            "flags": bound_flags(ext_model, fits[ext_model].coords, data),
         },
         "gain": {
             "metric": HELD_OUT_METRIC,
-            "baseline": cv[base]["error"],
+            "baseline": errors[base]["error"],
             "extended": ext_err,
-            "ratio": 1.0 if cause == "none" else ext_err / cv[base]["error"],
+            "ratio": 1.0 if cause == "none" else ext_err / errors[base]["error"],
         },
+        "explains_data": explained["explains_data"],
+        "confidence": cause_fractions([r["cause"] for r in resamples]),
     }
-    return ConfigurationDiagnosis(_clean(document), fits, data, scatter, residuals)
+    return ConfigurationDiagnosis(_clean(document), fits, data, scatter, residuals, resamples)
 
 
 # ------------------------------------------------------- across configurations
@@ -1206,7 +1670,7 @@ def across_configurations(
             res = model_residuals(fit, d.data, d.scatter, context)
             err = _weighted_rms(
                 0.5 * (res[f"z_{HELD_OUT_SCALE}"] ** 2 + res[f"f_{HELD_OUT_SCALE}"] ** 2),
-                amplitude_weights(d.data.velocity_in_s),
+                amplitude_weights(d.data.velocity_in_s, d.data.anchor_velocity_in_s),
             )
             entry = out["configurations"].setdefault(n, {"bearing_area_in2": d.data.bearing_area_in2})
             entry[f"{role}_error"] = err
@@ -1236,6 +1700,26 @@ def campaign_verdict(causes: Sequence[str], ratios: Sequence[float]) -> str:
     for c, r in named:
         counts.setdefault(c, []).append(r)
     return min(counts, key=lambda c: (-len(counts[c]), float(np.mean(counts[c]))))
+
+
+def campaign_confidence(diagnoses: Mapping[str, ConfigurationDiagnosis]) -> dict[str, float]:
+    """Fraction of joint resamples whose campaign verdict names each cause.
+
+    Resample ``b`` of every configuration (each drawn from its own runs) gives one set of
+    configuration causes and gain ratios, and :func:`campaign_verdict` turns it into one
+    campaign cause."""
+    counts = {len(d.resamples) for d in diagnoses.values()}
+    if not diagnoses or len(counts) != 1 or 0 in counts:
+        return {}
+    n = counts.pop()
+    verdicts = [
+        campaign_verdict(
+            [d.resamples[b]["cause"] for d in diagnoses.values()],
+            [d.resamples[b]["ratio"] for d in diagnoses.values()],
+        )
+        for b in range(n)
+    ]
+    return cause_fractions(verdicts)
 
 
 def diagnose_campaign(
@@ -1301,6 +1785,7 @@ def diagnose_campaign(
     document = {
         "campaign": campaign_name,
         "cause": cause,
+        "confidence": campaign_confidence(diagnoses),
         "campaign_rule": "most frequent configuration cause other than none (ties: lowest mean "
         "gain ratio); none only when every configuration is none",
         "configurations": configurations,

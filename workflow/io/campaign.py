@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import io
 import math
+import os
 import re
 from collections import Counter
 from dataclasses import asdict, dataclass, field
@@ -80,6 +81,17 @@ HEAD_ROWS: int = 11
 single bad first row is reported as bad instead of setting the format."""
 
 CAMPAIGN_FILE: str = "campaign.yaml"
+
+CONFIGURATION_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
+"""What a configuration name may be: it becomes part of output paths and Snakemake
+wildcards, so no ``/``, ``..``, spaces or shell characters (docs/input-safety.md)."""
+
+MAX_CAMPAIGN_YAML_BYTES: int = 1_000_000
+"""Largest campaign.yaml read; a real one is a few kilobytes."""
+
+MAX_YAML_VALUES: int = 100_000
+"""Most values campaign.yaml may hold once its aliases are expanded: a bound on the
+work of validating it, whatever its aliases and nesting (an alias bomb is refused)."""
 
 # --------------------------------------------------------------------------------------
 # Errors
@@ -131,8 +143,12 @@ def _canonical_force_unit(unit: str) -> str:
 def _relative_glob(files: str) -> str:
     if not files.strip():
         raise ValueError("files must be a non-empty glob")
-    if Path(files).is_absolute() or files.startswith(("/", "\\")):
+    if Path(files).is_absolute() or files.startswith(("/", "\\", "~")) or re.match(r"[A-Za-z]:", files):
         raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
+    if ".." in re.split(r"[/\\]", files):
+        raise ValueError(f"files glob {files!r} leaves the campaign folder ('..' is not allowed)")
+    if not Path(files).parts:
+        raise ValueError(f"files glob {files!r} names no file")
     return files
 
 
@@ -295,26 +311,62 @@ def _node_line(root: yaml.Node | None, loc: tuple[Any, ...]) -> int | None:
     return line
 
 
-def _duplicate_key(node: yaml.Node | None) -> tuple[str, int] | None:
-    """First key that appears twice in one mapping (PyYAML keeps the last silently)."""
+def _duplicate_key(root: yaml.Node | None) -> tuple[str, int] | None:
+    """First key that appears twice in one mapping (PyYAML keeps the last silently).
+
+    Each node is visited once, however many aliases refer to it, so the work stays
+    proportional to the file's length.
+    """
     import yaml
 
-    if isinstance(node, yaml.MappingNode):
-        seen: set[str] = set()
-        for key, value in node.value:
-            name = str(key.value)
-            if name in seen:
-                return name, key.start_mark.line + 1
-            seen.add(name)
-            found = _duplicate_key(value)
-            if found:
-                return found
-    elif isinstance(node, yaml.SequenceNode):
-        for item in node.value:
-            found = _duplicate_key(item)
-            if found:
-                return found
+    visited: set[int] = set()
+    pending = [root]
+    while pending:
+        node = pending.pop()
+        if node is None or id(node) in visited:
+            continue
+        visited.add(id(node))
+        if isinstance(node, yaml.MappingNode):
+            seen: set[str] = set()
+            for key, _value in node.value:
+                name = str(key.value)
+                if name in seen:
+                    return name, key.start_mark.line + 1
+                seen.add(name)
+            pending.extend(value for _, value in reversed(node.value))
+        elif isinstance(node, yaml.SequenceNode):
+            pending.extend(reversed(node.value))
     return None
+
+
+def _expanded_size(root: yaml.Node | None, limit: int) -> int:
+    """Number of values in the document once every alias is expanded, counted up to
+    just past ``limit`` (each node's size is computed once: linear work)."""
+    import yaml
+
+    sizes: dict[int, int] = {}
+    order: list[yaml.Node] = []
+    pending = [root]
+    while pending:
+        node = pending.pop()
+        if node is None or id(node) in sizes:
+            continue
+        sizes[id(node)] = -1
+        order.append(node)
+        if isinstance(node, yaml.MappingNode):
+            pending.extend(part for pair in node.value for part in pair)
+        elif isinstance(node, yaml.SequenceNode):
+            pending.extend(node.value)
+    # Children are listed after their parents: sum them up in reverse order.
+    for node in reversed(order):
+        if isinstance(node, yaml.MappingNode):
+            children = [part for pair in node.value for part in pair]
+        elif isinstance(node, yaml.SequenceNode):
+            children = node.value
+        else:
+            children = []
+        sizes[id(node)] = min(limit + 1, 1 + sum(sizes[id(child)] for child in children))
+    return 0 if root is None else sizes[id(root)]
 
 
 def load_campaign(campaign_dir: str | Path) -> Campaign:
@@ -344,9 +396,26 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         raise CampaignFormatError(
             path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
         )
-    text = path.read_text(encoding="utf-8-sig", errors="replace")
+    try:
+        size_bytes = path.stat().st_size
+        if size_bytes > MAX_CAMPAIGN_YAML_BYTES:
+            raise CampaignFormatError(
+                path,
+                None,
+                f"{size_bytes} bytes: too large for a campaign.yaml (limit {MAX_CAMPAIGN_YAML_BYTES})",
+            )
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
+    except OSError as error:
+        raise CampaignFormatError(path, None, f"cannot be read: {error.strerror or error}") from None
     try:
         root = yaml.compose(text, Loader=yaml.SafeLoader)
+        if _expanded_size(root, MAX_YAML_VALUES) > MAX_YAML_VALUES:
+            raise CampaignFormatError(
+                path,
+                None,
+                f"its aliases (*name) expand to more than {MAX_YAML_VALUES} values: refused "
+                "(an alias bomb?); write the settings out instead",
+            )
         raw = yaml.safe_load(text)
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
@@ -354,11 +423,23 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         raise CampaignFormatError(
             path, None if mark is None else mark.line + 1, f"not valid YAML: {problem}"
         ) from None
+    except RecursionError:
+        raise CampaignFormatError(path, None, "nested too deeply to be a campaign.yaml") from None
     if not isinstance(raw, dict):
         raise CampaignFormatError(path, 1, "must be a mapping of keys (name, response, configurations, ...)")
     duplicate = _duplicate_key(root)
     if duplicate:
         raise CampaignFormatError(path, duplicate[1], f"{duplicate[0]}: key given twice")
+    if isinstance(raw.get("configurations"), dict):
+        for name in raw["configurations"]:
+            if not (isinstance(name, str) and CONFIGURATION_NAME.fullmatch(name)):
+                raise CampaignFormatError(
+                    path,
+                    _node_line(root, ("configurations", name)),
+                    f"configurations.{name}: configuration name {name!r} is not allowed: it names "
+                    "output files, so it must be 1 to 64 letters, digits, '_' or '-', starting "
+                    "with a letter or digit",
+                )
     if "name" not in raw:
         raw = {**raw, "name": Path(campaign_dir).resolve().name}
     try:
@@ -379,7 +460,46 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
                 first_line = _node_line(root, loc)
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
     object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
+    if campaign.sample_rate_hz is not None:
+        problem = frequency_problem(campaign, campaign.sample_rate_hz)
+    else:
+        problem = frequency_problem(campaign, math.inf)
+    if problem is not None:
+        key = "mode_hz" if problem.startswith("mode_hz") else "band_hz"
+        raise CampaignFormatError(path, _node_line(root, (key,)), problem)
     return campaign
+
+
+def frequency_problem(campaign: Campaign, sample_rate_hz: float, rate_source: str = "") -> str | None:
+    """What is wrong with campaign.yaml's ``mode_hz`` and ``band_hz`` for records sampled
+    at ``sample_rate_hz``, or None.
+
+    The band must lie inside (0, Nyquist) and hold ``mode_hz``, which must lie below
+    Nyquist; a message starts with the campaign.yaml key it is about.
+
+    Parameters
+    ----------
+    campaign : Campaign
+        The validated campaign.yaml.
+    sample_rate_hz : float
+        Sample rate of the records, Hz (``math.inf`` checks the band and mode alone).
+    rate_source : str, optional
+        Where the sample rate comes from, for the message (e.g. ``"header line 2"``).
+    """
+    nyquist_hz = sample_rate_hz / 2.0
+    source = f" ({rate_source})" if rate_source else ""
+    rate = f"the Nyquist frequency {nyquist_hz:.6g} Hz of the sample rate {sample_rate_hz:.6g} Hz{source}"
+    if campaign.mode_hz is not None and campaign.mode_hz >= nyquist_hz:
+        return f"mode_hz: {campaign.mode_hz:.6g} Hz is not below {rate}: such a mode cannot be in the records"
+    band = campaign.band_hz
+    if band is not None and band[1] >= nyquist_hz:
+        return f"band_hz: [{band[0]:.6g}, {band[1]:.6g}] Hz reaches {rate}; the band must lie below it"
+    if band is not None and campaign.mode_hz is not None and not band[0] < campaign.mode_hz < band[1]:
+        return (
+            f"band_hz: [{band[0]:.6g}, {band[1]:.6g}] Hz does not hold mode_hz {campaign.mode_hz:.6g} Hz: "
+            "the band-pass would isolate another mode (or none)"
+        )
+    return None
 
 
 def _with_default_globs(raw: dict[str, Any]) -> dict[str, Any]:
@@ -411,8 +531,45 @@ class RunFile:
     """Path relative to the campaign folder, with ``/`` separators."""
 
 
-def list_runs(campaign_dir: str | Path, campaign: Campaign) -> list[RunFile]:
-    """All run files, configurations in campaign.yaml order, runs sorted by file name.
+@dataclass(frozen=True)
+class ExcludedPath:
+    """A path a configuration's glob leads to that is not read, or a glob that matches
+    nothing: a row of runs.parquet with status ``excluded`` and the reason."""
+
+    configuration: str
+    run: str
+    """File name without extension (empty for a glob that matches nothing)."""
+    path: str
+    """Path relative to the campaign folder, or the glob that matched nothing."""
+    reason: str
+
+    def status(self) -> dict[str, str]:
+        """The runs-table row (the keys of the analysis jobs' status documents)."""
+        return {**asdict(self), "status": "excluded"}
+
+
+def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
+    """Why a path matched by a glob is not read as a run file, or None."""
+    resolved = path.resolve()
+    if not resolved.is_relative_to(root_resolved):
+        return "not read: a symbolic link that leads outside the campaign folder (docs/input-safety.md)"
+    if path.is_dir():
+        return "not read: a directory, not a run file"
+    if not path.is_file():
+        return "not read: not a regular file (a broken link, a device or a pipe)"
+    if not os.access(path, os.R_OK):
+        return "not read: permission denied (the file cannot be opened for reading)"
+    return None
+
+
+def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[RunFile], list[ExcludedPath]]:
+    """The run files of every configuration, and what its glob leads to that is not read.
+
+    Only regular, readable files whose real path (symbolic links followed) lies inside
+    the campaign folder are run files. Directories, links leading outside, other
+    special files and unreadable files are excluded with their reason; a glob that
+    matches nothing gives one excluded entry that names ``configurations.<name>.files``.
+    Names starting with ``.`` are skipped, as a shell glob would.
 
     Parameters
     ----------
@@ -423,24 +580,54 @@ def list_runs(campaign_dir: str | Path, campaign: Campaign) -> list[RunFile]:
 
     Returns
     -------
-    list of RunFile
-        Name order is run order; files starting with ``.`` are skipped.
+    runs : list of RunFile
+        Configurations in campaign.yaml order, runs sorted by file name (run order).
+    excluded : list of ExcludedPath
+        Everything else the globs lead to, in the same order.
 
     Raises
     ------
     CampaignFormatError
-        Two runs of one configuration with the same name (their rows would collide).
+        Two runs of one configuration with the same name (their rows would collide), or
+        a glob that pathlib cannot use.
     """
     root = Path(campaign_dir)
+    root_resolved = root.resolve()
     runs: list[RunFile] = []
+    excluded: list[ExcludedPath] = []
     for configuration, spec in campaign.configurations.items():
-        matches = sorted(
-            (p for p in root.glob(spec.files) if p.is_file() and not p.name.startswith(".")),
-            key=lambda p: (p.name, p.as_posix()),
-        )
+        try:
+            matches = sorted(
+                (p for p in root.glob(spec.files) if not p.name.startswith(".")),
+                key=lambda p: (p.name, p.as_posix()),
+            )
+        except (ValueError, NotImplementedError, IndexError) as error:
+            raise CampaignFormatError(
+                root / CAMPAIGN_FILE,
+                None,
+                f"configurations.{configuration}.files: {spec.files!r} is not a usable glob ({error})",
+            ) from None
+        if not matches:
+            excluded.append(
+                ExcludedPath(
+                    configuration,
+                    "",
+                    spec.files,
+                    f"configurations.{configuration}.files: the glob {spec.files!r} matches no "
+                    f"file in the campaign folder {root.as_posix()}",
+                )
+            )
         seen: dict[str, str] = {}
         for match in matches:
             relative = match.relative_to(root).as_posix()
+            reason = _unreadable_reason(match, root_resolved)
+            if reason is not None:
+                excluded.append(
+                    ExcludedPath(
+                        configuration, match.stem, relative, f"{root.as_posix()}/{relative}: {reason}"
+                    )
+                )
+                continue
             if match.stem in seen:
                 raise CampaignFormatError(
                     root / CAMPAIGN_FILE,
@@ -450,7 +637,13 @@ def list_runs(campaign_dir: str | Path, campaign: Campaign) -> list[RunFile]:
                 )
             seen[match.stem] = relative
             runs.append(RunFile(configuration, match.stem, relative))
-    return runs
+    return runs, excluded
+
+
+def list_runs(campaign_dir: str | Path, campaign: Campaign) -> list[RunFile]:
+    """The run files of :func:`scan_campaign` (regular, readable files inside the campaign
+    folder), configurations in campaign.yaml order, runs sorted by file name."""
+    return scan_campaign(campaign_dir, campaign)[0]
 
 
 # --------------------------------------------------------------------------------------
@@ -502,11 +695,30 @@ def _is_data_like(cell: str) -> bool:
     return bool(_NUMBER.fullmatch(cell)) and ("." in cell or "e" in cell.lower())
 
 
+_DECIMAL_COMMA_NUMBER = re.compile(r"[+-]?\d*,\d+(?:[eE][+-]?\d+)?")
+DECIMAL_COMMA_HINT = (
+    "numbers written with decimal commas; the decimal point of run files is '.' "
+    'unless campaign.yaml says decimal: "," (campaign-format.md)'
+)
+
+
+def _is_decimal_comma_row(line: str) -> bool:
+    """A row of numbers written with decimal commas (``0,0021<TAB>-0,00037``)."""
+    cells = [cell for cell in re.split(r"[\t; ]+", line.strip()) if cell]
+    return (
+        bool(cells)
+        and all(_NUMBER.fullmatch(cell) or _DECIMAL_COMMA_NUMBER.fullmatch(cell) for cell in cells)
+        and any(_DECIMAL_COMMA_NUMBER.fullmatch(cell) for cell in cells)
+    )
+
+
 def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) -> str | None:
     """What is wrong with one row of the numeric block, or None if it is fine."""
     stripped = line.strip()
     if not stripped:
         return "blank line among the numbers"
+    if delimiter != "," and _is_decimal_comma_row(stripped):
+        return f"{DECIMAL_COMMA_HINT}: {stripped[:60]!r}"
     for other in ("\t", ",", ";"):
         if other != delimiter and other in stripped:
             return (
@@ -556,6 +768,39 @@ def _parse_block_careful(
                 raise CampaignFormatError(path, first_line + index, problem)
             values[index] = [float(cell) for cell in _split_row(row, delimiter)]
     return values
+
+
+FAST_CHUNK_CHARS: int = 1 << 20
+"""Characters of the numeric block handed to the C reader at a time: the reader's working
+copy of the text (4 bytes a character) then stays small however long the record."""
+
+
+def _parse_text_fast(
+    text: str, start: int, end: int, delimiter: str, n_rows: int, n_columns: int
+) -> NDArray[np.float64] | None:
+    """:func:`_parse_block_fast` of ``text[start:end]``, in chunks of whole rows (no copy
+    of the whole block); None whenever the careful pass must decide."""
+    if _FOREIGN[delimiter].search(text, start, end):
+        return None
+    values = np.empty((n_rows, n_columns))
+    row, position = 0, start
+    while position <= end:
+        stop = end
+        if position + FAST_CHUNK_CHARS < end:
+            stop = text.rfind("\n", position, position + FAST_CHUNK_CHARS)
+            if stop < 0:
+                stop = text.find("\n", position + FAST_CHUNK_CHARS, end)
+                stop = end if stop < 0 else stop
+        chunk = text[position:stop]
+        chunk_rows = chunk.count("\n") + 1
+        if row + chunk_rows > n_rows:
+            return None
+        parsed = _parse_block_fast(chunk, delimiter, chunk_rows, n_columns)
+        if parsed is None:
+            return None
+        values[row : row + chunk_rows] = parsed
+        row, position = row + chunk_rows, stop + 1
+    return values if row == n_rows else None
 
 
 def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -> NDArray[np.float64] | None:
@@ -808,10 +1053,46 @@ class _Columns:
     line: int | None
 
 
+_WIDE_ENCODINGS = (
+    (b"\xff\xfe\x00\x00", "UTF-32 (little-endian)"),
+    (b"\x00\x00\xfe\xff", "UTF-32 (big-endian)"),
+    (b"\xff\xfe", "UTF-16 (little-endian)"),
+    (b"\xfe\xff", "UTF-16 (big-endian)"),
+)
+
+
+def _wide_encoding(raw: bytes) -> str | None:
+    """The name of a UTF-16/UTF-32 encoding the bytes are written in, from the byte-order
+    mark or, without one, from NUL bytes alternating with ASCII text; else None."""
+    for mark, name in _WIDE_ENCODINGS:
+        if raw.startswith(mark):
+            return name
+    head = raw[:4096]
+    if len(head) >= 8:
+        even_nul = head[0::2].count(0) / len(head[0::2])
+        odd_nul = head[1::2].count(0) / len(head[1::2])
+        if odd_nul > 0.9 and even_nul < 0.1:
+            return "UTF-16 (little-endian)"
+        if even_nul > 0.9 and odd_nul < 0.1:
+            return "UTF-16 (big-endian)"
+    return None
+
+
 def _read_text(path: Path, shown: str) -> str:
     """File text with LF line ends (UTF-8, else Windows-1252 for old exports)."""
-    with open(path, "rb") as handle:  # read-only: raw files are never modified
-        raw = handle.read()
+    try:
+        with open(path, "rb") as handle:  # read-only: raw files are never modified
+            raw = handle.read()
+    except OSError as error:
+        raise CampaignFormatError(shown, None, f"cannot be read: {error.strerror or error}") from None
+    encoding = _wide_encoding(raw)
+    if encoding is not None:
+        raise CampaignFormatError(
+            shown,
+            None,
+            f"text encoded as {encoding}: run files must be ASCII or UTF-8 text "
+            "(save the export as ASCII/UTF-8, or convert it, e.g. with iconv)",
+        )
     nul = raw.find(b"\x00")
     if nul >= 0:
         raise CampaignFormatError(
@@ -821,6 +1102,7 @@ def _read_text(path: Path, shown: str) -> str:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
         text = raw.decode("cp1252", errors="replace")
+    del raw  # a long record: hold one copy of its text at a time
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
     return text
@@ -1019,6 +1301,52 @@ def _rates_agree(a_hz: float, b_hz: float, extra_rel: float = 0.0) -> bool:
     return abs(a_hz - b_hz) <= (SAMPLE_RATE_REL_TOLERANCE + extra_rel) * max(a_hz, b_hz)
 
 
+HEAD_BYTES: int = 65536
+"""Bytes of a run file that :func:`declared_sample_rate_hz` reads: enough for any header
+and the first rows of the numbers."""
+
+
+def declared_sample_rate_hz(campaign_dir: str | Path, run_file: RunFile, campaign: Campaign) -> float | None:
+    """The sample rate (Hz) a run file declares, from its first :data:`HEAD_BYTES` only:
+    campaign.yaml's ``sample_rate_hz``, else the header's, else the step of the first
+    rows of the time column; None when the head does not tell (or cannot be read: the
+    full read then reports why).
+
+    Planning checks campaign.yaml's band and mode against it before any job runs,
+    without reading whole records.
+    """
+    if campaign.sample_rate_hz is not None:
+        return campaign.sample_rate_hz
+    path = Path(campaign_dir) / run_file.path
+    shown = path.as_posix()
+    try:
+        with open(path, "rb") as handle:
+            raw = handle.read(HEAD_BYTES)
+        if _wide_encoding(raw) is not None or b"\x00" in raw:
+            return None
+        text = raw.decode("utf-8-sig", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
+        header, offset, first_line = _locate_numbers(text)
+        if offset < 0:
+            return None
+        header_values = _header_values(header, shown)
+        if header_values.sample_rate_hz is not None:
+            return header_values.sample_rate_hz
+        rows = [row for row in text[offset:].split("\n")[:HEAD_ROWS] if row.strip()]
+        delimiter = _majority([_line_delimiter(row) for row in rows], _SPACES)
+        n_columns = _majority([len(_split_row(row, delimiter)) for row in rows], 1)
+        columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
+        if "time" not in columns.roles:
+            return None
+        time_factor_s = _column_unit_factors(columns, campaign, shown)[0]
+        time_s = np.array([float(_split_row(row, delimiter)[columns.roles["time"]]) for row in rows[:-1]])
+    except (OSError, ValueError, IndexError):  # CampaignFormatError is a ValueError
+        return None
+    steps_s = np.diff(time_s) * time_factor_s
+    if steps_s.size == 0 or not np.all(steps_s > 0):
+        return None
+    return float(1.0 / np.mean(steps_s))
+
+
 def read_run(
     campaign_dir: str | Path, run_file_or_path: RunFile | str | Path, campaign: Campaign
 ) -> RunRecord:
@@ -1052,14 +1380,24 @@ def read_run(
     except ValueError:
         relative = full.as_posix()
     shown = full.as_posix()
-    if not full.is_file():
+    if not full.exists():
         raise CampaignFormatError(shown, None, "no such file")
+    reason = _unreadable_reason(full, root.resolve())
+    if reason is not None:
+        raise CampaignFormatError(shown, None, reason)
 
     text = _read_text(full, shown)
     if not text.strip():
         raise CampaignFormatError(shown, 1, "the file is empty")
     header, offset, first_line = _locate_numbers(text)
     if offset < 0:
+        comma_line = next(
+            (number for number, line in header if line.strip() and _is_decimal_comma_row(line)), None
+        )
+        if comma_line is not None:
+            raise CampaignFormatError(
+                shown, comma_line, f"{DECIMAL_COMMA_HINT}: {header[comma_line - 1][1].strip()[:60]!r}"
+            )
         last_line = len(text.rstrip("\n").split("\n"))
         raise CampaignFormatError(
             shown,
@@ -1068,20 +1406,29 @@ def read_run(
             "after the header, one sample per line)",
         )
 
-    block = text[offset:].rstrip()
-    rows_head = block.split("\n", HEAD_ROWS)[:HEAD_ROWS]
-    rows_head = [row for row in rows_head if row.strip()]
+    # The numbers are text[offset:end]; no copy of them is made (a long record's text
+    # is the largest thing a run-analysis job holds).
+    end = len(text)
+    while end > offset and text[end - 1].isspace():
+        end -= 1
+    head_end = offset
+    for _ in range(HEAD_ROWS):
+        head_end = text.find("\n", head_end + 1, end)
+        if head_end < 0:
+            head_end = end
+            break
+    rows_head = [row for row in text[offset:head_end].split("\n") if row.strip()]
     delimiter = _majority([_line_delimiter(row) for row in rows_head], _SPACES)
     n_columns = _majority([len(_split_row(row, delimiter)) for row in rows_head], 1)
-    n_rows = block.count("\n") + 1
+    n_rows = text.count("\n", offset, end) + 1
 
     header_values = _header_values(header, shown)
     columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
     time_factor_s, force_factor_lbf = _column_unit_factors(columns, campaign, shown)
 
-    values = _parse_block_fast(block, delimiter, n_rows, n_columns)
+    values = _parse_text_fast(text, offset, end, delimiter, n_rows, n_columns)
     if values is None:
-        values = _parse_block_careful(block.split("\n"), first_line, delimiter, n_columns, shown)
+        values = _parse_block_careful(text[offset:end].split("\n"), first_line, delimiter, n_columns, shown)
     last_data_line = first_line + n_rows - 1
     if n_rows < MIN_SAMPLES:
         raise CampaignFormatError(
@@ -1100,7 +1447,7 @@ def read_run(
     time_s = None
     if "time" in columns.roles:
         time_s = values[:, columns.roles["time"]] * time_factor_s
-        first_row, last_row = rows_head[0], block.rsplit("\n", 1)[-1]
+        first_row, last_row = rows_head[0], text[max(text.rfind("\n", offset, end), offset - 1) + 1 : end]
         resolution_s = time_factor_s * _print_resolution(
             [_split_row(row, delimiter)[columns.roles["time"]] for row in (first_row, last_row)]
         )
@@ -1124,6 +1471,11 @@ def read_run(
                     f"{rate_a:.9g} Hz from the {name_a}",
                 )
     source_name, sample_rate_hz = sources[0][0], sources[0][1]
+    rate_line = sources[0][2]
+    rate_source = source_name if rate_line is None else f"{source_name}, line {rate_line}"
+    problem = frequency_problem(campaign, sample_rate_hz, rate_source)
+    if problem is not None:
+        raise CampaignFormatError(shown, rate_line, f"campaign.yaml {problem}")
     sample_rate_source = "campaign.yaml" if source_name.startswith("campaign") else source_name
 
     pretrigger_samples, pretrigger_source = campaign.pretrigger_samples, "default"

@@ -179,6 +179,10 @@ class DiscoverySettings:
 
     seed: int = 1976
 
+    resamples: Annotated[int, Ge(10)] = 100
+    """Bootstrap resamples of the runs (of amplitude blocks with one run) behind each
+    verdict's ``confidence``."""
+
 
 @dataclass(frozen=True)
 class DemoSettings:

@@ -166,8 +166,11 @@ def _zero_phase_spectrum(
     extended = np.concatenate([head, x, tail])
     padded = 1 << int(np.ceil(np.log2(extended.size + 40.0 * tau_samples)))
     spectrum = np.fft.fft(extended, padded)
+    del extended
     frequency_hz = np.abs(np.fft.fftfreq(padded, d=1.0 / fs_hz))
-    return spectrum * butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order), extension, padded
+    # In place: a long record's padded spectrum is the largest array of a run's analysis.
+    spectrum *= butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order)
+    return spectrum, extension, padded
 
 
 def bandpass(x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int = 10) -> np.ndarray:
@@ -300,7 +303,11 @@ def analytic_bandpass(
     x = np.asarray(x, dtype=float)
     _check_band(fs_hz, band_hz, order)
     spectrum, extension, padded = _zero_phase_spectrum(x, fs_hz, band_hz, order)
-    return np.fft.ifft(spectrum * _analytic_mask(padded))[extension : extension + x.size]
+    spectrum *= _analytic_mask(padded)
+    padded_signal = np.fft.ifft(spectrum)
+    del spectrum
+    # A copy of the record's part, so that the padded signal is freed on return.
+    return padded_signal[extension : extension + x.size].copy()
 
 
 def segment_bounds(
@@ -762,6 +769,8 @@ def analyse_decay(
     z = analytic_bandpass(response, fs_hz, band_hz, filter_order)
     env = np.abs(z)
     phase = np.unwrap(np.angle(z))
+    filtered = z.real.copy()
+    del z  # a long record's largest array: only its parts above are used
 
     start = int(np.argmax(env[:stop])) if start_index is None else int(start_index)
     if not 0 <= start < stop:
@@ -882,7 +891,7 @@ def analyse_decay(
     segments["kept"] = reasons == ""
     segments["reject_reason"] = reasons
     return DecayResult(
-        filtered=z.real.copy(),
+        filtered=filtered,
         envelope=env,
         phase_rad=phase,
         noise_floor=floor,

@@ -65,8 +65,23 @@ def _clipping(response, clip_fraction_of_peak, clip_max_samples, unit="") -> Che
         return CheckResult(math.nan, "response is empty")
     peak = float(magnitude.max())
     if peak == 0.0:
-        return CheckResult(math.nan, "response is zero throughout")
+        return CheckResult(math.nan, "response is zero throughout: a dead or disconnected channel")
     at_peak = int(np.count_nonzero(magnitude >= clip_fraction_of_peak * peak))
+    if at_peak == magnitude.size:
+        # Every sample at the "peak": the record has no ring-down at all, which a
+        # clipped measurement always has between its flat tops.
+        response = np.asarray(response, dtype=np.float64)
+        low, high = float(response.min()), float(response.max())
+        unit_text = f" {unit}" if unit else ""
+        if low == high:
+            return CheckResult(
+                at_peak, f"response is constant ({low:.4g}{unit_text}) throughout: a dead or stuck channel"
+            )
+        return CheckResult(
+            at_peak,
+            f"response stays between {low:.4g} and {high:.4g}{unit_text} throughout (an offset with no "
+            "ring-down): a dead or stuck channel",
+        )
     if at_peak <= clip_max_samples:
         return CheckResult(at_peak, None)
     return CheckResult(

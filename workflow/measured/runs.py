@@ -139,6 +139,11 @@ def identify_mode(
         band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
     else:
         band_hz = modal_id.band_around(mode_hz, band_half_width)
+    if band_hz[1] >= sample_rate_hz / 2.0:
+        raise ValueError(
+            f"the band [{band_hz[0]:.6g}, {band_hz[1]:.6g}] Hz around the mode at {mode_hz:.6g} Hz reaches the "
+            f"Nyquist frequency {sample_rate_hz / 2.0:.6g} Hz; give a narrower band_hz in campaign.yaml"
+        )
     return ModeInfo(
         mode_hz=float(mode_hz),
         band_hz=band_hz,
@@ -373,14 +378,19 @@ def analyse_run_file(
 
 
 def collect_tables(
-    *, segment_paths, quality_paths, status_paths, mode_paths, campaign
+    *, segment_paths, quality_paths, status_paths, mode_paths, campaign, excluded_paths=()
 ) -> dict[str, pd.DataFrame]:
     """Merge the per-run outputs into the campaign's tables.
 
+    ``excluded_paths`` are runs-table rows for what the campaign's globs lead to that
+    no job reads (:meth:`workflow.io.campaign.ExcludedPath.status`): directories, links
+    leading outside the campaign, unreadable files, globs that match nothing.
+
     Returns ``segments`` (kept segments of used runs: the output contract's
     table), ``rejected`` (every other segment, with its reason), ``runs`` (one
-    row per run file, used or excluded), ``quality`` (one row per run and quality
-    check: value, threshold, passed) and ``modes`` (one row per configuration).
+    row per run file, used or excluded, then the excluded paths), ``quality`` (one
+    row per run and quality check: value, threshold, passed) and ``modes`` (one row
+    per configuration).
     """
     import json
     from pathlib import Path
@@ -392,6 +402,7 @@ def collect_tables(
     # Each status file holds the statuses of one job's runs.
     statuses = pd.DataFrame(
         [status for path in status_paths for status in json.loads(Path(path).read_text())]
+        + list(excluded_paths)
     )
     runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
