@@ -1,10 +1,13 @@
 """Hit rate of the model discovery over hidden-effect campaigns and seeds.
 
 For every cause of the vocabulary, ``--seeds`` campaigns from the virtual lab (effect
-size and bearing area drawn per seed, see workflow/studies/hidden_effects.py) go through the
+size and bearing area drawn per seed, see workflow/lab/hidden_effects.py) go through the
 measured-data chain and the diagnosis; the script prints the confusion table (rows:
 hidden cause, columns: verdict, as rates), the hit rate per cause, the gain ratios, and
-the runtime.
+the runtime. Runs differ from run to run as in a real lab (the lab's default
+``LabSettings``); ``--no-variability`` makes every run of a campaign the same beam, and
+``--time-domain`` integrates the joint in time instead of the averaged model (the
+causes it can hide: none, microslip_power_law, run_drift, unknown).
 
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
 """
@@ -12,12 +15,18 @@ the runtime.
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from workflow.studies.hidden_effects import CASES, run_case
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from workflow.discovery.diagnosis import diagnose_campaign  # noqa: E402
+from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case  # noqa: E402
+from workflow.lab.virtual_lab import TIME_DOMAIN_EFFECTS, LabSettings  # noqa: E402
 
 VERDICTS = [
     "none",
@@ -29,11 +38,22 @@ VERDICTS = [
 ]
 
 
+def lab_settings(variability: bool) -> LabSettings:
+    """The lab's default settings, or the same without run-to-run variability."""
+    if variability:
+        return LabSettings()
+    return LabSettings(frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
+
+
 def _one(args):
-    cause, seed, work = args
+    cause, seed, work, variability, integrator = args
     start = time.perf_counter()
     try:
-        case, doc = run_case(cause, seed, Path(work))
+        case, out = generate_case(
+            cause, seed, Path(work), settings=lab_settings(variability), integrator=integrator
+        )
+        segments = campaign_segments(out)
+        doc = diagnose_campaign(segments, out.name)
         conf = next(iter(doc["configurations"].values()), None)
         ratio = conf["gain"]["ratio"] if conf else None
         verdict = doc["cause"] if conf else "no data"
@@ -111,7 +131,17 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--first-seed", type=int, default=1)
     parser.add_argument("--jobs", type=int, default=2)
-    parser.add_argument("--causes", nargs="*", default=list(CASES))
+    parser.add_argument("--causes", nargs="*", default=None, help="default: every cause the path can hide")
+    parser.add_argument(
+        "--no-variability",
+        action="store_true",
+        help="every run of a campaign from the same beam (no run-to-run variability)",
+    )
+    parser.add_argument(
+        "--time-domain",
+        action="store_true",
+        help="integrate the joint in time (causes none, microslip_power_law, run_drift, unknown)",
+    )
     parser.add_argument(
         "--visibility",
         action="store_true",
@@ -121,15 +151,24 @@ def main() -> None:
     if args.visibility:
         visibility()
         return
+    integrator = "time_domain" if args.time_domain else "averaged"
+    hideable = [c for c in CASES if not args.time_domain or CASES[c][1] in TIME_DOMAIN_EFFECTS]
+    if args.causes is None:
+        args.causes = hideable
+    elif set(args.causes) - set(hideable):
+        parser.error(f"the {integrator} path cannot hide {sorted(set(args.causes) - set(hideable))}")
     with tempfile.TemporaryDirectory() as work:
         tasks = [
-            (c, s, work) for c in args.causes for s in range(args.first_seed, args.first_seed + args.seeds)
+            (c, s, work, not args.no_variability, integrator)
+            for c in args.causes
+            for s in range(args.first_seed, args.first_seed + args.seeds)
         ]
         start = time.perf_counter()
         with ProcessPoolExecutor(args.jobs) as pool:
             results = list(pool.map(_one, tasks))
         wall = time.perf_counter() - start
     print(
+        f"run-to-run variability {'off' if args.no_variability else 'on'}, {integrator} integrator; "
         f"{len(results)} campaigns, {args.seeds} seeds per cause, wall {wall:.0f} s, "
         f"mean {sum(r[5] for r in results) / len(results):.1f} s per campaign\n"
     )

@@ -21,5 +21,8 @@ if USES_DEMO:
         params:
             seed=SETTINGS.demo.seed,
             runs_per_configuration=SETTINGS.demo.runs_per_configuration,
+            frequency_spread=SETTINGS.demo.frequency_spread,
+            damping_spread=SETTINGS.demo.damping_spread,
+            slip_force_spread=SETTINGS.demo.slip_force_spread,
         script:
             "../scripts/make_demo_campaign.py"

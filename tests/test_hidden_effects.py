@@ -1,15 +1,28 @@
 """Hidden effects: the virtual lab hides a cause, the measured-data chain and the
-discovery must name it (cases in :mod:`workflow.studies.hidden_effects`; one seed per
-cause, ``LAPJOINT_HIDDEN_SEED`` overrides it; ``bench/hit_rate.py`` runs many).
+discovery must name it.
+
+The cases (effect, size and bearing-area ranges, and the measured chain) are in
+:mod:`workflow.lab.hidden_effects` (``LAPJOINT_HIDDEN_SEED`` overrides the base seed).
+``bench/hit_rate.py`` runs the same cases over many seeds.
 """
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
-from workflow.studies.hidden_effects import CASES, run_case
+from workflow.discovery.diagnosis import diagnose_campaign
+from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case
+
+
+def run_case(cause: str, seed: int, work_dir: Path) -> tuple[dict, dict]:
+    """Generate, analyse and diagnose one hidden-effect campaign; (drawn case, diagnosis)."""
+    case, out = generate_case(cause, seed, work_dir)
+    segments = campaign_segments(out)
+    return case, diagnose_campaign(segments, out.name)
+
 
 BASE_SEED = int(os.environ.get("LAPJOINT_HIDDEN_SEED", "20240"))
 

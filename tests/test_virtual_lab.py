@@ -203,3 +203,196 @@ def test_second_mode_appears_in_band(tmp_path):
     assert near(1.08 * f1) > 0.2 * near(f1)
     with pytest.raises(ValueError, match="joint='dahl'"):
         vl.generate_campaign(tmp_path / "bad", effect="second_mode")
+
+
+# ------------------------------------------------- run-to-run variability
+
+NO_SPREAD = vl.LabSettings(frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
+
+
+def test_demo_settings_default_to_the_lab_spreads():
+    from workflow.io.settings import DemoSettings
+
+    demo = DemoSettings()
+    for name in ("frequency_spread", "damping_spread", "slip_force_spread"):
+        assert getattr(demo, name) == getattr(SETTINGS, name), name
+
+
+def test_slip_force_scaling_matches_recomputed_patches(no_washer):
+    setup, (a, d, loss) = no_washer
+    p = setup.joint_modes.patches
+    for factor in (0.9, 1.08):
+        d_scaled, loss_scaled = vl.scale_slip_forces(a, d, loss, factor)
+        d_exact, loss_exact = contact_describing(setup, a, p.slip_force_lbf * factor)
+        v = abs(setup.mode.accelerometer_participation) * setup.omega0_rad_s * a
+        sel = (v > 0.01) & (v < 30) & (d_exact > 1e-6 * d_exact.max())
+        # linear interpolation on the 1500-point log grid: relative error ~ (d ln a)^2
+        assert np.allclose(d_scaled[sel], d_exact[sel], rtol=2e-3)
+        assert np.allclose(loss_scaled[sel], loss_exact[sel], rtol=2e-3, atol=1e-9 * setup.omega0_rad_s**2)
+
+
+def contact_describing(setup, a, slip_force_lbf):
+    from workflow.models import contact
+
+    p = setup.joint_modes.patches
+    return contact.patch_describing_function(
+        a, setup.joint_modes.slip_per_xi, p.stiffness_lbf_in, slip_force_lbf
+    )
+
+
+def test_runs_get_their_own_physics(tmp_path):
+    truth = vl.generate_campaign(
+        tmp_path / "spread", seed=5, runs_per_configuration=12, joint="dahl", configurations={"beam": 0.8}
+    )
+    entry = truth["configurations"]["beam"]
+    runs = entry["runs"]
+    factors = np.array([[r["frequency_factor"], r["zeta0"], r["slip_force_factor"]] for r in runs])
+    # drawn, not equal; spreads of the right size (12 draws: sample std within 0.5-1.6 sigma)
+    for column, sigma in zip(np.log(factors).T, (3e-4, 0.03, 0.03)):
+        assert 0.5 * sigma < np.std(column, ddof=1) < 1.6 * sigma
+    v = np.array(truth["velocity_amplitude_in_s"])
+    low = np.argmin(np.abs(v - 0.01))  # far below slip: the stuck linear mode
+    f_low = np.array([r["damped_frequency_hz"][low] for r in runs])
+    assert np.allclose(f_low / entry["damped_frequency_hz"][low], factors[:, 0], rtol=2e-6)
+    z_low = np.array([r["zeta"][low] for r in runs])
+    # at 0.01 in/s the Dahl joint adds < 0.5 % to the linear damping: each run's own zeta0
+    assert np.allclose(z_low, factors[:, 1], rtol=0.005)
+    coulomb = np.array([r["dahl_coulomb_modal"] for r in runs])
+    assert np.allclose(coulomb / entry["dahl_coulomb_modal"], factors[:, 2], rtol=1e-12)
+    # in slip (3 in/s) a weaker joint damps more: the slip force really changes the physics
+    high = np.argmin(np.abs(v - 3.0))
+    z_high = np.array([r["zeta"][high] for r in runs]) - factors[:, 1]
+    assert np.corrcoef(np.log(z_high), np.log(factors[:, 2]))[0, 1] < -0.9
+
+
+def test_measured_frequencies_follow_the_drawn_ones(tmp_path):
+    from workflow.lab.hidden_effects import campaign_segments
+
+    truth = vl.generate_campaign(
+        tmp_path / "m", seed=9, runs_per_configuration=6, joint="dahl", configurations={"beam": 0.8}
+    )
+    segments = campaign_segments(tmp_path / "m")
+    runs = truth["configurations"]["beam"]["runs"]
+    v = np.array(truth["velocity_amplitude_in_s"])
+    measured, drawn = [], []
+    for run in runs:
+        seg = segments[segments["run"] == run["run"]]
+        sel = (seg["velocity_amplitude_in_s"] > 0.1) & (seg["velocity_amplitude_in_s"] < 0.5)
+        f_truth = np.interp(
+            np.log(seg["velocity_amplitude_in_s"][sel]), np.log(v), np.array(run["damped_frequency_hz"])
+        )
+        measured.append(np.median(seg["frequency_hz"][sel] / f_truth))
+        drawn.append(run["frequency_factor"])
+    # each run's measured frequency is its own truth within the measurement's 2e-5
+    # scatter (the drawn spread is 3e-4)
+    assert np.allclose(measured, 1.0, atol=3e-5)
+    assert np.std(drawn) > 5e-5
+
+
+def test_no_spread_gives_the_same_beam_every_run(tmp_path):
+    truth = vl.generate_campaign(
+        tmp_path / "same", seed=5, runs_per_configuration=3, configurations={"beam": 1.36}, settings=NO_SPREAD
+    )
+    entry = truth["configurations"]["beam"]
+    for run in entry["runs"]:
+        assert run["frequency_factor"] == 1.0 and run["slip_force_factor"] == 1.0
+        assert run["zeta0"] == NO_SPREAD.zeta0
+        assert run["zeta"] == entry["zeta"] and run["damped_frequency_hz"] == entry["damped_frequency_hz"]
+
+
+def test_variability_has_no_trend_with_run_order():
+    # 400 runs: a trend of even 0.2 sigma over the runs would give a correlation of 0.06;
+    # the draws' correlation with run index stays at sampling noise 1/sqrt(400)
+    runs = vl.draw_run_physics(SETTINGS, np.random.default_rng(1), 400)
+    order = np.arange(400)
+    for name in ("frequency_factor", "zeta0", "slip_force_factor"):
+        values = np.array([getattr(r, name) for r in runs])
+        assert abs(np.corrcoef(order, values)[0, 1]) < 3 / np.sqrt(400), name
+
+
+# ------------------------------------------------------------ time domain
+
+
+def _peaks(t, x):
+    i = np.flatnonzero((x[1:-1] > x[:-2]) & (x[1:-1] >= x[2:])) + 1
+    y0, y1, y2 = x[i - 1], x[i], x[i + 1]
+    shift = 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2)
+    return t[i] + shift * (t[1] - t[0]), y1 - 0.25 * (y0 - y2) * shift
+
+
+@pytest.mark.parametrize("joint", ["dahl", "patches"])
+@pytest.mark.parametrize("peak_force_lbf", [5.0, 40.0])
+def test_time_domain_agrees_with_the_averaged_model(no_washer, joint, peak_force_lbf):
+    setup, curves = no_washer
+    run = vl.RunPhysics(frequency_factor=1.0003, zeta0=0.00085, slip_force_factor=0.97)
+    table = vl.mode_table(setup, curves, SETTINGS, joint, None, None, run=run)
+    coulomb = vl.run_dahl_coulomb(setup, None, None, 0.0, run.slip_force_factor)
+    t = np.arange(8192) / vl.SAMPLE_RATE_HZ
+    modal_peak = setup.mode.hammer_participation * peak_force_lbf
+    averaged = vl.averaged_mode_response(setup, table, run)(t, modal_peak, 0.8e-3)
+    direct = vl.time_domain_mode_response(setup, joint, coulomb, run)(t, modal_peak, 0.8e-3)
+    ta, aa = _peaks(t, averaged)
+    td, ad = _peaks(t, direct)
+    n = min(ta.size, td.size) - 20
+    # damping over 20-cycle blocks (0.04-6 in/s): the describing function drops the joint
+    # force's higher harmonics, a relative error of order zeta (measured <= 0.5 %)
+    block = np.arange(5, n, 20)
+    zeta_a = np.log(aa[block] / aa[block + 20]) / (40 * np.pi)
+    zeta_d = np.log(ad[block] / ad[block + 20]) / (40 * np.pi)
+    assert np.allclose(zeta_d, zeta_a, rtol=0.01)
+    f_a = 20 / (ta[block + 20] - ta[block])
+    f_d = 20 / (td[block + 20] - td[block])
+    # frequency to the measurement's own scatter (2e-5; measured <= 1e-5)
+    assert np.allclose(f_d, f_a, rtol=2e-5)
+    assert np.allclose(ad[5:n], aa[5:n], rtol=0.01)
+
+
+def test_time_domain_campaign_and_its_limits(tmp_path):
+    truth = vl.generate_campaign(
+        tmp_path / "td",
+        seed=3,
+        runs_per_configuration=2,
+        joint="dahl",
+        effect="run_drift",
+        configurations={"beam": 0.8},
+        integrator="time_domain",
+    )
+    assert truth["integrator"] == "time_domain"
+    _, data = _read(tmp_path / "td" / "beam" / "run02.txt")
+    assert data.shape == (8192, 3) and np.argmax(data[:, 1] >= 1.0) == 25
+    for effect in ("quadratic_damping", "stiffness_nonlinearity"):
+        with pytest.raises(ValueError, match="time-domain"):
+            vl.generate_campaign(tmp_path / "x", joint="dahl", effect=effect, integrator="time_domain")
+
+
+# ---------------------------------------------------------------- sensors
+
+
+def test_sensor_variants_share_the_decay_not_the_noise(tmp_path):
+    truths = vl.generate_sensor_campaigns(
+        tmp_path,
+        {"accelerometer": 1.0, "mid": 0.5},
+        seed=4,
+        runs_per_configuration=1,
+        joint="dahl",
+        configurations={"beam": 0.8},
+    )
+    assert [t["sensor_gain"] for t in truths.values()] == [1.0, 0.5]
+    _, a = _read(tmp_path / "accelerometer" / "beam" / "run01.txt")
+    _, b = _read(tmp_path / "mid" / "beam" / "run01.txt")
+    assert np.array_equal(a[:, :2], b[:, :2])  # same hammer hit
+    freq = np.fft.rfftfreq(8192, 1 / vl.SAMPLE_RATE_HZ)
+    band = (freq > 110) & (freq < 140)
+    spectrum_a, spectrum_b = (np.fft.rfft(x[:, 2])[band] for x in (a, b))
+    # mode 1 scaled by the gain (the band's noise is 1e-3 of the mode's energy)
+    ratio = np.sqrt(np.sum(np.abs(spectrum_b) ** 2) / np.sum(np.abs(spectrum_a) ** 2))
+    assert ratio == pytest.approx(0.5, rel=0.01)
+    # independent noise: before the hit the records are noise alone, and their difference
+    # has the std of two independent noises (sqrt(2) x 0.002 g; 20 samples: +-40 %)
+    difference = a[:20, 2] - b[:20, 2]
+    assert np.std(difference) == pytest.approx(np.sqrt(2) * SETTINGS.acceleration_noise_g, rel=0.4)
+    v = np.array(truths["mid"]["velocity_amplitude_in_s"])
+    # the truth is per sensor: the mid sensor's 1 in/s is the accelerometer's 2 in/s
+    z_mid = np.interp(np.log(1.0), np.log(v), truths["mid"]["configurations"]["beam"]["zeta"])
+    z_acc = np.interp(np.log(2.0), np.log(v), truths["accelerometer"]["configurations"]["beam"]["zeta"])
+    assert z_mid == pytest.approx(z_acc, rel=1e-3)

@@ -1004,7 +1004,9 @@ the line fit, ``fit_rms``), as a fraction of the decay of ln-envelope across the
 (``2 pi N zeta`` for ``N`` cycles), in each run's highest-amplitude third."""
 
 
-def envelope_structure(data: ConfigurationData, *, segment_cycles: float = AnalysisSettings.segment_cycles) -> dict | None:
+def envelope_structure(
+    data: ConfigurationData, *, segment_cycles: float = AnalysisSettings.segment_cycles
+) -> dict | None:
     """Whether the log-decrement segments measure a decay at all.
 
     Every model of the vocabulary is a single mode whose damping changes slowly with

@@ -221,6 +221,13 @@ class DemoSettings:
     path: str = "results/demo_campaign"
     seed: int = 2004
     runs_per_configuration: Annotated[int, Ge(1), Le(200)] = 10
+    frequency_spread: Annotated[float, Ge(0.0), Le(0.01)] = 3e-4
+    """Run-to-run relative standard deviation of the natural frequency (the virtual lab's
+    ``LabSettings.frequency_spread``; docs/virtual-lab.md). 0 turns it off."""
+    damping_spread: Annotated[float, Ge(0.0), Le(0.5)] = 0.03
+    """Run-to-run relative standard deviation of the linear modal damping."""
+    slip_force_spread: Annotated[float, Ge(0.0), Le(0.5)] = 0.03
+    """Run-to-run relative standard deviation of the joint's slip forces."""
 
 
 @dataclass(frozen=True)

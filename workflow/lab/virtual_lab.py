@@ -9,6 +9,14 @@ run is an interpolation: fast, and accurate for this weak nonlinearity.
 Higher flexible modes and the two rigid-body suspension modes (bounce and
 pitch on the rubber tubing) respond linearly to the hammer pulse.
 
+Runs of a configuration differ as in a real lab (``LabSettings.*_spread``, see
+docs/virtual-lab.md): each run draws its own natural frequency, linear modal damping
+and joint slip force, at random and independent of run order, and gets its own table.
+For test campaigns, ``generate_campaign(integrator="time_domain")`` integrates the
+joint's equation of motion in time (contact patches: :func:`patch_mode_response_time_domain`;
+Dahl: :func:`workflow.models.ringdown.simulate_ringdown`) instead of the averaged equations, so that the discovery is not tested only on the
+model it fits.
+
 The campaign folder follows ``campaign-format.md``; the truth is written
 beside it as ``<campaign_dir>.truth.json``, never inside.
 """
@@ -17,14 +25,17 @@ from __future__ import annotations
 
 import functools
 import json
-from dataclasses import asdict, dataclass, field
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
+import numba
 import numpy as np
 import scipy.optimize
 
 from workflow.lab.layout import PAPER_CONFIGURATIONS, run_name
-from workflow.models import contact, specimen
+from workflow.models import contact, ringdown, specimen
 
 SAMPLE_RATE_HZ = 2560.0
 N_SAMPLES = 8192
@@ -57,6 +68,11 @@ EFFECT_SIZE_MEANING = {
     "second_mode": "initial acceleration amplitude of a linear mode at 1.08 f1, relative to mode 1",
 }
 SECOND_MODE_FREQUENCY_RATIO = 1.08
+INTEGRATORS = ("averaged", "time_domain")
+TIME_DOMAIN_EFFECTS = (None, "run_drift", "second_mode")
+"""Effects the time-domain path can add (to the Dahl joint): its integrators have the
+joints (contact patches, Dahl) and linear modal damping only (no velocity-squared loss,
+no dissipation-free softening)."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +94,47 @@ class LabSettings:
     samples_per_run: int = N_SAMPLES
     """Record length (the paper's analyser: 8192); longer only to benchmark scaling."""
     joint: contact.JointParameters = field(default_factory=contact.JointParameters)
+    frequency_spread: float = 3e-4
+    """Run-to-run relative standard deviation of the natural frequency (temperature:
+    aluminium's modulus changes by about -4e-4/K, so f by -2e-4/K; re-hanging the beam
+    on its tubing; docs/virtual-lab.md). 0 turns it off."""
+    damping_spread: float = 0.03
+    """Run-to-run relative standard deviation of the linear modal damping ``zeta0``
+    (support and suspension losses after re-hanging; air). 0 turns it off."""
+    slip_force_spread: float = 0.03
+    """Run-to-run relative standard deviation of every joint slip force (friction
+    coefficient and preload of a re-struck, settled contact). 0 turns it off."""
+
+
+@dataclass(frozen=True)
+class RunPhysics:
+    """What differs from run to run of one configuration (drawn, not a trend)."""
+
+    frequency_factor: float = 1.0
+    """Natural frequency of the stuck-joint mode relative to the configuration's."""
+    zeta0: float = LabSettings.zeta0
+    """Linear modal damping ratio of this run."""
+    slip_force_factor: float = 1.0
+    """Every slip force of the joint (patches' limits, Dahl's Fc) relative to nominal."""
+
+
+def draw_run_physics(settings: LabSettings, rng: np.random.Generator, n_runs: int) -> list[RunPhysics]:
+    """Independent run-to-run variations of ``n_runs`` runs.
+
+    Frequency: ``1 + frequency_spread * N(0, 1)``; damping and slip force log-normal
+    with log standard deviations ``damping_spread`` and ``slip_force_spread`` (positive,
+    median the nominal value). Draws are independent of run order: a trend is the
+    ``run_drift`` effect, not this.
+    """
+    normal = rng.standard_normal((n_runs, 3))
+    return [
+        RunPhysics(
+            frequency_factor=float(1.0 + settings.frequency_spread * f),
+            zeta0=float(settings.zeta0 * np.exp(settings.damping_spread * z)),
+            slip_force_factor=float(np.exp(settings.slip_force_spread * s)),
+        )
+        for f, z, s in normal
+    ]
 
 
 # ------------------------------------------------------------ linear modes
@@ -317,25 +374,68 @@ def setup_configuration(name, bearing_area_in2, settings: LabSettings) -> tuple[
     A configuration without an area gets the paper's no-washer contact.
     """
     area = bearing_area_in2 if bearing_area_in2 is not None else PAPER_CONFIGURATIONS["no_washer"]
-    jm, sigma, coulomb, curves = _configuration_physics(float(area), settings)
+    # the nominal physics does not depend on the run-to-run spreads: one cache entry
+    nominal = replace(settings, frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
+    jm, sigma, coulomb, curves = _configuration_physics(float(area), nominal)
     return JointSetup(name, bearing_area_in2, jm, jm.omega_rad_s, sigma, coulomb), curves
 
 
+def scale_slip_forces(amplitude, dissipation, stiffness_loss, factor):
+    """Describing-function curves of a joint whose slip forces are all multiplied by ``factor``.
+
+    Exact for rate-independent joints whose elements slip at a force ``Fs`` over a
+    stiffness (Jenkins patches, Dahl): the loop at amplitude ``a`` with ``c Fs`` is the
+    loop at ``a / c`` with ``Fs`` scaled by ``c`` in force and displacement, so
+    ``D_c(a) = c^2 D(a / c)`` and ``loss_c(a) = loss(a / c)``. Interpolated in
+    ``ln a`` on the (fine, logarithmic) amplitude grid.
+
+    Parameters
+    ----------
+    amplitude : ndarray
+        Modal amplitude grid, increasing.
+    dissipation : ndarray
+        Energy dissipated per cycle at each amplitude (modal units).
+    stiffness_loss : ndarray
+        Modal stiffness loss at each amplitude (units of omega^2, 1/s^2).
+    factor : float
+        Slip-force multiplier ``c`` (> 0).
+
+    Returns
+    -------
+    dissipation, stiffness_loss : ndarray
+    """
+    if factor == 1.0:
+        return dissipation.copy(), stiffness_loss.copy()
+    log_a = np.log(amplitude)
+    shifted = log_a - np.log(factor)
+    return (
+        factor**2 * np.interp(shifted, log_a, dissipation),
+        np.interp(shifted, log_a, stiffness_loss),
+    )
+
+
 def joint_curves(
-    setup: JointSetup, patch_curves, settings: LabSettings, joint, effect, effect_size, run_fraction=0.0
+    setup: JointSetup,
+    patch_curves,
+    settings: LabSettings,
+    joint,
+    effect,
+    effect_size,
+    run_fraction=0.0,
+    slip_force_factor=1.0,
 ):
     """Dissipation per cycle and stiffness loss of the whole mode-1 joint model.
 
-    ``run_fraction`` in [0, 1] is the run's position in the campaign (drift).
+    ``run_fraction`` in [0, 1] is the run's position in the campaign (drift);
+    ``slip_force_factor`` the run's random change of every slip force.
     """
     a, patch_d, patch_loss = patch_curves
     if joint == "patches":
-        d, loss = patch_d.copy(), patch_loss.copy()
+        d, loss = scale_slip_forces(a, patch_d, patch_loss, slip_force_factor)
     else:
-        coulomb = setup.dahl_coulomb
-        if effect == "run_drift":
-            coulomb = coulomb * (1.0 - effect_size * run_fraction)
-        d, loss = _dahl_curves(a, setup.dahl_sigma, coulomb)
+        d, loss = _dahl_curves(
+            a, setup.dahl_sigma, run_dahl_coulomb(setup, effect, effect_size, run_fraction, slip_force_factor)
+        )
     w0 = setup.omega0_rad_s
     a_ref = REFERENCE_VELOCITY_IN_S / (abs(setup.mode.accelerometer_participation) * w0)
     if effect == "quadratic_damping":
@@ -349,10 +449,28 @@ def joint_curves(
     return d, loss
 
 
-def mode_table(setup, patch_curves, settings, joint, effect, effect_size, run_fraction=0.0):
+def run_dahl_coulomb(
+    setup: JointSetup, effect, effect_size, run_fraction=0.0, slip_force_factor=1.0
+) -> float:
+    """The Dahl joint's modal friction limit ``Fc`` in one run (drift and random change)."""
+    coulomb = setup.dahl_coulomb * slip_force_factor
+    if effect == "run_drift":
+        coulomb = coulomb * (1.0 - effect_size * run_fraction)
+    return coulomb
+
+
+def mode_table(
+    setup, patch_curves, settings, joint, effect, effect_size, run_fraction=0.0, run: RunPhysics | None = None
+):
+    """Averaged dynamics of one run's mode 1 (``run``: its own frequency, damping and
+    slip force; default the configuration's nominal physics)."""
+    run = run if run is not None else RunPhysics(zeta0=settings.zeta0)
     a = patch_curves[0]
-    d, loss = joint_curves(setup, patch_curves, settings, joint, effect, effect_size, run_fraction)
-    zeta, omega = contact.equivalent_damping(a, setup.omega0_rad_s, settings.zeta0, d, loss)
+    d, loss = joint_curves(
+        setup, patch_curves, settings, joint, effect, effect_size, run_fraction, run.slip_force_factor
+    )
+    omega0 = setup.omega0_rad_s * run.frequency_factor
+    zeta, omega = contact.equivalent_damping(a, omega0, run.zeta0, d, loss)
     return ModeTable.build(a, zeta, omega)
 
 
@@ -389,8 +507,238 @@ def boxcar_half_sine(t_start_s, dt_s, t0_s, peak, duration_s):
     return (primitive(t_start_s + dt_s) - primitive(t_start_s)) / dt_s
 
 
-def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng, second_mode_ratio=0.0):
-    """One triggered record: (time s, force lbf, acceleration g) and run facts."""
+def half_sine_spectral_factor(omega_rad_s, duration_s):
+    """``|F(omega)| / impulse`` of a half-sine pulse (1 for an ideal impulse).
+
+    After the pulse, a linear oscillator struck by it rings exactly as if struck by an
+    impulse this much smaller at the pulse centre (the pulse is symmetric).
+    """
+    x = omega_rad_s * duration_s / np.pi
+    return float(np.cos(0.5 * omega_rad_s * duration_s) / (1.0 - x**2)) if abs(x - 1) > 1e-9 else np.pi / 4
+
+
+def dahl_mode_response_time_domain(
+    t_s, sigma, coulomb, omega0_rad_s, zeta0, modal_peak, duration_s, oversampling=8, steps_per_period=64
+):
+    """Modal acceleration of mode 1 with a Dahl joint, integrated in time.
+
+    The equation of motion ``xi'' + 2 zeta0 omega0 xi' + (omega0^2 - sigma) xi + F = 0``,
+    ``dF/dxi = sigma (1 - F sign(xi') / Fc)`` (the stuck stiffness ``sigma`` is part of
+    ``omega0``, as in the averaged tables) is integrated by the compiled Lawson RK4 of
+    :func:`workflow.models.ringdown.simulate_ringdown`, from the pulse centre with the
+    pulse's impulse at the stuck frequency; during the pulse (a tenth of a cycle) the mode
+    responds as the stuck linear oscillator.
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Times from the pulse start, s (uniform).
+    sigma : float
+        Dahl rest stiffness in modal units, 1/s^2.
+    coulomb : float
+        Dahl friction limit ``Fc`` in modal units (modal force per unit mass).
+    omega0_rad_s : float
+        Stuck-joint natural frequency, rad/s.
+    zeta0 : float
+        Linear modal damping ratio (of ``omega0``).
+    modal_peak : float
+        Peak modal force of the half-sine pulse (per unit modal mass).
+    duration_s : float
+        Pulse duration, s.
+    oversampling : int
+        Integrator output samples per sample of ``t_s``: the pulse centre falls on the
+        output grid within ``dt / (2 oversampling)`` (phase error < 0.01 rad at 125 Hz).
+    steps_per_period : int
+        Minimum integration steps per period (envelope error < 1e-4 at 64,
+        bench/bench_integrator.py).
+
+    Returns
+    -------
+    ndarray
+        Modal acceleration at ``t_s``.
+    """
+    t = np.asarray(t_s, dtype=float)
+    if omega0_rad_s**2 <= sigma:
+        raise ValueError("the Dahl stiffness sigma must be below omega0^2 (the stuck mode includes it)")
+    omega_free = np.sqrt(omega0_rad_s**2 - sigma)
+    impulse = 2.0 * modal_peak * duration_s / np.pi
+    v0 = impulse * half_sine_spectral_factor(omega0_rad_s, duration_s)
+    dt = t[1] - t[0]
+    fs_fine = oversampling / dt
+    centre = 0.5 * duration_s
+    n_fine = int(np.ceil((t[-1] - centre) * fs_fine)) + 2
+    out = ringdown.simulate_ringdown(
+        "dahl",
+        {"sigma": sigma, "fc": coulomb},
+        omega_rad_s=omega_free,
+        zeta0=zeta0 * omega0_rad_s / omega_free,  # same damping force 2 zeta0 omega0 xi'
+        initial_velocity=v0,
+        fs_out_hz=fs_fine,
+        duration_s=n_fine / fs_fine,
+        steps_per_period=steps_per_period,
+    )
+    acc_fine = out["acceleration"][0]
+    _, _, acc = half_sine_response(t, omega0_rad_s, zeta0, modal_peak, duration_s)
+    after = t > duration_s
+    index = np.round((t[after] - centre) * fs_fine).astype(int)
+    acc[after] = acc_fine[np.minimum(index, n_fine - 1)]
+    return acc
+
+
+_FREEZE_MARGIN = 1.05
+"""A patch is frozen once the amplitude is this factor below its slip onset (the
+energy amplitude ``sqrt(x^2 + (x'/omega0)^2)`` varies within a cycle by the joint's
+< 1 % softening)."""
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _patch_ringdown_kernel(s, k, fs, onset, stiffness, damping, e00, e01, e10, e11, v0, n_steps, h, acc):
+    """Kick-drift-kick ring-down of ``x'' + damping x' + stiffness x + R = 0`` from
+    ``x = 0, x' = v0``, ``R = sum s (f - k s x)`` with Jenkins forces ``f``; writes ``acc``.
+
+    Patches sorted by ``onset``. Once the amplitude has fallen below a patch's onset it
+    never slips again: stuck, its ``s (f - k s x)`` is constant, so it is summed once
+    (``frozen``) and leaves the loop.
+    """
+    f = np.zeros(s.size)
+    x, eta, x_prev = 0.0, v0, 0.0
+    n_active = s.size
+    frozen = 0.0
+    for j in range(n_steps):
+        dx = x - x_prev
+        remainder = frozen
+        for i in range(n_active):
+            trial = f[i] + k[i] * s[i] * dx
+            f[i] = min(max(trial, -fs[i]), fs[i])
+            remainder += s[i] * (f[i] - k[i] * s[i] * x)
+        amplitude = math.sqrt(x * x + eta * eta / stiffness)
+        while n_active > 0 and onset[n_active - 1] > _FREEZE_MARGIN * amplitude:
+            n_active -= 1
+            frozen += s[n_active] * (f[n_active] - k[n_active] * s[n_active] * x)
+        x_prev = x
+        if j > 0:
+            eta -= 0.5 * h * remainder  # second half kick of the previous step
+        acc[j] = -stiffness * x - damping * eta - remainder
+        eta -= 0.5 * h * remainder
+        x, eta = e00 * x + e01 * eta, e10 * x + e11 * eta
+
+
+def patch_mode_response_time_domain(
+    t_s,
+    slip_per_xi,
+    stiffness_lbf_in,
+    slip_force_lbf,
+    omega0_rad_s,
+    zeta0,
+    modal_peak,
+    duration_s,
+    oversampling=4,
+):
+    """Modal acceleration of mode 1 with the contact patches, integrated in time.
+
+    ``xi'' + 2 zeta0 omega0 xi' + omega0^2 xi + sum s (f - k s xi) = 0`` (the stuck patch
+    stiffness is part of ``omega0``), every patch a Jenkins element (``f`` clipped at its
+    slip force). The linear oscillator's flow over a step is exact; the patches' nonlinear
+    remainder, zero while they stick, is applied as two half kicks per step (second
+    order, Strang). Starts at the pulse centre with the pulse's impulse at the stuck
+    frequency; during the pulse the stuck linear oscillator. Patches whose slip onset lies
+    above the initial amplitude never slip and are left out (their remainder is zero).
+
+    Parameters
+    ----------
+    t_s : ndarray
+        Times from the pulse start, s (uniform).
+    slip_per_xi, stiffness_lbf_in, slip_force_lbf : ndarray
+        Slip per unit modal coordinate (in), tangential stiffness (lbf/in) and slip force
+        (lbf) of every patch (broadcast together).
+    omega0_rad_s, zeta0, modal_peak, duration_s
+        As :func:`dahl_mode_response_time_domain`.
+    oversampling : int
+        Steps per sample of ``t_s`` (4 at 2560 samples/s: 80 steps per period at 126 Hz;
+        8 changes the damping by < 0.03 % and the frequency by < 1e-6, measured).
+
+    Returns
+    -------
+    ndarray
+        Modal acceleration at ``t_s``.
+    """
+    t = np.asarray(t_s, dtype=float)
+    s, k, fs = (
+        np.ascontiguousarray(x, dtype=float).ravel()
+        for x in np.broadcast_arrays(np.abs(slip_per_xi), stiffness_lbf_in, slip_force_lbf)
+    )
+    v0 = 2.0 * modal_peak * duration_s / np.pi * half_sine_spectral_factor(omega0_rad_s, duration_s)
+    with np.errstate(divide="ignore"):
+        onset = fs / (k * s)  # modal amplitude at which each patch starts slipping
+    # sorted by onset; those above the initial amplitude never slip
+    order = np.argsort(onset)
+    order = order[onset[order] < _FREEZE_MARGIN * v0 / omega0_rad_s]
+    dt = t[1] - t[0]
+    h = dt / oversampling
+    centre = 0.5 * duration_s
+    n_steps = int(np.ceil((t[-1] - centre) / h)) + 2
+    stiffness, damping = omega0_rad_s**2, 2.0 * zeta0 * omega0_rad_s
+    e00, e01, e10, e11 = (float(e) for e in ringdown.oscillator_propagator(stiffness, damping, h))
+    acc_fine = np.empty(n_steps)
+    _patch_ringdown_kernel(
+        s[order],
+        k[order],
+        fs[order],
+        onset[order],
+        stiffness,
+        damping,
+        e00,
+        e01,
+        e10,
+        e11,
+        v0,
+        n_steps,
+        h,
+        acc_fine,
+    )
+    _, _, acc = half_sine_response(t, omega0_rad_s, zeta0, modal_peak, duration_s)
+    after = t > duration_s
+    index = np.round((t[after] - centre) / h).astype(int)
+    acc[after] = acc_fine[np.minimum(index, n_steps - 1)]
+    return acc
+
+
+ModeResponse = Callable[[np.ndarray, float, float], np.ndarray]
+"""Mode-1 modal acceleration at times from the pulse start, given the peak modal force
+and the pulse duration."""
+
+
+def simulate_run(
+    setup: JointSetup,
+    mode_response: ModeResponse,
+    settings: LabSettings,
+    rng,
+    second_mode_ratio=0.0,
+    *,
+    run: RunPhysics | None = None,
+    noise_rng=None,
+    sensor_gain=1.0,
+):
+    """One triggered record: (time s, force lbf, acceleration g) and run facts.
+
+    Parameters
+    ----------
+    mode_response : callable
+        Mode 1's modal acceleration (:func:`averaged_mode_response` or
+        :func:`time_domain_mode_response`).
+    rng : numpy.random.Generator
+        The hammer: peak force, pulse duration, trigger phase, force noise.
+    run : RunPhysics, optional
+        This run's frequency (also of the linear modes, as a temperature change would)
+        and damping; default the nominal ones.
+    noise_rng : numpy.random.Generator, optional
+        Accelerometer noise; default ``rng``.
+    sensor_gain : float
+        Mode 1 (and the added second mode) as seen by this sensor, relative to the
+        accelerometer's mode shape; the other modes as at the accelerometer.
+    """
+    run = run if run is not None else RunPhysics(zeta0=settings.zeta0)
+    noise_rng = noise_rng if noise_rng is not None else rng
     dt = 1.0 / SAMPLE_RATE_HZ
     lo, hi = settings.peak_force_lbf
     peak = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
@@ -405,13 +753,12 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
     mode = setup.mode
     tau = t - t0
     phi_h = mode.hammer_participation
-    acc = mode.accelerometer_participation * nonlinear_mode_response(
-        tau, table, setup.omega0_rad_s, settings.zeta0, phi_h * peak, duration
-    )
+    phi_a = sensor_gain * mode.accelerometer_participation
+    acc = phi_a * mode_response(tau, phi_h * peak, duration)
     for m in mode.higher_modes:
         _, _, q = half_sine_response(
             tau,
-            2 * np.pi * m.frequency_hz,
+            2 * np.pi * m.frequency_hz * run.frequency_factor,
             settings.higher_mode_zeta,
             m.hammer_participation * peak,
             duration,
@@ -419,11 +766,15 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
         acc += m.accelerometer_participation * q
     if second_mode_ratio:
         _, _, q = half_sine_response(
-            tau, SECOND_MODE_FREQUENCY_RATIO * setup.omega0_rad_s, settings.zeta0, phi_h * peak, duration
+            tau,
+            SECOND_MODE_FREQUENCY_RATIO * setup.omega0_rad_s * run.frequency_factor,
+            run.zeta0,
+            phi_h * peak,
+            duration,
         )
         # An extra (e.g. torsional) mode that the beam model lacks: excited like
         # mode 1, seen at the accelerometer with the chosen relative amplitude.
-        acc += second_mode_ratio * mode.accelerometer_participation * q
+        acc += second_mode_ratio * phi_a * q
     # rigid-body bounce and pitch on the suspension
     geo = settings.joint.geometry
     lever_acc = geo.accelerometer_x_in - mode.centre_of_mass_in
@@ -434,12 +785,47 @@ def simulate_run(setup: JointSetup, table: ModeTable, settings: LabSettings, rng
     ):
         _, _, q = half_sine_response(tau, 2 * np.pi * f_hz, settings.suspension_zeta, gain * peak, duration)
         acc += q
-    acc_g = acc / specimen.G_IN_S2 + settings.acceleration_noise_g * rng.standard_normal(n)
+    acc_g = acc / specimen.G_IN_S2 + settings.acceleration_noise_g * noise_rng.standard_normal(n)
     sl = slice(trigger - PRETRIGGER_SAMPLES, trigger - PRETRIGGER_SAMPLES + settings.samples_per_run)
     force_q = quantise(force[sl], FORCE_RANGE_LBF)
     acc_q = quantise(acc_g[sl], ACCELERATION_RANGE_G)
     facts = {"peak_force_lbf": peak, "pulse_duration_s": duration}
     return np.arange(settings.samples_per_run) * dt, force_q, acc_q, facts
+
+
+def averaged_mode_response(setup: JointSetup, table: ModeTable, run: RunPhysics) -> ModeResponse:
+    """Mode 1 from the run's averaged table (slow flow)."""
+    omega0 = setup.omega0_rad_s * run.frequency_factor
+
+    def response(tau, modal_peak, duration):
+        return nonlinear_mode_response(tau, table, omega0, run.zeta0, modal_peak, duration)
+
+    return response
+
+
+def time_domain_mode_response(setup: JointSetup, joint: str, coulomb: float, run: RunPhysics) -> ModeResponse:
+    """Mode 1 with the run's joint (``patches`` or ``dahl`` with friction limit
+    ``coulomb``) integrated in time."""
+    omega0 = setup.omega0_rad_s * run.frequency_factor
+    patches = setup.joint_modes.patches
+
+    def response(tau, modal_peak, duration):
+        if joint == "patches":
+            return patch_mode_response_time_domain(
+                tau,
+                setup.joint_modes.slip_per_xi,
+                patches.stiffness_lbf_in,
+                patches.slip_force_lbf * run.slip_force_factor,
+                omega0,
+                run.zeta0,
+                modal_peak,
+                duration,
+            )
+        return dahl_mode_response_time_domain(
+            tau, setup.dahl_sigma, coulomb, omega0, run.zeta0, modal_peak, duration
+        )
+
+    return response
 
 
 def format_run(time_s, force_lbf, acceleration_g) -> str:
@@ -490,7 +876,11 @@ def generate_campaign(
     effect=None,
     effect_size=None,
     configurations=None,
-    samples_per_run=N_SAMPLES,
+    samples_per_run=None,
+    settings: LabSettings | None = None,
+    integrator="averaged",
+    sensor_gain=1.0,
+    noise_stream=0,
 ) -> dict:
     """Write a simulated campaign folder and its truth; return the truth dict.
 
@@ -512,8 +902,23 @@ def generate_campaign(
     configurations : dict, optional
         Name -> bearing area in^2 (or None for a campaign without areas);
         default the paper's three.
-    samples_per_run : int
-        Samples per record (default 8192, as the paper's analyser).
+    samples_per_run : int, optional
+        Samples per record; overrides ``settings.samples_per_run`` (default 8192, as the
+        paper's analyser).
+    settings : LabSettings, optional
+        Instrument, specimen and run-to-run variability (default ``LabSettings()``:
+        variability on; ``frequency_spread=0, damping_spread=0, slip_force_spread=0``
+        makes every run of a configuration the same beam).
+    integrator : {"averaged", "time_domain"}
+        ``averaged``: mode 1 from the slow-flow tables (any joint and effect);
+        ``time_domain``: the joint's equation of motion integrated in time (patches or
+        Dahl; effects in ``TIME_DOMAIN_EFFECTS``; about 1 s per patch-joint run).
+    sensor_gain : float
+        Mode 1 as seen by another sensor, relative to the accelerometer's mode shape
+        (see :func:`generate_sensor_campaigns`).
+    noise_stream : int
+        Index of the accelerometer-noise stream: with the same ``seed``, campaigns with
+        different streams share the physics and the hammer and differ only in sensor noise.
     """
     if joint not in ("patches", "dahl"):
         raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")
@@ -523,12 +928,23 @@ def generate_campaign(
         )
     if effect is not None and joint != "dahl":
         raise ValueError("an added effect departs from the Dahl baseline: pass joint='dahl'")
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
+    if integrator == "time_domain" and effect not in TIME_DOMAIN_EFFECTS:
+        raise ValueError(
+            "the time-domain path integrates the patch or Dahl joint with linear modal damping: "
+            f"it takes effect in {TIME_DOMAIN_EFFECTS}, got {effect!r}"
+        )
+    if not sensor_gain > 0:
+        raise ValueError(f"sensor_gain must be positive, got {sensor_gain!r}")
     if effect is not None and effect_size is None:
         effect_size = DEFAULT_EFFECT_SIZES[effect]
     if runs_per_configuration < 1:
         raise ValueError("runs_per_configuration must be at least 1")
     configurations = dict(PAPER_CONFIGURATIONS if configurations is None else configurations)
-    settings = LabSettings(samples_per_run=samples_per_run)
+    settings = settings if settings is not None else LabSettings()
+    if samples_per_run is not None:
+        settings = replace(settings, samples_per_run=samples_per_run)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     root_seq = np.random.SeedSequence(seed)
@@ -544,6 +960,9 @@ def generate_campaign(
         "effect_size_meaning": EFFECT_SIZE_MEANING.get(effect),
         "reference_velocity_in_s": REFERENCE_VELOCITY_IN_S,
         "expected_cause": cause,
+        "integrator": integrator,
+        "sensor_gain": sensor_gain,
+        "noise_stream": noise_stream,
         "lab_settings": {k: v for k, v in asdict(settings).items() if k != "joint"},
         "joint_parameters": {k: v for k, v in asdict(settings.joint).items() if k != "geometry"},
         "preload_lbf": settings.joint.preload_lbf,
@@ -552,9 +971,8 @@ def generate_campaign(
         "configurations": {},
     }
     setups = {}
-    for (cname, area), _child in zip(configurations.items(), children):
-        setup, curves = setup_configuration(cname, area, settings)
-        setups[cname] = (setup, curves)
+    for cname, area in configurations.items():
+        setups[cname] = setup_configuration(cname, area, settings)
     mode_hz = float(np.mean([s.mode.frequency_hz for s, _ in setups.values()]))
     (out / "campaign.yaml").write_text(
         _campaign_yaml(f"virtual-lab-{joint}-{effect or 'baseline'}-{seed}", configurations, round(mode_hz))
@@ -564,9 +982,12 @@ def generate_campaign(
         folder.mkdir(exist_ok=True)
         for stale in folder.glob("run*.txt"):
             stale.unlink()
-        rng = np.random.default_rng(child)
+        hammer_seq, noise_seq, variability_seq = child.spawn(3)
+        rng = np.random.default_rng(hammer_seq)
+        noise_rng = np.random.default_rng(noise_seq.spawn(noise_stream + 1)[noise_stream])
+        runs = draw_run_physics(settings, np.random.default_rng(variability_seq), runs_per_configuration)
         base_table = mode_table(setup, curves, settings, joint, effect, effect_size)
-        zeta, fd = truth_curves(setup, base_table, velocity)
+        zeta, fd = truth_curves(setup, base_table, velocity / sensor_gain)
         mode = setup.mode
         entry = {
             "bearing_area_in2": setup.bearing_area_in2,
@@ -582,24 +1003,61 @@ def generate_campaign(
             "damped_frequency_hz": fd.tolist(),
             "runs": [],
         }
-        for i in range(runs_per_configuration):
+        for i, run in enumerate(runs):
             fraction = i / (runs_per_configuration - 1) if runs_per_configuration > 1 else 0.0
-            table = base_table
-            if effect == "run_drift":
-                table = mode_table(setup, curves, settings, joint, effect, effect_size, fraction)
+            table = mode_table(setup, curves, settings, joint, effect, effect_size, fraction, run)
+            coulomb = run_dahl_coulomb(setup, effect, effect_size, fraction, run.slip_force_factor)
+            if integrator == "time_domain":
+                response = time_domain_mode_response(setup, joint, coulomb, run)
+            else:
+                response = averaged_mode_response(setup, table, run)
             ratio = effect_size if effect == "second_mode" else 0.0
-            t, f, acc, facts = simulate_run(setup, table, settings, rng, ratio)
+            t, f, acc, facts = simulate_run(
+                setup, response, settings, rng, ratio, run=run, noise_rng=noise_rng, sensor_gain=sensor_gain
+            )
             name = run_name(i)
             (folder / f"{name}.txt").write_text(format_run(t, f, acc))
-            run_entry = {"run": name, **facts}
-            if effect == "run_drift":
-                z_run, f_run = truth_curves(setup, table, velocity)
-                run_entry.update(
-                    zeta=z_run.tolist(),
-                    damped_frequency_hz=f_run.tolist(),
-                    dahl_coulomb_modal=setup.dahl_coulomb * (1 - effect_size * fraction),
-                )
-            entry["runs"].append(run_entry)
+            z_run, f_run = truth_curves(setup, table, velocity / sensor_gain)
+            entry["runs"].append(
+                {
+                    "run": name,
+                    **facts,
+                    **asdict(run),
+                    "linear_frequency_hz": mode.frequency_hz * run.frequency_factor,
+                    "dahl_coulomb_modal": coulomb,
+                    "zeta": z_run.tolist(),
+                    "damped_frequency_hz": f_run.tolist(),
+                }
+            )
         truth["configurations"][cname] = entry
     truth_path(out).write_text(json.dumps(truth, indent=1))
     return truth
+
+
+def generate_sensor_campaigns(out_root, sensor_gains: Mapping[str, float], **campaign_options) -> dict:
+    """The same campaign as seen by several sensors: one campaign folder per sensor.
+
+    Every campaign has the same physics, hammer hits and run-to-run variations (same
+    ``seed``); mode 1's response is scaled by the sensor's mode-shape ratio to the
+    accelerometer, and each sensor has its own independent noise.
+
+    Parameters
+    ----------
+    out_root : path
+        Folder that receives ``<sensor name>/`` campaign folders (truth beside each).
+    sensor_gains : mapping of str to float
+        Sensor name -> mode-1 amplitude relative to the accelerometer (``phi(x) /
+        phi(x_accelerometer)``, positive; e.g. ``{"accelerometer": 1.0, "mid": 0.6}``).
+    **campaign_options
+        Passed to :func:`generate_campaign` (seed, joint, effect, configurations ...).
+
+    Returns
+    -------
+    dict
+        Sensor name -> truth dict of its campaign.
+    """
+    root = Path(out_root)
+    return {
+        name: generate_campaign(root / name, sensor_gain=gain, noise_stream=index, **campaign_options)
+        for index, (name, gain) in enumerate(sensor_gains.items())
+    }

@@ -1,1 +1,0 @@
-"""Studies over many virtual-lab campaigns, shared by tests and benchmarks."""
