@@ -2,7 +2,6 @@
 and every malformed case of campaign-format.md."""
 
 import os
-import time
 from pathlib import Path
 
 import numpy as np
@@ -562,16 +561,13 @@ if not REALDATA.is_dir():
 
 
 @pytest.mark.skipif(not (REALDATA / "pff-lms-sample").is_dir(), reason="real data not present")
-def test_real_pff_record_reads_fast():
+def test_real_pff_record_reads():
+    """The real PFF record (its read time is a benchmark: bench/bench_readers.py)."""
     folder = REALDATA / "pff-lms-sample"
     campaign = load_campaign(folder)
     runs = list_runs(folder, campaign)
     assert [run.run for run in runs] == ["run01"]
-    read_run(folder, runs[0], campaign)  # warm caches
-    start = time.perf_counter()
     record = read_run(folder, runs[0], campaign)
-    elapsed_s = time.perf_counter() - start
-    assert elapsed_s < 0.5
     assert record.n_samples == 131072 and record.sample_rate_hz == 51200.0
     assert record.response_unit == "m/s^2" and record.force_lbf is None
     assert record.time_s[-1] == pytest.approx(2.5599805)
