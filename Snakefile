@@ -37,7 +37,7 @@ onsuccess:
     # so that a reader sees the verdict and the excluded runs without scrolling.
     summary = Path("results/summary.txt")
     if summary.exists() and (not workflow.dag_settings.targets or "all" in workflow.dag_settings.targets):
-        print("\n" + summary.read_text(), end="", file=sys.stderr)
+        print(f"\n{summary.read_text()}", end="", file=sys.stderr)
 
 
 rule measured:

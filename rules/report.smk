@@ -123,6 +123,8 @@ rule run_summary:
         "results/logs/run_summary.log",
     benchmark:
         "results/benchmarks/run_summary.tsv"
+    conda:
+        LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,

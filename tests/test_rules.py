@@ -78,3 +78,9 @@ def test_the_binding_check_tells_a_binding_from_a_use(line, binds):
 @pytest.mark.parametrize("path", sorted((REPO / "scripts").glob("*.py")), ids=lambda path: path.name)
 def test_scripts_reach_the_installed_library_without_path_edits(path):
     assert "sys.path" not in path.read_text()
+
+
+@pytest.mark.parametrize("name", sorted(RULES))
+def test_rule_names_its_software(name):
+    """snakemake --lint asks every rule for its software: the project's one environment."""
+    assert re.search(r"^\s+conda:\n\s+LAPJOINT_ENV$", RULES[name], flags=re.M), name
