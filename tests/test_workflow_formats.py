@@ -3,6 +3,7 @@ TDMS and ASCII files: the same tables as the same samples in ASCII, and a damage
 excluded with its reason while the others complete."""
 
 import functools
+import shutil
 
 import numpy as np
 import pandas as pd
@@ -62,7 +63,8 @@ REALDATA = REPO.parent / "shared" / "realdata"
 def test_real_plain_mat_gives_the_segments_of_the_converted_campaign(tmp_path):
     campaign = tmp_path / "campaign"
     (campaign / "decay").mkdir(parents=True)
-    (campaign / "decay" / "run01.mat").symlink_to(REALDATA / "raw" / "pff_Sample_LMS_Data.mat")
+    # a copy: a link leading outside the campaign is not read (docs/input-safety.md)
+    shutil.copyfile(REALDATA / "raw" / "pff_Sample_LMS_Data.mat", campaign / "decay" / "run01.mat")
     converted_yaml = (REALDATA / "pff-lms-sample" / "campaign.yaml").read_text()
     (campaign / "campaign.yaml").write_text(
         converted_yaml.replace("unit: m/s^2}", "unit: m/s^2, channel: x}").replace("*.txt", "*.mat")
