@@ -318,15 +318,23 @@ def damping_vs_amplitude(
             fitted[name] = frame
         for name, frame in fitted.items():
             notes.append(damping_misfit(segments, frame, name))
-        if segments.empty:
-            axis.text(0.5, 0.5, "no usable segment", ha="center", va="center", transform=axis.transAxes)
-        amplitude_axis(axis)
-        axis.set_ylabel(DAMPING_LABEL)
-        axis.set_title(title)
-        legend_beside(axis)
-        figure.tight_layout()
-        add_note(figure, [note for note in notes if note])
+        _finish_amplitude_panel(figure, axis, segments, DAMPING_LABEL, title, notes)
     return figure
+
+
+def _finish_amplitude_panel(
+    figure, axis, segments: pd.DataFrame, ylabel: str, title: str, notes: list
+) -> None:
+    """Axes, labels, legend and notes of a curve against velocity amplitude; a note on the
+    panel itself when no segment was usable."""
+    if segments.empty:
+        axis.text(0.5, 0.5, "no usable segment", ha="center", va="center", transform=axis.transAxes)
+    amplitude_axis(axis)
+    axis.set_ylabel(ylabel)
+    axis.set_title(title)
+    legend_beside(axis)
+    figure.tight_layout()
+    add_note(figure, [note for note in notes if note])
 
 
 def damping_misfit(segments: pd.DataFrame, frame: pd.DataFrame, name: str) -> str | None:
@@ -363,14 +371,7 @@ def frequency_vs_amplitude(
                 frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, linewidth=2.0, label=name
             )
             notes.append(frequency_misfit(segments, frame, name))
-        if segments.empty:
-            axis.text(0.5, 0.5, "no usable segment", ha="center", va="center", transform=axis.transAxes)
-        amplitude_axis(axis)
-        axis.set_ylabel(FREQUENCY_LABEL)
-        axis.set_title(title)
-        legend_beside(axis)
-        figure.tight_layout()
-        add_note(figure, [note for note in notes if note])
+        _finish_amplitude_panel(figure, axis, segments, FREQUENCY_LABEL, title, notes)
     return figure
 
 
