@@ -218,6 +218,46 @@ def test_run_order_trend():
     assert not disc.run_order_trend(data, res, n_tests=10)["significant"]
 
 
+def test_heldout_standard_error_of_equal_runs_is_zero_and_grows_with_their_spread():
+    weights = np.full(6, 2.0)
+    assert disc.heldout_standard_error(np.full(6, 0.5), weights) == pytest.approx(0.0, abs=1e-15)
+    spread = np.array([0.4, 0.6, 0.4, 0.6, 0.4, 0.6])
+    # equal weights: the standard error of the mean of the runs' squares over their weight
+    expected = np.std(spread / 2.0, ddof=1) / np.sqrt(6)
+    assert disc.heldout_standard_error(spread, weights) == pytest.approx(expected, rel=1e-12)
+    assert disc.heldout_standard_error(spread[:1], weights[:1]) == 0.0
+
+
+def test_run_order_trend_sees_a_joint_change_through_random_linear_damping():
+    """Runs' linear damping spread at random (8 %, more than the trend's step) hides a
+    drift of the joint's damping at high amplitude in the runs' plain mean residuals; with
+    each run's offset set by its own lowest-amplitude segments the drift stands out, and
+    random spread alone stays insignificant."""
+    rng = np.random.default_rng(3)
+    n_runs = 8
+    v = np.tile(np.geomspace(0.05, 3, 60), n_runs)
+    run = np.repeat(np.arange(n_runs), 60)
+    zeta_model = 1e-3 * (1 + 2 * v / 3)  # linear damping below, friction above
+    linear_offset = 0.08 * rng.standard_normal(n_runs)[run] * 1e-3 / zeta_model
+    joint_change = 0.02 * (run - 3.5) * (v > 0.5)
+    data = disc.ConfigurationData(
+        "c", v, zeta_model, np.full(v.size, 100.0), run, [f"r{i}" for i in range(n_runs)], None
+    )
+    calibration = disc.calibration_segments(v, run, np.arange(n_runs))
+    for drift, significant in ((joint_change, True), (0.0 * joint_change, False)):
+        ln_zeta = linear_offset + drift + 0.005 * rng.standard_normal(v.size)
+        plain = disc.run_order_trend(data, {"ln_zeta": ln_zeta}, n_tests=2)
+        rel_f, s = np.zeros(v.size), np.full(v.size, 0.005)
+        offsets = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, run, n_runs, calibration)
+        own = disc.apply_run_offsets(rel_f, ln_zeta, zeta_model, *offsets, run)[1]
+        calibrated = disc.run_order_trend(
+            data, {"ln_zeta": ln_zeta, "ln_zeta_calibrated": own, "calibration": calibration}, n_tests=2
+        )
+        assert calibrated["significant"] is significant
+        if significant:
+            assert not plain["significant"]
+
+
 def _cand(err, bic, sig=False):
     return {"heldout_error": err, "bic": bic, "residual_significant": sig}
 
@@ -229,8 +269,19 @@ def test_decision_rule_branches():
     assert disc.decide(1.0, 0.0, True, {"a": _cand(0.9, 5)})[0] == "unknown"
     assert disc.decide(1.0, 0.0, True, {"a": _cand(0.9, -5, sig=True)})[0] == "unknown"
     assert disc.decide(1.0, 0.0, True, {"a": _cand(0.5, -5, sig=True)})[0] == "a"
-    # near-tie on held-out error: lower BIC wins
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.50, -5), "b": _cand(0.505, -30)})[0] == "b"
+    # without per-run evidence only equal held-out errors tie: the lower error wins
+    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.50, -5), "b": _cand(0.505, -30)})[0] == "a"
+    # with it, b's squared error lies within one standard error of a's: the lower BIC wins
+    runs = np.array([0.20, 0.30, 0.25, 0.23, 0.27])  # a's weighted squares per run, mean 0.25
+    weights = np.ones(runs.size)
+    squares = {"a": runs, "b": runs + 0.005}
+    se = disc.heldout_standard_error(runs, weights)
+    assert 0.005 < se
+    near = {"a": _cand(0.50, -5), "b": _cand(np.sqrt(0.255), -30)}
+    assert disc.decide(1.0, 0.0, True, near, unit_squares=squares, unit_weights=weights)[0] == "b"
+    far = {"a": _cand(0.50, -5), "b": _cand(np.sqrt(0.25 + 2 * se), -30)}
+    squares["b"] = runs + 2 * se
+    assert disc.decide(1.0, 0.0, True, far, unit_squares=squares, unit_weights=weights)[0] == "a"
     assert disc.decide(1.0, 0.0, True, {"a": _cand(0.3, -5)}, envelope_structure=True)[0] == "unknown"
 
 

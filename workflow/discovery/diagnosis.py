@@ -68,6 +68,8 @@ __all__ = [
     "amplitude_bin",
     "run_offsets",
     "calibration_segments",
+    "heldout_standard_error",
+    "heldout_units",
 ]
 
 CAUSE_MODELS: dict[str, str] = {
@@ -91,7 +93,13 @@ TOL_REL_F = 1.0e-4
 1e-5 away from the transition, 3.6e-4 at its steepest point)."""
 
 ALPHA = 0.01
-"""Familywise false-alarm probability of the discrepancy tests."""
+"""Familywise false-alarm probability of the discrepancy tests: half of it is shared by
+the amplitude bins (Bonferroni over bins and curves), half goes to the run-order test."""
+
+RUN_ORDER_TESTS = 2
+"""The run-order test is significant at ``p < ALPHA / RUN_ORDER_TESTS``: it is one
+question on its own axis (run order, not amplitude), so it is not diluted by the number
+of amplitude bins."""
 
 CLEAR_GAIN = 0.7
 """Without a significant baseline misfit, a candidate is named only when its held-out
@@ -689,8 +697,11 @@ def model_residuals(
     Returns ``ln_zeta`` (``ln zeta - ln zeta_model``), ``rel_f`` (``f / f_model - 1``),
     their normalised versions ``z_norm``, ``f_norm`` (total uncertainty) and
     ``z_noise``, ``f_noise`` (scatter alone), the model curves with each run's offsets
-    (``zeta_model``, ``f_model``), the offsets ``delta_f``, ``delta_zeta0`` per run, and
-    ``ln_zeta_shared``, the damping residual of the shared model before the offsets.
+    (``zeta_model``, ``f_model``), the offsets ``delta_f``, ``delta_zeta0`` per run,
+    ``ln_zeta_shared``, the damping residual of the shared model before the offsets, and
+    ``ln_zeta_calibrated``, the damping residual with each run's offsets set by its own
+    lowest-amplitude segments (``calibration``, :func:`calibration_segments`) as a
+    held-out run's are.
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
@@ -700,7 +711,14 @@ def model_residuals(
     n_runs = max(data.n_runs, 1)
     delta_f, delta_z = np.zeros(n_runs), np.zeros(n_runs)
     ln_shared = ln_res
+    calibration = np.zeros(data.n, dtype=bool)
+    ln_calibrated = ln_res
     if data.n_runs >= 2:
+        calibration = calibration_segments(data.velocity_in_s, data.run_index, np.arange(n_runs))
+        own = run_offsets(
+            f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, data.run_index, n_runs, calibration
+        )
+        ln_calibrated = apply_run_offsets(f_res, ln_res, zeta, *own, data.run_index)[1]
         offsets = run_offsets if offsets_from is not None else centred_run_offsets
         delta_f, delta_z = offsets(
             f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, data.run_index, n_runs, offsets_from
@@ -720,6 +738,8 @@ def model_residuals(
         "delta_f": delta_f,
         "delta_zeta0": delta_z,
         "ln_zeta_shared": ln_shared,
+        "ln_zeta_calibrated": ln_calibrated,
+        "calibration": calibration,
     }
 
 
@@ -890,8 +910,8 @@ def binned_discrepancy(
     observation; the mean over runs, its standard error over runs and a t test
     (``n_runs - 1`` degrees of freedom) follow. With one run, the segments are the
     observations and the standard error uses their AR(1) effective number. A bin
-    counts as a real misfit when ``p < alpha / n_tests`` (Bonferroni over all bins
-    and both curves) and ``|mean|`` exceeds the model accuracy (``TOL_LN_ZETA`` or
+    counts as a real misfit when ``p < alpha / (2 n_tests)`` (Bonferroni over all bins
+    and both curves with half of ``alpha``; the run-order test has the other half) and ``|mean|`` exceeds the model accuracy (``TOL_LN_ZETA`` or
     ``TOL_REL_F``).
 
     Returns
@@ -942,7 +962,7 @@ def binned_discrepancy(
                     "significant": False,
                 }
             )
-    n_tests = max(len(rows), 1) + 1
+    n_tests = 2 * max(len(rows), 1)  # the other half of alpha goes to the run-order test
     for row in rows:
         row["significant"] = bool(row["p"] < alpha / n_tests and abs(row["mean"]) > row["tolerance"])
     return rows
@@ -956,15 +976,23 @@ def run_order_trend(
     alpha: float = ALPHA,
     run_position: np.ndarray | None = None,
 ) -> dict | None:
-    """Linear trend of the runs' mean damping residual with run order.
+    """Linear trend of the runs' damping residual with run order.
 
-    The residuals are those of the shared model (``ln_zeta_shared`` when present, i.e.
-    before each run's own offsets, which would absorb a trend): a random spread between
-    runs only widens the scatter of the runs' means, which the t test counts, while a
-    steady change with run order tilts them.
+    Each run's residual is the shared model's, with the run's own frequency and linear
+    damping set by its lowest-amplitude segments (``ln_zeta_calibrated`` and
+    ``calibration`` when present, as for a held-out run; else ``ln_zeta_shared``, else
+    ``ln_zeta``), averaged over its other segments with every quarter decade of
+    amplitude weighted equally (:func:`amplitude_weights`). The calibration takes out
+    the random spread of the runs' linear damping, which would otherwise hide a change of
+    the joint where it acts, at the amplitudes it slips; what random spread is left only
+    widens the scatter of the runs' means, which the t test counts, while a steady change
+    with run order tilts them. Offsets fitted to all of a run's segments would absorb a
+    trend.
 
     Parameters
     ----------
+    n_tests : int
+        The test is significant at ``p < alpha / n_tests``.
     run_position : ndarray, optional
         Position in run order of each of the ``data.n_runs`` runs (default ``0 .. n-1``;
         a resample of runs passes the drawn runs' positions).
@@ -977,9 +1005,12 @@ def run_order_trend(
     x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
     if data.n_runs < 4 or np.unique(x).size < 3:
         return None
-    r = residuals.get("ln_zeta_shared", residuals["ln_zeta"])
-    counts = np.bincount(data.run_index, minlength=data.n_runs)
-    means = np.bincount(data.run_index, weights=r, minlength=data.n_runs) / np.maximum(counts, 1)
+    r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
+    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
+    if "calibration" in residuals:
+        w = w * ~residuals["calibration"]
+    counts = np.bincount(data.run_index, weights=w, minlength=data.n_runs)
+    means = np.bincount(data.run_index, weights=w * r, minlength=data.n_runs) / np.maximum(counts, 1e-300)
     keep = counts > 0
     x, y = x[keep], means[keep]
     dx = x - x.mean()
@@ -1111,12 +1142,41 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
 
 
 # ------------------------------------------------------------------ decision
+def heldout_units(data: ConfigurationData) -> np.ndarray:
+    """Independent unit of held-out evidence of each segment: its run, or with one run its
+    half decade of amplitude (counted from the anchor, as the discrepancy bins)."""
+    if data.n_runs >= 2:
+        return data.run_index
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
+    return code - code.min()
+
+
+def heldout_standard_error(unit_squares: np.ndarray, unit_weights: np.ndarray) -> float:
+    """Standard error of a model's squared held-out error over the units of evidence.
+
+    ``E^2 = sum_u S_u / sum_u W_u`` over the units ``u`` (runs), ``S_u`` the unit's
+    weighted squared held-out residuals and ``W_u`` its weight. The units are taken as
+    independent draws, so ``E^2`` is a ratio estimator whose variance, to first order,
+    is ``n / (n - 1) sum_u (S_u - E^2 W_u)^2 / W^2``; 0 with fewer than two units.
+    """
+    present = unit_weights > 0
+    squares, weights = unit_squares[present], unit_weights[present]
+    total = float(np.sum(weights))
+    if squares.size < 2 or total <= 0:
+        return 0.0
+    mean = float(np.sum(squares) / total)
+    variance = squares.size / (squares.size - 1) * float(np.sum((squares - mean * weights) ** 2)) / total**2
+    return float(np.sqrt(variance))
+
+
 def decide(
     baseline_error: float,
     baseline_bic: float,
     baseline_fails: bool,
     candidates: Mapping[str, dict],
     envelope_structure: bool = False,
+    unit_squares: Mapping[str, np.ndarray] | None = None,
+    unit_weights: np.ndarray | None = None,
 ) -> tuple[str, str]:
     """The decision rule.
 
@@ -1131,6 +1191,11 @@ def decide(
 
     envelope_structure : bool
         Whether the ring-downs are not single-mode decays (:func:`envelope_structure`).
+    unit_squares, unit_weights : optional
+        Per candidate, its held-out weighted squared residuals summed over each
+        independent unit of evidence (a run; with one run, a half decade of amplitude,
+        :func:`heldout_units`), and the units' weights: they give the standard error of
+        the best candidate's held-out error. Without them only equal errors tie.
 
     Returns
     -------
@@ -1145,8 +1210,12 @@ def decide(
       its BIC is below the baseline's.
     * ``none`` when the baseline has no significant misfit and no eligible candidate
       cuts the held-out error below ``CLEAR_GAIN`` x the baseline's.
-    * Otherwise the best eligible candidate by held-out error (within 2 % of each
-      other: lower BIC). ``unknown`` when no candidate is eligible, or when the best
+    * Otherwise the best eligible candidate by held-out error; candidates whose squared
+      held-out error is within one standard error of the best's (the one-standard-error
+      rule of cross-validation, :func:`heldout_standard_error`) predict as well as far
+      as the data can tell, and the one with the lowest BIC (fewest parameters for the
+      same fit) is taken. ``unknown`` when no
+      candidate is eligible, or when the best
       leaves a significant misfit and does not cut the held-out error below
       ``RESIDUAL_GAIN`` x the baseline's.
     """
@@ -1170,8 +1239,11 @@ def decide(
         return "unknown", (
             "the baseline misfit is significant but no candidate lowers both the held-out error and the BIC"
         )
-    best_err = min(v["heldout_error"] for v in eligible.values())
-    near = {c: v for c, v in eligible.items() if v["heldout_error"] <= 1.02 * best_err}
+    leader = min(eligible, key=lambda c: eligible[c]["heldout_error"])
+    reach = eligible[leader]["heldout_error"] ** 2
+    if unit_squares is not None and unit_weights is not None:
+        reach += heldout_standard_error(unit_squares[leader], unit_weights)
+    near = {c: v for c, v in eligible.items() if v["heldout_error"] ** 2 <= reach}
     best = min(near, key=lambda c: near[c]["bic"])
     v = eligible[best]
     if v["residual_significant"] and v["heldout_error"] >= RESIDUAL_GAIN * baseline_error:
@@ -1354,10 +1426,16 @@ def evaluate_decision(
     n_runs_view = view.n_runs
     weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s)
     n_eff = effective_observations(view)
-    errors, bic, residuals = {}, {}, {}
+    units = heldout_units(view)
+    n_units = int(units.max()) + 1 if units.size else 0
+    errors, bic, residuals, unit_squares = {}, {}, {}, {}
+    unit_weights = None
     for m, ev in evidence.items():
         scored = ev.heldout["scored"][segments]
         square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])[segments]
+        unit_squares[m] = np.bincount(units[scored], weights=(weights * square)[scored], minlength=n_units)
+        if unit_weights is None:
+            unit_weights = np.bincount(units[scored], weights=weights[scored], minlength=n_units)
         errors[m] = {
             "error": _weighted_rms(square[scored], weights[scored]),
             "error_zeta": _weighted_rms(ev.heldout["squared_zeta"][segments][scored], weights[scored]),
@@ -1366,7 +1444,16 @@ def evaluate_decision(
             ),
         }
         res = {
-            k: ev.residuals[k][segments] for k in ("ln_zeta", "rel_f", "ln_zeta_shared", "z_noise", "f_noise")
+            k: ev.residuals[k][segments]
+            for k in (
+                "ln_zeta",
+                "rel_f",
+                "ln_zeta_shared",
+                "ln_zeta_calibrated",
+                "calibration",
+                "z_noise",
+                "f_noise",
+            )
         }
         residuals[m] = res
         in_sample = _weighted_rms(0.5 * (res["z_noise"] ** 2 + res["f_noise"] ** 2), weights) ** 2
@@ -1374,7 +1461,7 @@ def evaluate_decision(
         bic[m] = information_criterion(in_sample, ev.n_params + offsets, n_eff)
     base = min((m for m in BASELINE_MODELS if m in evidence), key=lambda m: errors[m]["error"])
     bins = binned_discrepancy(view, residuals[base])
-    trend = run_order_trend(view, residuals[base], n_tests=len(bins) + 1, run_position=run_position)
+    trend = run_order_trend(view, residuals[base], n_tests=RUN_ORDER_TESTS, run_position=run_position)
     baseline_fails = (
         any(b["significant"] for b in bins) or bool(trend and trend["significant"]) or envelope_significant
     )
@@ -1383,7 +1470,7 @@ def evaluate_decision(
         if m not in evidence:
             continue
         cb = binned_discrepancy(view, residuals[m])
-        ct = run_order_trend(view, residuals[m], n_tests=len(cb) + 1, run_position=run_position)
+        ct = run_order_trend(view, residuals[m], n_tests=RUN_ORDER_TESTS, run_position=run_position)
         candidates[cause] = {
             "model": m,
             "heldout_error": errors[m]["error"],
@@ -1398,7 +1485,13 @@ def evaluate_decision(
             "significant_bins": int(sum(b["significant"] for b in cb)),
         }
     cause, reason = decide(
-        errors[base]["error"], bic[base], baseline_fails, candidates, envelope_structure=envelope_significant
+        errors[base]["error"],
+        bic[base],
+        baseline_fails,
+        candidates,
+        envelope_structure=envelope_significant,
+        unit_squares={c: unit_squares[v["model"]] for c, v in candidates.items()},
+        unit_weights=unit_weights,
     )
     return {
         "cause": cause,
