@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from workflow.discovery.diagnosis import diagnose_campaign
@@ -49,3 +50,42 @@ def test_hidden_effect_is_named(cause, tmp_path):
     }
     scores = [row["score"] for row in configuration["ranking"]]
     assert scores == sorted(scores)
+
+
+SENSOR_GAIN = 0.7
+"""Mode-1 amplitude of the second sensor relative to the accelerometer's: its records are
+3 dB lower against the same noise floor. Much lower and an effect that sits a few
+scatters above the noise at the first sensor may fall into the second one's noise (at
+0.4, 8 dB, the quadratic-damping case of the base seed is called ``none`` with
+confidence 0.99): a detection limit, not a contradiction (docs/discovery.md)."""
+
+
+QUADRATIC_SENSOR_LIMIT = pytest.mark.xfail(
+    strict=True,
+    reason="issue 14: the base seed's quadratic damping (0.0047 at 0.56 in^2) is a knife-edge "
+    "verdict: at the accelerometer quadratic_damping with confidence 0.75 (gain ratio 0.55-0.68 "
+    "over three noise streams, one called with confidence 0.46 against none 0.49); the 3 dB "
+    "weaker sensor calls it none (0.94)",
+)
+
+
+@pytest.mark.parametrize(
+    "cause",
+    [pytest.param(c, marks=QUADRATIC_SENSOR_LIMIT) if c == "quadratic_damping" else c for c in CASES],
+)
+def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
+    """The same ring-downs recorded by a second sensor (amplitudes scaled by the mode
+    shape, its own noise), through the whole measured chain: the same cause, and each
+    sensor's gain ratio inside the 5-95 % range of the other's 100 resampled ratios,
+    widened by 0.05 (the Monte Carlo error of those quantiles is a few hundredths)."""
+    verdicts = []
+    for noise_stream, gain in enumerate((1.0, SENSOR_GAIN)):
+        _, out = generate_case(cause, BASE_SEED, tmp_path, sensor_gain=gain, noise_stream=noise_stream)
+        document, details = diagnose_campaign(campaign_segments(out), out.name, return_details=True)
+        ratios = [r["ratio"] for r in details["joint"].resamples]
+        verdicts.append((document["configurations"]["joint"], np.quantile(ratios, [0.05, 0.95])))
+    (a, band_a), (b, band_b) = verdicts
+    assert a["cause"] == b["cause"] == cause, (a["confidence"], b["confidence"])
+    margin = 0.05
+    assert band_a[0] - margin <= b["gain"]["ratio"] <= band_a[1] + margin, (a["gain"], b["gain"], band_a)
+    assert band_b[0] - margin <= a["gain"]["ratio"] <= band_b[1] + margin, (a["gain"], b["gain"], band_b)

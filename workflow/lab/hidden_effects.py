@@ -104,14 +104,19 @@ def generate_case(
     *,
     settings: LabSettings | None = None,
     integrator: str = "averaged",
+    sensor_gain: float = 1.0,
+    noise_stream: int = 0,
 ) -> tuple[dict, Path]:
     """Generate one hidden-effect campaign in ``work_dir``; (drawn case, campaign folder).
 
-    ``settings`` (default ``LabSettings()``, run-to-run variability on) and ``integrator``
-    are passed to :func:`workflow.lab.virtual_lab.generate_campaign`.
+    ``settings`` (default ``LabSettings()``, run-to-run variability on), ``integrator``,
+    ``sensor_gain`` (mode-1 amplitude at the sensor relative to the accelerometer's) and
+    ``noise_stream`` (the sensor's own noise) are passed to
+    :func:`workflow.lab.virtual_lab.generate_campaign`: the same case seen by another
+    sensor has the same physics, hits and run-to-run variations.
     """
     case = draw_case(cause, seed)
-    out = Path(work_dir) / f"{cause}_{seed}"
+    out = Path(work_dir) / f"{cause}_{seed}" / f"sensor{noise_stream}"
     generate_campaign(
         out,
         seed=case["seed"],
@@ -122,5 +127,7 @@ def generate_case(
         configurations={"joint": case["bearing_area_in2"]},
         settings=settings,
         integrator=integrator,
+        sensor_gain=sensor_gain,
+        noise_stream=noise_stream,
     )
     return case, out
