@@ -5,6 +5,7 @@
 rule diagnose:
     input:
         segments="results/tables/segments.parquet",
+        runs="results/tables/runs.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(

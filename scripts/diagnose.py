@@ -15,6 +15,7 @@ document, details = diagnose_campaign(
     response_quantity=campaign.response.quantity,
     settings=FitSettings(**snakemake.params.discovery),
     segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
+    runs=read_table(snakemake.input.runs),
     return_details=True,
 )
 write_table(residual_table(details), snakemake.output.residuals)

@@ -22,6 +22,7 @@ import pytest
 from browser import WINDOW_WIDTH_PX, audit_page, chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
+from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.lab.virtual_lab import generate_campaign
 from workflow.outputs import report
 
@@ -219,6 +220,34 @@ def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
     assert "my/campaign" in text
     assert "Verdict: micro-slip (power law)" in text
     assert "0.12 of LuGre's error" in text
+
+
+def test_runs_page_lists_runs_in_recorded_order():
+    runs = pd.DataFrame(
+        {
+            "configuration": ["a", "a", "a", "b", "b"],
+            "run": ["r1", "r2", "r3", "r1", "r2"],
+            "path": ["a/r1.tdms", "a/r2.tdms", "a/r3.tdms", "b/r1.txt", "b/r2.txt"],
+            "status": ["used"] * 5,
+            "reason": [""] * 5,
+            "record_start": ["2026-03-05T14:09:00", "2026-03-05T14:07:00", "2026-03-05T14:08:00", "", ""],
+        }
+    )
+    ordered, orders = report.runs_in_recorded_order(runs)
+    assert list(zip(ordered["configuration"], ordered["run"])) == [
+        ("a", "r2"),
+        ("a", "r3"),
+        ("a", "r1"),
+        ("b", "r1"),
+        ("b", "r2"),
+    ]
+    assert orders == {
+        "a": RECORD_START_ORDER,
+        "b": f"{FILE_NAME_ORDER} (the files carry no recording start time)",
+    }
+    page = report.runs_html(runs)
+    assert page.index("a/r2.tdms") < page.index("a/r3.tdms") < page.index("a/r1.tdms")
+    assert "2026-03-05T14:07:00" in page and "a: run order: recording start times in the files" in page
 
 
 def test_tables_render(hypotheses, runs):

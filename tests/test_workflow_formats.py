@@ -44,6 +44,12 @@ def test_mixed_format_campaign_gives_the_tables_of_its_ascii_copy(tmp_path):
     assert "truncated" in runs.loc["run06", "reason"]
     assert (runs.drop(index="run06")["status"] == "used").all()
     assert runs.loc["run02", "path"] == "no_washer/run02.mat"
+    # the recording start each system-format file states (in the reverse of name order), none in ASCII
+    assert runs.loc["run01", "record_start"] == ""
+    assert runs.loc["run02", "record_start"] == "2026-03-05T14:03:00"  # Test.Lab: local clock time
+    assert runs.loc["run03", "record_start"] == "2026-03-05T14:02:00"  # UFF58 ID line 3
+    assert runs.loc["run05", "record_start"] == "2026-03-05T14:00:00+00:00"  # TDMS: UTC
+    assert runs.loc["run06", "record_start"] == ""  # not readable
 
     for table in ("segments", "modes"):
         pd.testing.assert_frame_equal(tables["mixed"][table], tables["ascii"][table])

@@ -21,7 +21,10 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
 import pandas as pd
+
+from workflow.io.recording_time import run_order
 
 #: What each cause of the output contract means, in plain words.
 CAUSE_WORDS: dict[str, str] = {
@@ -776,8 +779,27 @@ def hypotheses_html(hypotheses: pd.DataFrame) -> str:
     return page("Hypotheses", body)
 
 
+def runs_in_recorded_order(runs: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, str]]:
+    """The runs table with each configuration's rows in run order, and which order that is.
+
+    Run order is the order of the recording start times (``record_start``) when every
+    file of the configuration states one, else of the file names
+    (:func:`workflow.io.recording_time.run_order`); rows that are not run files (a glob
+    that matched nothing) keep their place after the runs.
+    """
+    starts = runs["record_start"] if "record_start" in runs else pd.Series("", index=runs.index)
+    parts, orders = [], {}
+    for name, part in runs.groupby("configuration", sort=False):
+        names = part["run"].astype(str)
+        ordered, orders[name] = run_order(list(names), dict(zip(names, starts[part.index].fillna(""))))
+        rank = {run: i for i, run in enumerate(ordered)}
+        parts.append(part.iloc[np.argsort(names.map(rank).to_numpy(), kind="stable")])
+    return (pd.concat(parts) if parts else runs), orders
+
+
 def runs_html(runs: pd.DataFrame) -> str:
-    """Every run file: used or excluded, and why."""
+    """Every run file: used or excluded, and why; each configuration's runs in run order."""
+    runs, orders = runs_in_recorded_order(runs)
     counts = runs.groupby("configuration", sort=False)["status"].value_counts().unstack(fill_value=0)
     summary = html_table(
         ["configuration", "used", "excluded"],
@@ -787,15 +809,25 @@ def runs_html(runs: pd.DataFrame) -> str:
         ],
         numeric=(1, 2),
     )
+    recorded = runs["record_start"].fillna("") if "record_start" in runs else pd.Series("", index=runs.index)
     rows = [
-        [esc(r.configuration), esc(r.run), esc(r.path), tag(r.status, r.status), esc(r.reason)]
+        [
+            esc(r.configuration),
+            esc(r.run),
+            esc(r.path),
+            esc(recorded[r.Index]),
+            tag(r.status, r.status),
+            esc(r.reason),
+        ]
         for r in runs.itertuples()
     ]
+    order_notes = "".join(f"<li>{esc(name)}: run order: {esc(order)}</li>" for name, order in orders.items())
     body = (
         "<h1>Runs and quality checks</h1>"
         + summary
+        + f"<ul>{order_notes}</ul>"
         + html_table(
-            ["configuration", "run", "file", "status", "reason"],
+            ["configuration", "run", "file", "recording start", "status", "reason"],
             rows,
             row_classes=["excluded" if r.status == "excluded" else "" for r in runs.itertuples()],
         )
