@@ -20,6 +20,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
 
+from workflow.io.units import SI  # noqa: E402
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
@@ -96,10 +97,22 @@ def test_damping_figure_says_where_its_fit_misses():
     ).assign(zeta_low=lambda frame: frame["zeta"] * 0.99, zeta_high=lambda frame: frame["zeta"] * 1.01)
     figure = figures.damping_vs_amplitude(segments, title="t", curve=flat)
     notes = " ".join(text.get_text() for text in figure.texts)
-    assert "The polynomial fit misses the measured damping" in notes
+    assert "The polynomial fit misses the measured damping" in notes and " in/s" in notes
     assert readability_problems(figure) == []
+    # in SI the same bins are found and said in m/s
+    si_notes = " ".join(
+        text.get_text()
+        for text in figures.damping_vs_amplitude(segments, title="t", curve=flat, units=SI).texts
+    )
+    assert "misses the measured damping" in si_notes and " m/s" in si_notes and "in/s" not in si_notes
+    assert "at 0.0254-0.0508 m/s:" in figures.misfit_sentence("M", "damping", [(1.0, 2.0, 3.0)], SI)
     figure = figures.damping_vs_amplitude(segments, title="t", curve=flat.assign(zeta=zeta))
     assert not figure.texts
+
+
+def test_friction_model_parameters_are_said_with_their_units():
+    assert figures.parameter_text({"sigma": 39.5, "fc": 38.0}) == "σ = 39.5 lbf/in, Fc = 38 lbf"
+    assert figures.parameter_text({"sigma": 39.5, "fc": 38.0}, SI) == "σ = 6.92e+03 N/m, Fc = 169 N"
 
 
 # ------------------------------------------------------------------ the workflow's figures

@@ -23,6 +23,7 @@ from browser import WINDOW_WIDTH_PX, audit_page, chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
+from workflow.io.units import SI
 from workflow.lab.virtual_lab import generate_campaign
 from workflow.outputs import report
 
@@ -435,6 +436,22 @@ def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
     assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
 
 
+def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
+    segments = segments_with(-0.1, -0.004)
+    trend = report.measured_trends(segments)["t5nm"]
+    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s," in report.trend_sentence(trend)
+    in_si = report.trend_sentence(trend, SI)
+    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s," in in_si and "in/s" not in in_si
+    assert report.amplitude_range(1.0, 10.0, SI) == "0.0254–0.254 m/s"
+    page = report.verdict_html(
+        document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36}, units=SI
+    )
+    assert "area (m²)" in page and report.fmt(1.36 * 0.0254**2) in page
+    assert "whose amplitudes are in in/s (1 in/s = 0.0254 m/s)" in page
+    default = report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36})
+    assert "area (in²)" in default and "1 in/s =" not in default
+
+
 def test_cause_words_claim_no_trend_the_data_may_contradict():
     # the mechanism only: 'damping grows as a power of amplitude' was said of falling data
     assert not any("grows" in words or "proportional" in words for words in report.CAUSE_WORDS.values())
@@ -555,6 +572,8 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
     assert (
         "does not explain" in sentence and "frequency at 1.67-5.28 in/s" in sentence and "-10.1" in sentence
     )
+    (in_si,) = report.explains_sentences(entry, SI)
+    assert "frequency at 0.0424-0.134 m/s" in in_si
     entry["explains_data"] = True
     (sentence,) = report.explains_sentences(entry)
     assert "explains the data" in sentence and "not" not in sentence
