@@ -20,7 +20,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
 
-from workflow.io.units import SI  # noqa: E402
+from workflow.io.units import INCH_M, LBF_N, SI  # noqa: E402
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
@@ -136,12 +136,14 @@ def demo(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def one_configuration(tmp_path_factory):
+    """A one-configuration campaign through ``all`` in SI units (``units: si``), so that the
+    SI figures are checked too (the demo is drawn in the default inch-second units)."""
     root = tmp_path_factory.mktemp("single")
     campaign = root / "campaign"
     generate_campaign(campaign, seed=5, runs_per_configuration=3, configurations={"no_washer": 1.36})
     workdir = root / "work"
     workdir.mkdir()
-    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP)
+    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}", "units=si", *CHEAP)
     assert result.returncode == 0, result.stderr[-4000:]
     return workdir
 
@@ -154,6 +156,24 @@ def test_every_workflow_figure_is_readable(campaign, configurations, request):
     # backbone and residuals
     assert len(drawn) == 6 + 5 * configurations, drawn
     assert hard_to_read(workdir) == []
+
+
+def test_si_run_writes_model_parameters_and_residuals_in_si(one_configuration):
+    fits = pd.read_parquet(one_configuration / "results/tables/model_fits.parquet")
+    assert (
+        {"N/m", "N", "N s/m", "m/s"}
+        <= set(fits["unit_si"])
+        <= {"N/m", "N", "N s/m", "m/s", "1", "rad/s", "Hz"}
+    )
+    for parameter, factor in (("sigma", LBF_N / INCH_M), ("fc", LBF_N), ("v0", INCH_M), ("zeta0", 1.0)):
+        rows = fits[fits["parameter"] == parameter]
+        np.testing.assert_array_equal(rows["value_si"], rows["value"] * factor)
+    residuals = pd.read_parquet(one_configuration / "results/tables/diagnosis_residuals.parquet")
+    np.testing.assert_array_equal(
+        residuals["velocity_amplitude_m_s"], residuals["velocity_amplitude_in_s"] * INCH_M
+    )
+    verdict = (one_configuration / "results/report/verdict.html").read_text()
+    assert "area (m²)" in verdict and " m/s" in verdict
 
 
 @pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason=f"no real data at {REALDATA}")
