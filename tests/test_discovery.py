@@ -470,6 +470,7 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
     assert "0.0042 % below the lugre fit" in text
     assert "statistically clear" in text and "physically negligible" in text and "0.42 of it" in text
     assert "not significant" not in text and "0.00 %" not in text
+    assert "within the run-to-run scatter or the models' accuracy" in text  # not both: the misfit is clear
     # larger than the accuracy but not significant
     text = disc.discrepancy_sentence("dahl", [_bin("damping", 0.05, 1.5, 0.2)], None, 8)
     assert "5.1 % above the dahl fit" in text

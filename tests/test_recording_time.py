@@ -45,12 +45,12 @@ def test_runs_in_recording_order_only_when_every_run_has_a_distinct_start():
     starts = {"a": "2026-03-05T14:09:00", "b": "2026-03-05T14:07:00", "c": "2026-03-05T14:08:00"}
     assert run_order(names, starts) == (["b", "c", "a"], RECORD_START_ORDER)
     missing = run_order(names, {**starts, "c": ""})
-    assert missing == (names, f"{FILE_NAME_ORDER} (1 of 3 runs carry no recording start time)")
+    assert missing == (names, f"{FILE_NAME_ORDER}: 1 of 3 runs carry no recording start time")
     same = run_order(names, {**starts, "c": starts["a"]})
     assert same[0] == names and "the same recording start" in same[1]
     mixed = run_order(names, {**starts, "c": "2026-03-05T14:08:00+00:00"})
     assert mixed[0] == names and "time zone" in mixed[1]
     assert run_order(["b", "a"], {}) == (
         ["a", "b"],
-        f"{FILE_NAME_ORDER} (the files carry no recording start time)",
+        f"{FILE_NAME_ORDER}: the files carry no recording start time",
     )

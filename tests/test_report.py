@@ -244,7 +244,7 @@ def test_runs_page_lists_runs_in_recorded_order():
     ]
     assert orders == {
         "a": RECORD_START_ORDER,
-        "b": f"{FILE_NAME_ORDER} (the files carry no recording start time)",
+        "b": f"{FILE_NAME_ORDER}: the files carry no recording start time",
     }
     page = report.runs_html(runs)
     assert page.index("a/r2.tdms") < page.index("a/r3.tdms") < page.index("a/r1.tdms")

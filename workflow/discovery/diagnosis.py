@@ -1162,8 +1162,8 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
         worst = max(bins, key=lambda b: abs(b["t"]), default=None)
         tail = "" if worst is None else "; " + _negligible_misfit_words(model_name, worst)
         return (
-            f"The {model_name} baseline fits damping and frequency within the run-to-run "
-            f"scatter and the models' accuracy at every amplitude ({n_runs} runs){tail}."
+            f"The {model_name} baseline fits damping and frequency at every amplitude to "
+            f"within the run-to-run scatter or the models' accuracy ({n_runs} runs){tail}."
         )
     text = "; ".join(parts)
     return text[0].upper() + text[1:] + "."

@@ -85,20 +85,20 @@ def run_order(run_names: Sequence[str], record_start: Mapping[str, str]) -> tupl
         time zone) and no two equal; else by file name.
     order : str
         Which order that is, in words (:data:`RECORD_START_ORDER`, or
-        :data:`FILE_NAME_ORDER` with the reason the start times could not be used).
+        :data:`FILE_NAME_ORDER`, a colon and the reason the start times could not be used).
     """
     by_name = sorted(run_names)
     starts = {name: record_start.get(name) or "" for name in by_name}
     missing = [name for name in by_name if not starts[name]]
     if missing:
         if len(missing) == len(by_name):
-            return by_name, f"{FILE_NAME_ORDER} (the files carry no recording start time)"
+            return by_name, f"{FILE_NAME_ORDER}: the files carry no recording start time"
         return by_name, (
-            f"{FILE_NAME_ORDER} ({len(missing)} of {len(by_name)} runs carry no recording start time)"
+            f"{FILE_NAME_ORDER}: {len(missing)} of {len(by_name)} runs carry no recording start time"
         )
     moments = {name: datetime.fromisoformat(text) for name, text in starts.items()}
     if len({moment.tzinfo is None for moment in moments.values()}) > 1:
-        return by_name, f"{FILE_NAME_ORDER} (some recording start times name a time zone, others do not)"
+        return by_name, f"{FILE_NAME_ORDER}: some recording start times name a time zone, others do not"
     if len(set(moments.values())) < len(moments):
-        return by_name, f"{FILE_NAME_ORDER} (two runs carry the same recording start time)"
+        return by_name, f"{FILE_NAME_ORDER}: two runs carry the same recording start time"
     return sorted(by_name, key=moments.__getitem__), RECORD_START_ORDER
