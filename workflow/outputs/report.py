@@ -649,8 +649,9 @@ def verdict_html(
     if entries and units.velocity != INCH_SECOND.velocity:
         parts.append(
             '<p class="note">The first sentence of each line quotes diagnosis.json, whose '
-            f"amplitudes are in in/s (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} {units.velocity}); "
-            f"the rest of this page is in {units.velocity}.</p>"
+            f"amplitudes are in in/s (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} {units.velocity}), "
+            "as do the statistics of the hypotheses, which are defined on in/s; the rest of this "
+            f"page is in {units.velocity}.</p>"
         )
     skipped = document.get("skipped_configurations") or {}
     if skipped:
