@@ -252,6 +252,11 @@ def test_files_without_a_recording_start_have_none(tmp_path):
     ]
     records[1]["id3"] = "Record 1 / free text"  # ID line 3 holds no date: not an error
     assert read(tmp_path / "uff", "run.uff", lambda p: write_uff58(p, records)).record_start == ""
+    records[1]["id2"] = "05-Mar-26 14:07:09"  # where some exporters put it
+    assert (
+        read(tmp_path / "uff2", "run.uff", lambda p: write_uff58(p, records)).record_start
+        == "2026-03-05T14:07:09"
+    )
     assert ascii_record(tmp_path, force, response).record_start == ""
 
 

@@ -10,6 +10,7 @@ property of its group or of the file.
 from __future__ import annotations
 
 import logging
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -30,7 +31,7 @@ class _WarningRecords(logging.Handler):
         self.messages.append(record.getMessage())
 
 
-def _date_time_property(properties: dict):
+def _date_time_property(properties: dict) -> datetime | None:
     """The ``DateTime`` property (any case) of a TDMS group or file as an aware datetime, or None."""
     for key, value in properties.items():
         if key.lower() == "datetime":
