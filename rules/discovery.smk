@@ -5,6 +5,7 @@
 rule diagnose:
     input:
         segments="results/tables/segments.parquet",
+        runs="results/tables/runs.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(
@@ -26,6 +27,7 @@ rule diagnose:
         mem_mb=3000,
         runtime=30,
     params:
+        units=SETTINGS.units,
         decay=asdict(SETTINGS.analysis.decay()),
         discovery=asdict(SETTINGS.discovery),
     script:
@@ -54,6 +56,8 @@ rule figure_discovery_residuals:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        units=SETTINGS.units,
     script:
         "../scripts/figure_discovery_residuals.py"
 
@@ -86,5 +90,7 @@ rule figure_discovery_summary:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        units=SETTINGS.units,
     script:
         "../scripts/figure_discovery_summary.py"

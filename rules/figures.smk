@@ -69,6 +69,7 @@ rule figures_damping:
         mem_mb=1000,
         runtime=10,
     params:
+        units=SETTINGS.units,
         configurations=CONFIGURATIONS,
     script:
         "../scripts/figures_damping.py"
@@ -101,6 +102,7 @@ rule figures_backbone:
         mem_mb=1000,
         runtime=10,
     params:
+        units=SETTINGS.units,
         configurations=CONFIGURATIONS,
     script:
         "../scripts/figures_backbone.py"

@@ -28,6 +28,8 @@ rule figure_friction_loops:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        units=SETTINGS.units,
     script:
         "../scripts/figure_friction_loops.py"
 
@@ -71,6 +73,8 @@ rule model_table:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        units=SETTINGS.units,
     script:
         "../scripts/model_table.py"
 
@@ -104,5 +108,7 @@ rule figure_models:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        units=SETTINGS.units,
     script:
         "../scripts/figure_models.py"

@@ -80,6 +80,8 @@ rule report_summary:
     resources:
         mem_mb=1000,
         runtime=5,
+    params:
+        units=SETTINGS.units,
     script:
         "../scripts/report_summary.py"
 

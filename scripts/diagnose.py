@@ -4,6 +4,7 @@ from workflow.discovery.diagnosis import FitSettings, diagnose_campaign, residua
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table, write_json, write_table
+from workflow.io.units import UNIT_SYSTEMS
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
@@ -15,9 +16,12 @@ document, details = diagnose_campaign(
     response_quantity=campaign.response.quantity,
     settings=FitSettings(**snakemake.params.discovery),
     segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
+    runs=read_table(snakemake.input.runs),
     return_details=True,
 )
-write_table(residual_table(details), snakemake.output.residuals)
+write_table(
+    residual_table(details), snakemake.output.residuals, unit_system=UNIT_SYSTEMS[snakemake.params.units]
+)
 write_json(snakemake.output.diagnosis, document)
 log.info("campaign verdict: %s", document["cause"])
 for name, entry in document["configurations"].items():

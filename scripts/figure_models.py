@@ -4,12 +4,14 @@ import json
 from pathlib import Path
 
 from workflow.io.tables import read_table
+from workflow.io.units import UNIT_SYSTEMS
 from workflow.models.paper import model_curve_frames
 from workflow.outputs import figures
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_models")
 configuration = snakemake.wildcards.configuration
+units = UNIT_SYSTEMS[snakemake.params.units]
 segments = read_table(snakemake.input.segments)
 mine = segments[segments["configuration"] == configuration]
 document = json.loads(Path(snakemake.input.fit).read_text())
@@ -27,10 +29,11 @@ for model, path, label in (
     fit = document["models"].get(model)
     if fit is None:
         title = f"{configuration}: {label} not fitted ({document.get('skipped', 'no fit')})"
-        figures.save(figures.model_comparison(mine, {}, title=title), path)
+        figures.save(figures.model_comparison(mine, {}, title=title, units=units), path)
         continue
     title = (
         f"{configuration}: measured vs fitted {label} simulation\n"
         f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)"
     )
-    figures.save(figures.model_comparison(mine, {f"{label} + ζ0 (fitted)": curves[model]}, title=title), path)
+    models = {f"{label} + ζ0 (fitted)": curves[model]}
+    figures.save(figures.model_comparison(mine, models, title=title, units=units), path)

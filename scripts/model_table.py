@@ -4,6 +4,7 @@ import json
 from pathlib import Path
 
 from workflow.io.tables import write_table
+from workflow.io.units import UNIT_SYSTEMS
 from workflow.models.paper import fit_table
 from workflow.runtime.logs import setup_script_logging
 
@@ -12,4 +13,4 @@ documents = {}
 for path in snakemake.input:
     document = json.loads(Path(path).read_text())
     documents[document["configuration"]] = document
-write_table(fit_table(documents), snakemake.output[0])
+write_table(fit_table(documents), snakemake.output[0], unit_system=UNIT_SYSTEMS[snakemake.params.units])

@@ -4,6 +4,7 @@ import json
 from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table
+from workflow.io.units import UNIT_SYSTEMS
 from workflow.outputs import report
 from workflow.runtime.logs import setup_script_logging
 
@@ -17,7 +18,12 @@ areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]
 
 pages = {
     "verdict": report.verdict_html(
-        document, runs=runs, hypotheses=hypotheses, areas=areas, segments=segments
+        document,
+        runs=runs,
+        hypotheses=hypotheses,
+        areas=areas,
+        segments=segments,
+        units=UNIT_SYSTEMS[snakemake.params.units],
     ),
     "hypotheses": report.hypotheses_html(hypotheses),
     "runs": report.runs_html(runs),

@@ -1,6 +1,7 @@
 """Run files in acquisition-system formats, written by each format's own library (scipy.io,
 h5py, pyuff, npTDMS), for the reader tests and the mixed-format workflow test."""
 
+from datetime import datetime, timedelta
 from pathlib import Path
 
 import numpy as np
@@ -21,10 +22,16 @@ def write_plain_mat(path: Path, **variables) -> None:
     scipy.io.savemat(path, variables)
 
 
-def lms_export_group(names, values, unit, interval_s, start_s=0.0, factor=1.0, offset=0.0, n_declared=None):
-    """One Test.Lab export struct (x_values / y_values / function_record) as a dict."""
+def lms_export_group(
+    names, values, unit, interval_s, start_s=0.0, factor=1.0, offset=0.0, n_declared=None, creation_time=None
+):
+    """One Test.Lab export struct (x_values / y_values / function_record) as a dict;
+    ``creation_time``: a datetime, written as Test.Lab writes it (``YYYY/MM/DD HH:MM:SS``)."""
     values = np.asarray(values, float)
     n = values.shape[0]
+    record = {"name": names[0] if len(names) == 1 else np.array(names, dtype=object), "type": "Signal"}
+    if creation_time is not None:
+        record["creation_time"] = creation_time.strftime("%Y/%m/%d %H:%M:%S")
     return {
         "x_values": {
             "start_value": float(start_s),
@@ -39,10 +46,7 @@ def lms_export_group(names, values, unit, interval_s, start_s=0.0, factor=1.0, o
                 "unit_transformation": {"factor": factor, "offset": offset, "log_reference": 1},
             },
         },
-        "function_record": {
-            "name": names[0] if len(names) == 1 else np.array(names, dtype=object),
-            "type": "Signal",
-        },
+        "function_record": record,
     }
 
 
@@ -86,8 +90,9 @@ def write_mat73(path: Path, variables: dict) -> None:
         handle.write(header.ljust(116, b" ") + b"\x00" * 8 + b"\x00\x02IM")
 
 
-def uff58_record(name, values, unit, data_type, interval_s, start_s=0.0, binary=False) -> dict:
-    """A dataset 58 time record for pyuff (data type 12 acceleration, 13 excitation force, ...)."""
+def uff58_record(name, values, unit, data_type, interval_s, start_s=0.0, binary=False, recorded=None) -> dict:
+    """A dataset 58 time record for pyuff (data type 12 acceleration, 13 excitation force, ...);
+    ``recorded``: a datetime, written in ID line 3 as the format has it (``DD-MMM-YY HH:MM:SS``)."""
     import pyuff
 
     values = np.asarray(values, float)
@@ -95,7 +100,7 @@ def uff58_record(name, values, unit, data_type, interval_s, start_s=0.0, binary=
         binary=int(binary),
         id1=name,
         id2="",
-        id3="",
+        id3="" if recorded is None else recorded.strftime("%d-%b-%y %H:%M:%S"),
         id4="",
         id5="",
         func_type=1,
@@ -141,9 +146,10 @@ def write_tdms(path: Path, group: str, channels: dict[str, tuple[np.ndarray, dic
         )
 
 
-def convert_run(record, target: Path, interval_s: float, binary_uff: bool = False) -> None:
+def convert_run(record, target: Path, interval_s: float, binary_uff: bool = False, recorded=None) -> None:
     """Write an ASCII run's samples (a RunRecord with force in lbf, acceleration in g) in the
-    format of ``target``'s extension (``.uff``: binary 58b when ``binary_uff``)."""
+    format of ``target``'s extension (``.uff``: binary 58b when ``binary_uff``), with the
+    recording start ``recorded`` (a datetime; TDMS: UTC) where the format keeps one."""
     start_s = -record.pretrigger_samples * interval_s
     force, response = record.force_lbf, record.response
     suffix = target.suffix
@@ -151,8 +157,12 @@ def convert_run(record, target: Path, interval_s: float, binary_uff: bool = Fals
         write_testlab_mat(
             target,
             {
-                "Force": lms_export_group(["Time Hammer:+Z"], force, "lbf", interval_s, start_s),
-                "Signal": lms_export_group(["Time Acc1:+Z"], response, "g", interval_s, start_s),
+                "Force": lms_export_group(
+                    ["Time Hammer:+Z"], force, "lbf", interval_s, start_s, creation_time=recorded
+                ),
+                "Signal": lms_export_group(
+                    ["Time Acc1:+Z"], response, "g", interval_s, start_s, creation_time=recorded
+                ),
             },
         )
     elif suffix == ".uff":
@@ -160,12 +170,14 @@ def convert_run(record, target: Path, interval_s: float, binary_uff: bool = Fals
         write_uff58(
             target,
             [
-                uff58_record("Hammer", force, "lbf", 13, interval_s, start_s, binary),
-                uff58_record("Acc1 +Z", response, "g", 12, interval_s, start_s, binary),
+                uff58_record("Hammer", force, "lbf", 13, interval_s, start_s, binary, recorded),
+                uff58_record("Acc1 +Z", response, "g", 12, interval_s, start_s, binary, recorded),
             ],
         )
     elif suffix == ".tdms":
         properties = {"wf_increment": interval_s, "wf_start_offset": start_s}
+        if recorded is not None:
+            properties["wf_start_time"] = np.datetime64(recorded.replace(tzinfo=None), "us")
         write_tdms(
             target,
             "Impact",
@@ -181,10 +193,16 @@ def convert_run(record, target: Path, interval_s: float, binary_uff: bool = Fals
 MIXED_FORMATS = ("ascii", "mat", "uff", "uff58b", "tdms")
 """Formats given to a campaign's runs, in turn, by :func:`write_mixed_format_copy`."""
 
+FIRST_RECORDING = datetime(2026, 3, 5, 14, 0, 0)
+"""Recording start of the last run file by name in :func:`write_mixed_format_copy`."""
+
 
 def write_mixed_format_copy(source, target) -> dict[str, str]:
     """Copy an ASCII campaign folder with its runs turned, in turn, into ASCII, Test.Lab MAT,
     UFF58, UFF58b and TDMS files (same samples, same run names); returns run path -> format.
+
+    The system-format files record a start time, one minute apart, in the reverse of the
+    run names' order (the k-th of n runs: ``FIRST_RECORDING + (n - 1 - k)`` minutes).
 
     Every configuration's ``files`` glob becomes ``<configuration>/*``.
     """
@@ -200,7 +218,8 @@ def write_mixed_format_copy(source, target) -> dict[str, str]:
         yaml_text = yaml_text.replace(f'"{spec.files}"', f'"{name}/*"')
     (target / "campaign.yaml").write_text(yaml_text)
     formats = {}
-    for index, run in enumerate(list_runs(source, campaign)):
+    runs = list_runs(source, campaign)
+    for index, run in enumerate(runs):
         fmt = MIXED_FORMATS[index % len(MIXED_FORMATS)]
         folder = target / run.configuration
         folder.mkdir(exist_ok=True)
@@ -211,6 +230,9 @@ def write_mixed_format_copy(source, target) -> dict[str, str]:
             record = read_run(source, run, campaign)
             suffix = {"mat": ".mat", "uff": ".uff", "uff58b": ".uff", "tdms": ".tdms"}[fmt]
             path = folder / f"{run.run}{suffix}"
-            convert_run(record, path, 1.0 / record.sample_rate_hz, binary_uff=fmt == "uff58b")
+            recorded = FIRST_RECORDING + timedelta(minutes=len(runs) - 1 - index)
+            convert_run(
+                record, path, 1.0 / record.sample_rate_hz, binary_uff=fmt == "uff58b", recorded=recorded
+            )
         formats[path.relative_to(target).as_posix()] = fmt
     return formats

@@ -37,6 +37,16 @@ def test_bad_values_name_the_key(raw, key):
         validate_config(raw)
 
 
+def test_units_takes_inch_second_or_si_and_a_bad_value_lists_both():
+    assert WorkflowConfig().units == "inch-second"
+    assert validate_config({"units": "si"}).units == "si"
+    with pytest.raises(ConfigError) as caught:
+        validate_config({"units": "metric"}, command_line={"units": "metric"})
+    message = str(caught.value)
+    assert message.startswith("command line (--config): units:")
+    assert "'inch-second'" in message and "'si'" in message
+
+
 def test_demo_detection(tmp_path):
     assert WorkflowConfig().uses_demo_campaign(tmp_path)
     assert not WorkflowConfig(campaign="elsewhere").uses_demo_campaign(tmp_path)

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from workflow.discovery import diagnosis as disc
+from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.models.averaged import CurveGrid
 
 FAST = disc.FitSettings(global_samples=128, local_starts=2, resamples=40)
@@ -463,3 +464,85 @@ def test_parameters_on_the_edge_of_their_range_are_flagged():
     coords[4] = lo[4]  # chi
     (flag,) = disc.bound_flags("iwan", coords, data)
     assert flag.startswith("chi = -0.95 at the lower edge")
+
+
+def test_run_drift_seen_only_in_the_order_of_the_recording_start_times():
+    """Runs recorded in one order and named in an unrelated one (Spearman -0.05): the
+    drift is named when the runs table gives the recording starts, and not from the names."""
+    model, params = EXTENDED["run_drift"]
+    segments = synthetic_segments(model, params, seed=7)
+    name_of_position = [3, 7, 0, 5, 1, 6, 2, 4]  # run recorded r-th is named run{name_of_position[r] + 1}
+    rename = {f"run{r + 1:02d}": f"run{k + 1:02d}" for r, k in enumerate(name_of_position)}
+    segments["run"] = segments["run"].map(rename)
+    recorded_order = [rename[f"run{r + 1:02d}"] for r in range(8)]
+    runs = pd.DataFrame(
+        {
+            "configuration": "c",
+            "run": recorded_order[::-1],  # the table's row order says nothing
+            "record_start": [f"2026-03-05T14:{10 + 2 * r:02d}:00" for r in range(8)][::-1],
+        }
+    )
+    by_time = disc.diagnose_campaign(segments, "synthetic", settings=FAST, runs=runs)["configurations"]["c"]
+    trend = by_time["evidence"]["run_order_trend"]
+    assert by_time["cause"] == "run_drift"
+    assert trend["order"] == RECORD_START_ORDER and trend["runs"] == recorded_order
+    assert trend["significant"] and "(recording start times in the files)" in by_time["discrepancy"]
+
+    runs.loc[0, "record_start"] = ""  # one run without a start time: file-name order, said so
+    by_name = disc.diagnose_campaign(segments, "synthetic", settings=FAST, runs=runs)["configurations"]["c"]
+    trend = by_name["evidence"]["run_order_trend"]
+    assert by_name["cause"] != "run_drift" and not trend["significant"]
+    assert (
+        trend["order"].startswith(FILE_NAME_ORDER)
+        and "1 of 8 runs carry no recording start" in trend["order"]
+    )
+    assert trend["runs"] == sorted(recorded_order)
+
+
+def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3):
+    tolerance = tolerance or (disc.TOL_LN_ZETA if curve == "damping" else disc.TOL_REL_F)
+    return {
+        "curve": curve,
+        "v_low_in_s": 1.0,
+        "v_high_in_s": 3.16,
+        "mean": mean,
+        "t": t,
+        "p": p,
+        "p_limit": p_limit,
+        "tolerance": tolerance,
+        "n_runs": 8,
+        "significant": significant,
+    }
+
+
+def test_discrepancy_sentence_is_true_of_its_numbers():
+    # a tiny, precisely measured frequency misfit: clear but negligible, never "0.00 %"
+    text = disc.discrepancy_sentence("lugre", [_bin("frequency", -4.2e-5, -13.1, 1e-9)], None, 8)
+    assert "0.0042 % below the lugre fit" in text
+    assert "statistically clear" in text and "physically negligible" in text and "0.42 of it" in text
+    assert "not significant" not in text and "0.00 %" not in text
+    assert "within the run-to-run scatter or the models' accuracy" in text  # not both: the misfit is clear
+    # larger than the accuracy but not significant
+    text = disc.discrepancy_sentence("dahl", [_bin("damping", 0.05, 1.5, 0.2)], None, 8)
+    assert "5.1 % above the dahl fit" in text
+    assert "larger than the 2 % in damping" in text and "but not statistically significant" in text
+    assert "statistically clear" not in text
+    # neither
+    text = disc.discrepancy_sentence("dahl", [_bin("damping", -0.01, -0.8, 0.45)], None, 8)
+    assert "1.0 % below" in text and "neither statistically significant" in text
+    # the bin with the largest |t| is the one described
+    bins = [_bin("damping", -0.01, -0.8, 0.45), _bin("frequency", 3e-5, 4.0, 1e-4)]
+    assert "0.0030 % above" in disc.discrepancy_sentence("dahl", bins, None, 8)
+    # a real misfit: its size with its sign, and a drift with the order it was measured in
+    trend = {"significant": True, "change_over_sequence": -0.3, "t": -6.2, "order": RECORD_START_ORDER}
+    text = disc.discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
+    assert text.startswith("The measured damping differs from the lugre fit") and "by up to -26 %" in text
+    assert "drifts with run order (recording start times in the files) by -26 %" in text
+
+
+@pytest.mark.parametrize(
+    ("percent", "text"),
+    [(-0.0042, "-0.0042 %"), (31.4, "+31 %"), (0.5, "+0.50 %"), (2.04, "+2.0 %"), (0.0, "0 %")],
+)
+def test_percentages_keep_two_significant_digits(percent, text):
+    assert disc.format_percent(percent) == text

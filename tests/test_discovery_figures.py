@@ -12,6 +12,7 @@ import pytest
 
 from tests.test_discovery import synthetic_segments
 from workflow.discovery import diagnosis as disc
+from workflow.io.units import SI
 from workflow.models.averaged import CurveGrid, model_curves
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save
@@ -119,7 +120,11 @@ def test_figures_build_and_name_models(diagnosis, tmp_path):
         legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
         assert any(entry["baseline"]["model"] in t for t in legend)
         assert all(ax.get_xscale() == "log" for ax in fig.axes)
-        assert fig.axes[-1].get_xlabel() == dfig.VELOCITY_LABEL
+        assert fig.axes[-1].get_xlabel() == "velocity amplitude (in/s)"
+        si = dfig.residuals_figure(table, name, document, units=SI)
+        assert si.axes[-1].get_xlabel() == "velocity amplitude (m/s)"
+        inch_x = fig.axes[0].collections[0].get_offsets()[:, 0]
+        np.testing.assert_array_equal(si.axes[0].collections[0].get_offsets()[:, 0], inch_x * 0.0254)
         save(fig, tmp_path / f"residuals_{name}.png")
         assert (tmp_path / f"residuals_{name}.png").stat().st_size > 0
     fig = dfig.candidates_figure(document)

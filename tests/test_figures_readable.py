@@ -20,6 +20,7 @@ import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
 
+from workflow.io.units import INCH_M, LBF_N, SI  # noqa: E402
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
@@ -96,10 +97,22 @@ def test_damping_figure_says_where_its_fit_misses():
     ).assign(zeta_low=lambda frame: frame["zeta"] * 0.99, zeta_high=lambda frame: frame["zeta"] * 1.01)
     figure = figures.damping_vs_amplitude(segments, title="t", curve=flat)
     notes = " ".join(text.get_text() for text in figure.texts)
-    assert "The polynomial fit misses the measured damping" in notes
+    assert "The polynomial fit misses the measured damping" in notes and " in/s" in notes
     assert readability_problems(figure) == []
+    # in SI the same bins are found and said in m/s
+    si_notes = " ".join(
+        text.get_text()
+        for text in figures.damping_vs_amplitude(segments, title="t", curve=flat, units=SI).texts
+    )
+    assert "misses the measured damping" in si_notes and " m/s" in si_notes and "in/s" not in si_notes
+    assert "at 0.0254-0.0508 m/s:" in figures.misfit_sentence("M", "damping", [(1.0, 2.0, 3.0)], SI)
     figure = figures.damping_vs_amplitude(segments, title="t", curve=flat.assign(zeta=zeta))
     assert not figure.texts
+
+
+def test_friction_model_parameters_are_said_with_their_units():
+    assert figures.parameter_text({"sigma": 39.5, "fc": 38.0}) == "σ = 39.5 lbf/in, Fc = 38 lbf"
+    assert figures.parameter_text({"sigma": 39.5, "fc": 38.0}, SI) == "σ = 6.92e+03 N/m, Fc = 169 N"
 
 
 # ------------------------------------------------------------------ the workflow's figures
@@ -123,12 +136,14 @@ def demo(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def one_configuration(tmp_path_factory):
+    """A one-configuration campaign through ``all`` in SI units (``units: si``), so that the
+    SI figures are checked too (the demo is drawn in the default inch-second units)."""
     root = tmp_path_factory.mktemp("single")
     campaign = root / "campaign"
     generate_campaign(campaign, seed=5, runs_per_configuration=3, configurations={"no_washer": 1.36})
     workdir = root / "work"
     workdir.mkdir()
-    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP)
+    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}", "units=si", *CHEAP)
     assert result.returncode == 0, result.stderr[-4000:]
     return workdir
 
@@ -141,6 +156,24 @@ def test_every_workflow_figure_is_readable(campaign, configurations, request):
     # backbone and residuals
     assert len(drawn) == 6 + 5 * configurations, drawn
     assert hard_to_read(workdir) == []
+
+
+def test_si_run_writes_model_parameters_and_residuals_in_si(one_configuration):
+    fits = pd.read_parquet(one_configuration / "results/tables/model_fits.parquet")
+    assert (
+        {"N/m", "N", "N s/m", "m/s"}
+        <= set(fits["unit_si"])
+        <= {"N/m", "N", "N s/m", "m/s", "1", "rad/s", "Hz"}
+    )
+    for parameter, factor in (("sigma", LBF_N / INCH_M), ("fc", LBF_N), ("v0", INCH_M), ("zeta0", 1.0)):
+        rows = fits[fits["parameter"] == parameter]
+        np.testing.assert_array_equal(rows["value_si"], rows["value"] * factor)
+    residuals = pd.read_parquet(one_configuration / "results/tables/diagnosis_residuals.parquet")
+    np.testing.assert_array_equal(
+        residuals["velocity_amplitude_m_s"], residuals["velocity_amplitude_in_s"] * INCH_M
+    )
+    verdict = (one_configuration / "results/report/verdict.html").read_text()
+    assert "area (m²)" in verdict and " m/s" in verdict
 
 
 @pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason=f"no real data at {REALDATA}")

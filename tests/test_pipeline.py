@@ -113,6 +113,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         "path": "no_washer/run01.txt",
         "status": "used",
         "reason": "",
+        "record_start": "",  # an ASCII file states no recording start
     }
     assert good.segments["kept"].sum() >= 3 and set(good.segments["run"]) == {"run01"}
     assert good.quality["passed"][good.quality["applied"]].all()

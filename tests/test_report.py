@@ -22,6 +22,8 @@ import pytest
 from browser import WINDOW_WIDTH_PX, audit_page, chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
+from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
+from workflow.io.units import SI
 from workflow.lab.virtual_lab import generate_campaign
 from workflow.outputs import report
 
@@ -221,6 +223,34 @@ def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
     assert "0.12 of LuGre's error" in text
 
 
+def test_runs_page_lists_runs_in_recorded_order():
+    runs = pd.DataFrame(
+        {
+            "configuration": ["a", "a", "a", "b", "b"],
+            "run": ["r1", "r2", "r3", "r1", "r2"],
+            "path": ["a/r1.tdms", "a/r2.tdms", "a/r3.tdms", "b/r1.txt", "b/r2.txt"],
+            "status": ["used"] * 5,
+            "reason": [""] * 5,
+            "record_start": ["2026-03-05T14:09:00", "2026-03-05T14:07:00", "2026-03-05T14:08:00", "", ""],
+        }
+    )
+    ordered, orders = report.runs_in_recorded_order(runs)
+    assert list(zip(ordered["configuration"], ordered["run"])) == [
+        ("a", "r2"),
+        ("a", "r3"),
+        ("a", "r1"),
+        ("b", "r1"),
+        ("b", "r2"),
+    ]
+    assert orders == {
+        "a": RECORD_START_ORDER,
+        "b": f"{FILE_NAME_ORDER}: the files carry no recording start time",
+    }
+    page = report.runs_html(runs)
+    assert page.index("a/r2.tdms") < page.index("a/r3.tdms") < page.index("a/r1.tdms")
+    assert "2026-03-05T14:07:00" in page and "a: run order: recording start times in the files" in page
+
+
 def test_tables_render(hypotheses, runs):
     assert "supported" in report.hypotheses_html(hypotheses)
     assert "excluded" in report.runs_html(runs)
@@ -406,6 +436,22 @@ def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
     assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
 
 
+def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
+    segments = segments_with(-0.1, -0.004)
+    trend = report.measured_trends(segments)["t5nm"]
+    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s," in report.trend_sentence(trend)
+    in_si = report.trend_sentence(trend, SI)
+    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s," in in_si and "in/s" not in in_si
+    assert report.amplitude_range(1.0, 10.0, SI) == "0.0254–0.254 m/s"
+    page = report.verdict_html(
+        document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36}, units=SI
+    )
+    assert "area (m²)" in page and report.fmt(1.36 * 0.0254**2) in page
+    assert "whose amplitudes are in in/s (1 in/s = 0.0254 m/s)" in page
+    default = report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36})
+    assert "area (in²)" in default and "1 in/s =" not in default
+
+
 def test_cause_words_claim_no_trend_the_data_may_contradict():
     # the mechanism only: 'damping grows as a power of amplitude' was said of falling data
     assert not any("grows" in words or "proportional" in words for words in report.CAUSE_WORDS.values())
@@ -526,6 +572,8 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
     assert (
         "does not explain" in sentence and "frequency at 1.67-5.28 in/s" in sentence and "-10.1" in sentence
     )
+    (in_si,) = report.explains_sentences(entry, SI)
+    assert "frequency at 0.0424-0.134 m/s" in in_si
     entry["explains_data"] = True
     (sentence,) = report.explains_sentences(entry)
     assert "explains the data" in sentence and "not" not in sentence

@@ -4,6 +4,7 @@
 import dataclasses
 import shutil
 import sys
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -178,6 +179,85 @@ def test_tdms_round_trip_equals_ascii(tmp_path):
     record = read(tmp_path, "run.tdms", lambda p: write_tdms(p, "Impact", channels))
     assert_same_record(record, ascii_record(tmp_path, force, response))
     assert record.header["response channel"] == "Impact/Acceleration"
+
+
+RECORDED = datetime(2026, 3, 5, 14, 7, 9)
+"""A recording start written into the files below."""
+
+
+def _start_time_writers(recorded):
+    """File name -> writer of a run that records ``recorded`` as its start, per format."""
+    force, response = samples()
+    groups = {
+        "Force": lms_export_group(["Time Hammer:+Z"], force, "lbf", DT_S, creation_time=recorded),
+        "Signal": lms_export_group(["Time Acc1:+Z"], response, "g", DT_S, creation_time=recorded),
+    }
+    records = [
+        uff58_record("Hammer", force, "lbf", 13, DT_S, recorded=recorded),
+        uff58_record("Acc1 +Z", response, "g", 12, DT_S, recorded=recorded),
+    ]
+    binary = [
+        uff58_record("Hammer", force, "lbf", 13, DT_S, binary=True, recorded=recorded),
+        uff58_record("Acc1 +Z", response, "g", 12, DT_S, binary=True, recorded=recorded),
+    ]
+    properties = {"wf_increment": DT_S, "wf_start_time": np.datetime64(recorded, "us")}
+    channels = {
+        "Force": (force, {**properties, "unit_string": "lbf"}),
+        "Acceleration": (response, {**properties, "unit_string": "g"}),
+    }
+    return {
+        "run.mat": lambda p: write_testlab_mat(p, groups),
+        "run73.mat": lambda p: write_mat73(p, groups),
+        "run.uff": lambda p: write_uff58(p, records),
+        "run58b.uff": lambda p: write_uff58(p, binary),
+        "run.tdms": lambda p: write_tdms(p, "Impact", channels),
+    }
+
+
+@pytest.mark.parametrize("name", list(_start_time_writers(RECORDED)))
+def test_recording_start_is_read_from_each_format(tmp_path, name):
+    record = read(tmp_path, name, _start_time_writers(RECORDED)[name])
+    # TDMS time stamps are UTC; Test.Lab and UFF58 write local clock time with no zone
+    expected = "2026-03-05T14:07:09+00:00" if name.endswith(".tdms") else "2026-03-05T14:07:09"
+    assert record.record_start == expected
+
+
+def test_tdms_recording_start_from_the_file_properties(tmp_path):
+    from nptdms import ChannelObject, RootObject, TdmsWriter
+
+    force, response = samples()
+
+    def writer(path):
+        with TdmsWriter(str(path)) as tdms:
+            tdms.write_segment(
+                [
+                    RootObject(properties={"DateTime": np.datetime64(RECORDED, "us")}),
+                    ChannelObject(
+                        "Impact", "Force", force, properties={"wf_increment": DT_S, "unit_string": "lbf"}
+                    ),
+                    ChannelObject(
+                        "Impact", "Acc", response, properties={"wf_increment": DT_S, "unit_string": "g"}
+                    ),
+                ]
+            )
+
+    assert read(tmp_path, "run.tdms", writer).record_start == "2026-03-05T14:07:09+00:00"
+
+
+def test_files_without_a_recording_start_have_none(tmp_path):
+    force, response = samples()
+    records = [
+        uff58_record("Hammer", force, "lbf", 13, DT_S),
+        uff58_record("Acc1 +Z", response, "g", 12, DT_S),
+    ]
+    records[1]["id3"] = "Record 1 / free text"  # ID line 3 holds no date: not an error
+    assert read(tmp_path / "uff", "run.uff", lambda p: write_uff58(p, records)).record_start == ""
+    records[1]["id2"] = "05-Mar-26 14:07:09"  # where some exporters put it
+    assert (
+        read(tmp_path / "uff2", "run.uff", lambda p: write_uff58(p, records)).record_start
+        == "2026-03-05T14:07:09"
+    )
+    assert ascii_record(tmp_path, force, response).record_start == ""
 
 
 def test_force_in_newtons_is_converted_to_lbf(tmp_path):
@@ -481,6 +561,7 @@ def test_real_testlab_export_reads_the_laser_channel_in_its_unit(tmp_path):
     record = read_run(folder, "t5nm/sine_09hz.mat", load_campaign(folder))
     assert record.sample_rate_hz == 1024 and record.sample_rate_source == "file"
     assert record.n_samples == 65536
+    assert record.record_start == "2019-06-04T23:52:35"  # function_record.creation_time
     converted = read_run(
         REALDATA / "unesp-bolted-beam",
         "t5nm/sine_09hz.txt",

@@ -9,10 +9,12 @@ from workflow.io.tables import (
     concatenate_columns,
     read_columns,
     read_table,
+    with_si_columns,
     write_columns,
     write_json,
     write_table,
 )
+from workflow.io.units import SI
 
 
 def test_units_round_trip_as_field_metadata(tmp_path):
@@ -76,3 +78,51 @@ def test_concatenated_columns_stack_rows_and_keep_types():
     assert stacked["kept"].dtype == bool and stacked["kept"].tolist() == [True, False, True]
     with pytest.raises(ValueError, match="columns differ"):
         concatenate_columns([first, {"run": first["run"], "zeta": first["zeta"]}])
+
+
+def test_si_tables_gain_twin_columns_with_their_units(tmp_path):
+    frame = pd.DataFrame(
+        {
+            "configuration": ["a", "a"],
+            "velocity_amplitude_in_s": [0.1, 3.7],
+            "zeta": [0.01, 0.02],
+            "amplitude_low_in_s": [0.2, 0.3],
+            "bearing_area_in2": [1.36, 1.36],
+        }
+    )
+    path = tmp_path / "si.parquet"
+    write_table(frame, path, unit_system=SI)
+    back = read_table(path)
+    assert list(back.columns) == [
+        "configuration",
+        "velocity_amplitude_in_s",
+        "velocity_amplitude_m_s",
+        "zeta",
+        "amplitude_low_in_s",
+        "amplitude_low_m_s",
+        "bearing_area_in2",
+        "bearing_area_m2",
+    ]
+    np.testing.assert_array_equal(back["velocity_amplitude_m_s"], frame["velocity_amplitude_in_s"] * 0.0254)
+    np.testing.assert_array_equal(back["bearing_area_m2"], frame["bearing_area_in2"] * 0.0254**2)
+    units = column_units(path)
+    assert units["velocity_amplitude_in_s"] == "in/s" and units["velocity_amplitude_m_s"] == "m/s"
+    assert units["amplitude_low_m_s"] == "m/s" and units["bearing_area_m2"] == "m^2"
+    write_table(frame, tmp_path / "default.parquet")
+    assert list(read_table(tmp_path / "default.parquet").columns) == list(frame.columns)
+
+
+def test_si_model_parameters_carry_their_units():
+    table = pd.DataFrame(
+        {"parameter": ["sigma", "fc", "sigma1", "v0", "zeta0"], "value": [2.0] * 5, "std": [0.5] * 5}
+    )
+    si = with_si_columns(table)
+    assert list(si["unit"]) == ["lbf/in", "lbf", "lbf s/in", "in/s", "1"]
+    assert list(si["unit_si"]) == ["N/m", "N", "N s/m", "m/s", "1"]
+    lbf_n = 0.45359237 * 9.80665
+    np.testing.assert_allclose(
+        si["value_si"], 2.0 * np.array([lbf_n / 0.0254, lbf_n, lbf_n / 0.0254, 0.0254, 1.0])
+    )
+    np.testing.assert_allclose(si["std_si"], si["value_si"] / 4)
+    with pytest.raises(ValueError, match="stribeck"):
+        with_si_columns(pd.DataFrame({"parameter": ["stribeck"], "value": [1.0], "std": [0.1]}))

@@ -3,12 +3,17 @@
 import functools
 import re
 
+import matplotlib.text
+import numpy as np
 import pandas as pd
 import pytest
 from helpers import checksums, run_snakemake, write_run_with_bad_cell
 
 from workflow.io.tables import column_units
+from workflow.io.units import SI, SI_TWIN_COLUMNS
 from workflow.lab.virtual_lab import generate_campaign
+from workflow.outputs import figures
+from workflow.outputs.readability import readability_problems
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 
@@ -200,3 +205,84 @@ def test_quality_table_has_every_check_of_every_run_and_agrees_with_runs(finishe
     assert {"clipping", "snr", "segments"} <= set(used["check"])
     snr = used[used["check"] == "snr"]
     assert (snr["value"] > snr["threshold"]).all()
+
+
+SI_TABLES = {
+    "segments": ["velocity_amplitude_in_s", "bearing_area_in2"],
+    "segments_rejected": ["velocity_amplitude_in_s"],
+    "modes": ["bearing_area_in2"],
+    "damping_fits": ["bearing_area_in2", "amplitude_low_in_s", "amplitude_high_in_s"],
+    "damping_curves": ["velocity_amplitude_in_s", "bearing_area_in2"],
+    "area_fits": ["velocity_amplitude_in_s", "bearing_area_in2"],
+    "hypotheses": ["amplitude_low_in_s", "amplitude_high_in_s"],
+}
+"""Table -> its inch-second columns that gain an SI twin with ``units: si``."""
+
+
+def _all_text(figure) -> str:
+    """Every label, title, tick label, legend entry and note of a figure."""
+    return " ".join(text.get_text() for text in figure.findobj(matplotlib.text.Text))
+
+
+def test_si_units_add_si_columns_and_si_figures_beside_an_unchanged_default(finished_run, tmp_path):
+    campaign, default_workdir, _ = finished_run
+    result = snakemake(tmp_path, "-c2", "measured", "--config", f"campaign={campaign}", GROUPED, "units=si")
+    assert result.returncode == 0, result.stderr[-4000:]
+    tables = {}
+    for table, columns in SI_TABLES.items():
+        path = tmp_path / f"results/tables/{table}.parquet"
+        si, default = (
+            pd.read_parquet(path),
+            pd.read_parquet(default_workdir / f"results/tables/{table}.parquet"),
+        )
+        twins = {column: SI_TWIN_COLUMNS[column] for column in columns}
+        for column, (twin, unit, factor) in twins.items():
+            # the same multiplication as the table's: equal to the last bit
+            np.testing.assert_array_equal(si[twin].to_numpy(float), si[column].to_numpy(float) * factor)
+            assert column_units(path)[twin] == unit, (table, twin)
+            assert list(si.columns).index(twin) == list(si.columns).index(column) + 1
+        # the default run is what it was: no SI columns, the same values in the contract's units
+        assert not set(twin for twin, _, _ in twins.values()) & set(default.columns)
+        pd.testing.assert_frame_equal(si.drop(columns=[twin for twin, _, _ in twins.values()]), default)
+        tables[table] = si
+    assert tables["segments"]["velocity_amplitude_m_s"].notna().all()
+
+    # the rules draw in SI: the PNGs differ from the default run's, and nothing is hard to read
+    for name in ("fig10_damping_no_washer.png", "fig13_area_fits.png", "backbone_no_washer.png"):
+        si_png = (tmp_path / "results/figures" / name).read_bytes()
+        assert si_png != (default_workdir / "results/figures" / name).read_bytes(), name
+    for log in ("figures_damping.log", "figures_backbone.log"):
+        assert "hard to read" not in (tmp_path / "results/logs" / log).read_text()
+
+    # the figure code path on the SI run's tables: SI on every axis, label and note
+    segments = tables["segments"]
+    mine = segments[segments["configuration"] == "no_washer"]
+    curves = tables["damping_curves"]
+    drawn = {
+        "damping": figures.damping_vs_amplitude(
+            mine, title="t", curve=curves[curves["configuration"] == "no_washer"], units=SI
+        ),
+        "backbone": figures.frequency_vs_amplitude(mine, title="t", units=SI),
+        "area": figures.area_fits(curves, tables["area_fits"], title="t", units=SI),
+        "loops": figures.friction_loops(
+            [(0.5, np.array([-0.5, 0.5]), np.array([-2.0, 2.0]))], title="t", units=SI
+        ),
+    }
+    assert drawn["damping"].axes[0].get_xlabel() == "velocity amplitude (m/s)"
+    assert drawn["backbone"].axes[0].get_xlabel() == "velocity amplitude (m/s)"
+    first_run = mine[mine["run"] == mine["run"].iloc[0]]
+    np.testing.assert_array_equal(
+        drawn["damping"].axes[0].lines[0].get_xdata(), first_run["velocity_amplitude_m_s"].to_numpy(float)
+    )
+    left, right = drawn["area"].axes[:2]
+    assert left.get_xlabel() == "velocity amplitude (m/s)" and right.get_xlabel() == "bearing area (m²)"
+    loop_axis = drawn["loops"].axes[0]
+    assert (
+        loop_axis.get_xlabel() == "relative displacement (m)"
+        and loop_axis.get_ylabel() == "friction force (N)"
+    )
+    np.testing.assert_array_equal(loop_axis.lines[0].get_ydata(), np.array([-2.0, 2.0]) * SI.per_lbf)
+    for name, figure in drawn.items():
+        text = _all_text(figure)
+        assert "in/s" not in text and "in²" not in text and "lbf" not in text, name
+        assert readability_problems(figure) == [], name

@@ -3,17 +3,26 @@ TDMS and ASCII files: the same tables as the same samples in ASCII, and a damage
 excluded with its reason while the others complete."""
 
 import functools
+import json
 import shutil
+from datetime import timedelta
 
 import numpy as np
 import pandas as pd
 import pytest
 from helpers import REPO, checksums, run_snakemake
-from system_format_files import write_mixed_format_copy
+from system_format_files import FIRST_RECORDING, convert_run, write_mixed_format_copy
 
+from workflow.discovery.diagnosis import diagnose_campaign
+from workflow.io.campaign import list_runs, load_campaign, read_run
+from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
+from workflow.lab.hidden_effects import generate_case
 from workflow.lab.virtual_lab import generate_campaign
 
 snakemake = functools.partial(run_snakemake, timeout=900)
+
+HIDDEN_SEED = 20240
+"""Seed of the hidden-effect case (tests/test_hidden_effects.py's base seed: run drift named)."""
 
 
 def test_mixed_format_campaign_gives_the_tables_of_its_ascii_copy(tmp_path):
@@ -44,6 +53,12 @@ def test_mixed_format_campaign_gives_the_tables_of_its_ascii_copy(tmp_path):
     assert "truncated" in runs.loc["run06", "reason"]
     assert (runs.drop(index="run06")["status"] == "used").all()
     assert runs.loc["run02", "path"] == "no_washer/run02.mat"
+    # the recording start each system-format file states (in the reverse of name order), none in ASCII
+    assert runs.loc["run01", "record_start"] == ""
+    assert runs.loc["run02", "record_start"] == "2026-03-05T14:03:00"  # Test.Lab: local clock time
+    assert runs.loc["run03", "record_start"] == "2026-03-05T14:02:00"  # UFF58 ID line 3
+    assert runs.loc["run05", "record_start"] == "2026-03-05T14:00:00+00:00"  # TDMS: UTC
+    assert runs.loc["run06", "record_start"] == ""  # not readable
 
     for table in ("segments", "modes"):
         pd.testing.assert_frame_equal(tables["mixed"][table], tables["ascii"][table])
@@ -84,3 +99,47 @@ def test_real_plain_mat_gives_the_segments_of_the_converted_campaign(tmp_path):
     # decrement is a difference of logarithms and moves more.
     for column, rtol in (("response_amplitude", 1e-6), ("frequency_hz", 1e-6), ("zeta", 1e-5)):
         np.testing.assert_allclose(mat[column], converted[column], rtol=rtol, err_msg=column)
+
+
+def test_drift_seen_only_in_the_recording_order_of_system_format_files(tmp_path):
+    """A hidden run drift (virtual lab) in Test.Lab MAT, UFF58 and UFF58b files named in an
+    order unrelated to their recording (Spearman -0.05): the workflow reads each file's
+    recording start, orders the runs by it and names the drift; the same segments in
+    file-name order show none."""
+    _, lab_campaign = generate_case("run_drift", HIDDEN_SEED, tmp_path / "lab")
+    lab = load_campaign(lab_campaign)
+    campaign = tmp_path / "campaign"
+    (campaign / "joint").mkdir(parents=True)
+    yaml_text = (lab_campaign / "campaign.yaml").read_text()
+    (campaign / "campaign.yaml").write_text(
+        yaml_text.replace(f'"{lab.configurations["joint"].files}"', '"joint/*"')
+    )
+    name_of_position = [3, 7, 0, 5, 1, 6, 2, 4]  # the run recorded k-th is named run{name_of_position[k] + 1}
+    formats = ((".mat", False), (".uff", False), (".uff", True))
+    recorded_order = []
+    for position, run in enumerate(list_runs(lab_campaign, lab)):  # run01 ... run08: the lab's order
+        record = read_run(lab_campaign, run, lab)
+        suffix, binary = formats[position % len(formats)]
+        name = f"run{name_of_position[position] + 1:02d}"
+        recorded = FIRST_RECORDING + timedelta(minutes=5 * position)
+        convert_run(
+            record, campaign / "joint" / f"{name}{suffix}", 1 / record.sample_rate_hz, binary, recorded
+        )
+        recorded_order.append(name)
+
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    result = snakemake(workdir, "-c2", "discovery", "--config", f"campaign={campaign}")
+    assert result.returncode == 0, result.stderr[-4000:]
+    runs = pd.read_parquet(workdir / "results/tables/runs.parquet").set_index("run")
+    assert runs.loc[recorded_order[2], "record_start"] == "2026-03-05T14:10:00"
+    document = json.loads((workdir / "results/diagnosis.json").read_text())
+    joint = document["configurations"]["joint"]
+    trend = joint["evidence"]["run_order_trend"]
+    assert trend["order"] == RECORD_START_ORDER and trend["runs"] == recorded_order
+    assert joint["cause"] == "run_drift" and trend["significant"], joint["evidence"]["decision_rule"]
+
+    segments = pd.read_parquet(workdir / "results/tables/segments.parquet")
+    by_name = diagnose_campaign(segments, "by file name")["configurations"]["joint"]
+    assert by_name["evidence"]["run_order_trend"]["order"].startswith(FILE_NAME_ORDER)
+    assert by_name["cause"] != "run_drift" and not by_name["evidence"]["run_order_trend"]["significant"]

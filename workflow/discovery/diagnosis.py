@@ -40,6 +40,7 @@ import pandas as pd
 from scipy import optimize, special
 from scipy.stats import qmc
 
+from workflow.io.recording_time import FILE_NAME_ORDER, run_order
 from workflow.io.settings import AnalysisSettings, DiscoverySettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel, CurveGrid
 
@@ -164,8 +165,11 @@ class ConfigurationData:
     velocity_in_s, zeta, frequency_hz : ndarray
         Per segment: velocity amplitude (in/s), damping ratio, damped frequency (Hz).
     run_index : ndarray of int
-        0-based run of each segment in run order (sorted run names).
+        0-based run of each segment in run order (``run_names``).
     run_names : list of str
+        The runs in run order: by recording start when the files give one, else by name.
+    run_order : str
+        Which order ``run_names`` is, in words (:func:`workflow.io.recording_time.run_order`).
     bearing_area_in2 : float or None
     response_order : int
         0, 1, 2: the record was displacement, velocity, acceleration.
@@ -192,6 +196,7 @@ class ConfigurationData:
     anchor_velocity_in_s: float = 0.0
     """Top of the measured amplitudes (default: the largest), in/s: amplitude bins are
     counted down from it, so that they do not depend on the sensor's position."""
+    run_order: str = FILE_NAME_ORDER
 
     def __post_init__(self) -> None:
         if not self.anchor_velocity_in_s > 0:
@@ -211,11 +216,15 @@ class ConfigurationData:
         return float(np.median(self.frequency_hz))
 
 
-def prepare_configuration(frame: pd.DataFrame, name: str, response_order: int = 2) -> ConfigurationData:
+def prepare_configuration(
+    frame: pd.DataFrame, name: str, response_order: int = 2, record_start: Mapping[str, str] | None = None
+) -> ConfigurationData:
     """Arrays of one configuration from the segments table.
 
     Rows with non-finite values or ``zeta <= 0`` (a growing envelope) cannot enter a
-    fit in ``ln zeta`` and are dropped (counted in ``n_dropped``).
+    fit in ``ln zeta`` and are dropped (counted in ``n_dropped``). ``record_start``
+    (run name -> ISO 8601 recording start, the runs table's ``record_start``) orders
+    the runs when every run has one (:func:`workflow.io.recording_time.run_order`).
     """
     rows = frame[frame["configuration"] == name]
     v = rows["velocity_amplitude_in_s"].to_numpy(float)
@@ -223,7 +232,7 @@ def prepare_configuration(frame: pd.DataFrame, name: str, response_order: int = 
     f = rows["frequency_hz"].to_numpy(float)
     ok = np.isfinite(v) & np.isfinite(z) & np.isfinite(f) & (v > 0) & (z > 0) & (f > 0)
     runs = rows["run"].astype(str).to_numpy()
-    run_names = sorted(set(runs[ok]))
+    run_names, order = run_order(sorted(set(runs[ok])), record_start or {})
     index = {r: i for i, r in enumerate(run_names)}
     area = None
     if "bearing_area_in2" in rows and len(rows):
@@ -246,6 +255,7 @@ def prepare_configuration(frame: pd.DataFrame, name: str, response_order: int = 
         bearing_area_in2=area,
         response_order=response_order,
         n_dropped=int((~ok).sum()),
+        run_order=order,
         **extra,
     )
 
@@ -919,7 +929,8 @@ def binned_discrepancy(
     list of dict
         One per (bin, curve): ``curve`` ("damping"/"frequency"), ``v_low_in_s``,
         ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``standard_error``, ``t``,
-        ``p``, ``n_runs``, ``n_segments``, ``significant``.
+        ``p``, ``p_limit`` (``alpha / n_tests``), ``n_runs``, ``n_segments``,
+        ``tolerance``, ``significant``.
     """
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     rows = []
@@ -964,7 +975,8 @@ def binned_discrepancy(
             )
     n_tests = 2 * max(len(rows), 1)  # the other half of alpha goes to the run-order test
     for row in rows:
-        row["significant"] = bool(row["p"] < alpha / n_tests and abs(row["mean"]) > row["tolerance"])
+        row["p_limit"] = alpha / n_tests
+        row["significant"] = bool(row["p"] < row["p_limit"] and abs(row["mean"]) > row["tolerance"])
     return rows
 
 
@@ -998,9 +1010,10 @@ def run_order_trend(
         a resample of runs passes the drawn runs' positions).
 
     Returns None with fewer than 4 runs; else ``slope_per_run`` (ln zeta per run),
-    ``change_over_sequence`` (slope times (n_runs - 1)), ``t``, ``p`` and
+    ``change_over_sequence`` (slope times (n_runs - 1)), ``t``, ``p``,
     ``significant`` (``p < alpha / n_tests`` and the change over the sequence larger
-    than the model accuracy).
+    than the model accuracy), ``order`` (which run order, ``data.run_order``) and
+    ``runs`` (the run names in that order).
     """
     x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
     if data.n_runs < 4 or np.unique(x).size < 3:
@@ -1026,6 +1039,8 @@ def run_order_trend(
         "t": float(t),
         "p": p,
         "significant": bool(p < alpha / n_tests and abs(change) > TOL_LN_ZETA),
+        "order": data.run_order,
+        "runs": list(data.run_names),
     }
 
 
@@ -1095,8 +1110,63 @@ def _fmt_v(v: float) -> str:
     return f"{v:.3g}"
 
 
+def format_percent(value_percent: float) -> str:
+    """A signed percentage to two significant digits, never rounded to zero.
+
+    ``-0.0042`` gives ``"-0.0042 %"``, ``31.4`` gives ``"+31 %"``; exactly zero gives ``"0 %"``.
+    """
+    if value_percent == 0 or not np.isfinite(value_percent):
+        return f"{value_percent:g} %"
+    rounded = float(f"{value_percent:.2g}")
+    decimals = max(0, 1 - int(np.floor(np.log10(abs(rounded)))))
+    return f"{rounded:+.{decimals}f} %"
+
+
+def _misfit_percent(curve: str, mean: float) -> float:
+    """A bin's mean residual as a percentage of the model: damping residuals are in
+    ln zeta, frequency residuals relative."""
+    return 100 * float(np.expm1(mean)) if curve == "damping" else 100 * float(mean)
+
+
+def _misfit_words(model_name: str, row: Mapping) -> str:
+    """``the measured damping lies 4.2 % above the lugre fit at 1-3.2 in/s``."""
+    size = _misfit_percent(row["curve"], row["mean"])
+    side = "above" if size > 0 else "below" if size < 0 else "on"
+    return (
+        f"the measured {row['curve']} lies {format_percent(size).lstrip('+-')} {side} the "
+        f"{model_name} fit at {_fmt_v(row['v_low_in_s'])}-{_fmt_v(row['v_high_in_s'])} in/s"
+    )
+
+
+def _negligible_misfit_words(model_name: str, row: Mapping) -> str:
+    """Why the bin with the largest |t| is not a misfit: not significant after the
+    Bonferroni correction, or smaller than the models' accuracy, or both."""
+    tolerance = _misfit_percent(row["curve"], row["tolerance"])
+    clear = row["p"] < row["p_limit"]
+    small = abs(row["mean"]) <= row["tolerance"]
+    statistic = f"|t| = {abs(row['t']):.1f}, p = {row['p']:.2g} against {row['p_limit']:.2g} after correction"
+    accuracy = f"the {abs(tolerance):.2g} % in {row['curve']} the models are accurate to"
+    if clear and small:
+        judgement = (
+            f"statistically clear ({statistic}) but physically negligible: smaller than {accuracy} "
+            f"({abs(row['mean']) / row['tolerance']:.2g} of it)"
+        )
+    elif small:
+        judgement = f"neither statistically significant ({statistic}) nor larger than {accuracy}"
+    else:
+        judgement = f"larger than {accuracy} but not statistically significant ({statistic})"
+    return f"the largest binned misfit, where {_misfit_words(model_name, row)}, is {judgement}"
+
+
 def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, n_runs: int) -> str:
-    """Plain sentence: where and by how much the model is wrong (or that it is not)."""
+    """Plain sentence: where and by how much the model is wrong (or that it is not).
+
+    Sizes are percentages of the model (two significant digits, so that a misfit that
+    is not zero never reads as ``0.00 %``), with their direction in words. A misfit is
+    called significant only when it is both statistically clear (``p`` below the
+    corrected limit) and larger than the models' accuracy (``tolerance``); when no bin
+    is, the sentence says which of the two the largest one (by ``|t|``) fails.
+    """
     sig = [b for b in bins if b["significant"]]
     parts = []
     for curve in ("damping", "frequency"):
@@ -1106,36 +1176,25 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
         lo = min(b["v_low_in_s"] for b in rows)
         hi = max(b["v_high_in_s"] for b in rows)
         worst = max(rows, key=lambda b: abs(b["mean"]))
-        if curve == "damping":
-            size = f"{100 * (np.exp(worst['mean']) - 1):+.1f} %"
-        else:
-            size = f"{100 * worst['mean']:+.3f} %"
         parts.append(
             f"the measured {curve} differs from the {model_name} fit between "
-            f"{_fmt_v(lo)} and {_fmt_v(hi)} in/s, by up to {size} "
+            f"{_fmt_v(lo)} and {_fmt_v(hi)} in/s, by up to "
+            f"{format_percent(_misfit_percent(curve, worst['mean']))} "
             f"(|t| = {abs(worst['t']):.1f} over {worst['n_runs']} runs) at "
             f"{_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s"
         )
     if trend is not None and trend["significant"]:
         parts.append(
-            f"the runs' damping residual drifts with run order by "
-            f"{100 * (np.exp(trend['change_over_sequence']) - 1):+.1f} % from the "
+            f"the runs' damping residual drifts with run order ({trend['order']}) by "
+            f"{format_percent(_misfit_percent('damping', trend['change_over_sequence']))} from the "
             f"first to the last run (t = {trend['t']:.1f})"
         )
     if not parts:
         worst = max(bins, key=lambda b: abs(b["t"]), default=None)
-        tail = ""
-        if worst is not None:
-            size = 100 * (np.exp(worst["mean"]) - 1) if worst["curve"] == "damping" else 100 * worst["mean"]
-            tail = (
-                f"; the largest binned misfit is {size:+.2f} % in {worst['curve']} "
-                f"at {_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s "
-                f"(|t| = {abs(worst['t']):.1f}, not significant after correction or "
-                f"below the model accuracy)"
-            )
+        tail = "" if worst is None else "; " + _negligible_misfit_words(model_name, worst)
         return (
-            f"The {model_name} baseline fits damping and frequency within the run-to-run "
-            f"scatter at every amplitude ({n_runs} runs){tail}."
+            f"The {model_name} baseline fits damping and frequency at every amplitude to "
+            f"within the run-to-run scatter or the models' accuracy ({n_runs} runs){tail}."
         )
     text = "; ".join(parts)
     return text[0].upper() + text[1:] + "."
@@ -1382,6 +1441,7 @@ def _subset(
         fit_rms=pick(data.fit_rms),
         response_amplitude=pick(data.response_amplitude),
         anchor_velocity_in_s=data.anchor_velocity_in_s,
+        run_order=data.run_order,
     )
 
 
@@ -1824,6 +1884,7 @@ def diagnose_campaign(
     response_quantity: str | Mapping[str, str] = "acceleration",
     settings: FitSettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
+    runs: pd.DataFrame | None = None,
     return_details: bool = False,
 ):
     """The ``results/diagnosis.json`` document of a campaign.
@@ -1843,6 +1904,9 @@ def diagnose_campaign(
     segment_cycles : float
         Log-decrement segment length in cycles (config ``analysis.segment_cycles``),
         for the envelope-structure check.
+    runs : DataFrame, optional
+        The runs table (results/tables/runs.parquet): its ``record_start`` orders each
+        configuration's runs for the run-order tests; without it, file-name order.
     return_details : bool
         Also return the per-configuration :class:`ConfigurationDiagnosis` objects.
 
@@ -1865,7 +1929,11 @@ def diagnose_campaign(
             if isinstance(response_quantity, str)
             else response_quantity.get(name, "acceleration")
         )
-        data = prepare_configuration(segments, name, RESPONSE_ORDER[quantity])
+        starts = {}
+        if runs is not None and "record_start" in runs:
+            rows = runs[runs["configuration"] == name]
+            starts = dict(zip(rows["run"].astype(str), rows["record_start"].fillna("").astype(str)))
+        data = prepare_configuration(segments, name, RESPONSE_ORDER[quantity], starts)
         if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
             skipped[name] = f"only {data.n} usable segments: too few to fit and validate models"
             continue

@@ -1042,6 +1042,9 @@ class RunRecord:
         Where the sample rate came from: ``campaign.yaml``, ``header`` or ``time column``.
     pretrigger_source : str
         ``campaign.yaml``, ``header`` or ``default`` (contract default 0, not stated).
+    record_start : str
+        Wall-clock time the recording started, ISO 8601, when the file states it
+        (:mod:`workflow.io.recording_time`); empty otherwise (ASCII files).
     """
 
     path: str
@@ -1057,6 +1060,7 @@ class RunRecord:
     column_names: tuple[str, ...] = ()
     sample_rate_source: str = "campaign.yaml"
     pretrigger_source: str = "default"
+    record_start: str = ""
 
 
 @dataclass(frozen=True)

@@ -94,7 +94,7 @@ def read_mode(path: str | Path) -> ConfigurationMode:
 
 
 def write_run_statuses(path: str | Path, statuses: list[dict]) -> None:
-    """Write the status rows (configuration, run, path, status, reason) of one job's runs."""
+    """Write the status rows (configuration, run, path, status, reason, record_start) of one job's runs."""
     write_json(path, statuses)
 
 

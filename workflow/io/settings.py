@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from annotated_types import Ge, Gt, Le, Lt
 
@@ -248,6 +248,12 @@ class WorkflowConfig:
     job spends about 0.25 s starting (Python, Snakemake's script preamble, NumPy)
     and 0.06 s per run on signal work, and Snakemake's own bookkeeping grows with the
     number of jobs; 1 gives one job per run file. Results do not depend on it."""
+
+    units: Literal["inch-second", "si"] = "inch-second"
+    """Units of the results: ``inch-second`` (in/s, in, in², lbf: the paper's, and the
+    output contract's columns) or ``si``: the tables gain SI columns beside the
+    inch-second ones (``velocity_amplitude_m_s`` ...), and figures, notes and the verdict
+    page show m/s, m, m², N (workflow.io.units.UNIT_SYSTEMS). Frequencies are Hz either way."""
 
     analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
     quality: QualitySettings = field(default_factory=QualitySettings)

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, SI_TWIN_COLUMNS, UnitSystem
+
 if TYPE_CHECKING:
     import pandas as pd
 
@@ -107,7 +109,45 @@ def concatenate_columns(tables: Sequence[Mapping[str, np.ndarray]]) -> dict[str,
     return {name: np.concatenate([np.asarray(table[name]) for table in tables]) for name in names}
 
 
-def write_table(frame: pd.DataFrame, path: Path | str, units: Mapping[str, str] | None = None) -> None:
+def with_si_columns(frame: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` with each inch-second column of :data:`~workflow.io.units.SI_TWIN_COLUMNS`
+    followed by its SI twin (``velocity_amplitude_m_s`` = ``velocity_amplitude_in_s`` x
+    0.0254), and, for a table of model parameters (``parameter``, ``value``, ``std``),
+    ``unit`` (as fitted) then ``value_si``, ``std_si`` and ``unit_si``.
+
+    Raises
+    ------
+    ValueError
+        A model parameter whose unit is not in
+        :data:`~workflow.io.units.MODEL_PARAMETER_UNITS` (the message names it).
+    """
+    import pandas as pd
+
+    columns = {}
+    for name in frame.columns:
+        columns[name] = frame[name]
+        if name in SI_TWIN_COLUMNS:
+            twin, _, factor = SI_TWIN_COLUMNS[name]
+            columns[twin] = frame[name] * factor
+        if name == "std" and "parameter" in frame.columns:
+            unknown = sorted(set(frame["parameter"]) - set(MODEL_PARAMETER_UNITS))
+            if unknown:
+                raise ValueError(f"model parameters with no known unit, cannot be written in SI: {unknown}")
+            entries = frame["parameter"].map(MODEL_PARAMETER_UNITS)  # (unit, SI unit, factor)
+            columns["unit"] = entries.str[0]
+            columns["value_si"] = frame["value"] * entries.str[2]
+            columns["std_si"] = frame["std"] * entries.str[2]
+            columns["unit_si"] = entries.str[1]
+    return pd.DataFrame(columns, index=frame.index)
+
+
+def write_table(
+    frame: pd.DataFrame,
+    path: Path | str,
+    units: Mapping[str, str] | None = None,
+    *,
+    unit_system: UnitSystem = INCH_SECOND,
+) -> None:
     """Write ``frame`` as Parquet with each column's unit as field metadata.
 
     Parameters
@@ -118,11 +158,16 @@ def write_table(frame: pd.DataFrame, path: Path | str, units: Mapping[str, str] 
         Target file; written atomically.
     units : mapping, optional
         Extra ``column -> unit`` entries beside :data:`COLUMN_UNITS`.
+    unit_system : UnitSystem
+        Config ``units``: in SI the table gains the SI columns of :func:`with_si_columns`.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     all_units = {**COLUMN_UNITS, **(units or {})}
+    if unit_system.name == "si":
+        frame = with_si_columns(frame)
+        all_units.update({twin: unit for twin, unit, _ in SI_TWIN_COLUMNS.values()})
     table = pa.Table.from_pandas(frame.reset_index(drop=True), preserve_index=False)
     fields = [
         field.with_metadata({"unit": all_units[field.name]}) if field.name in all_units else field

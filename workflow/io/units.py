@@ -1,13 +1,15 @@
-"""Unit conversion to the internal units: inch, second, pound-force.
+"""Unit conversion to the internal units: inch, second, pound-force, and back to SI.
 
 The original study worked in in, in/s, in/s^2 and lbf, so every number that leaves
 the reader for the analysis is expressed in those units. Campaign files may use any
-unit listed in campaign-format.md; this module knows the exact factors.
+unit listed in campaign-format.md; this module knows the exact factors. Results are
+shown in those units or, with config ``units: si``, in SI (:data:`UNIT_SYSTEMS`).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -194,3 +196,72 @@ def velocity_amplitude_in_s(
     if quantity == "acceleration":
         return internal / omega_rad_s
     return internal * omega_rad_s
+
+
+INCH_M: float = 0.0254
+"""Metres in one inch (exact)."""
+
+LBF_N: float = 0.45359237 * 9.80665
+"""Newtons in one pound-force (exact: 0.45359237 kg times standard gravity)."""
+
+
+@dataclass(frozen=True)
+class UnitSystem:
+    """The units results are shown in (config ``units``), and the factors from the
+    analysis's own inch-pound-second units to them.
+
+    Attributes
+    ----------
+    name : str
+        ``inch-second`` or ``si``.
+    velocity, length, area, force : str
+        Unit labels for axes and sentences (``in/s``, ``in``, ``in²``, ``lbf`` or
+        ``m/s``, ``m``, ``m²``, ``N``).
+    per_in_s, per_in, per_in2, per_lbf : float
+        Value in this system of 1 in/s, 1 in, 1 in², 1 lbf.
+    """
+
+    name: str
+    velocity: str
+    length: str
+    area: str
+    force: str
+    per_in_s: float
+    per_in: float
+    per_in2: float
+    per_lbf: float
+
+
+INCH_SECOND = UnitSystem("inch-second", "in/s", "in", "in²", "lbf", 1.0, 1.0, 1.0, 1.0)
+"""The paper's units, in which the analysis works and the contract's columns are written."""
+
+SI = UnitSystem("si", "m/s", "m", "m²", "N", INCH_M, INCH_M, INCH_M**2, LBF_N)
+"""SI: m/s, m, m², N (frequencies stay in Hz)."""
+
+UNIT_SYSTEMS: dict[str, UnitSystem] = {system.name: system for system in (INCH_SECOND, SI)}
+"""Config ``units`` value -> unit system."""
+
+SI_TWIN_COLUMNS: dict[str, tuple[str, str, float]] = {
+    "velocity_amplitude_in_s": ("velocity_amplitude_m_s", "m/s", INCH_M),
+    "amplitude_low_in_s": ("amplitude_low_m_s", "m/s", INCH_M),
+    "amplitude_high_in_s": ("amplitude_high_m_s", "m/s", INCH_M),
+    "bearing_area_in2": ("bearing_area_m2", "m^2", INCH_M**2),
+}
+"""Inch-second table column -> (its SI twin's name, the twin's unit, factor to it)."""
+
+MODEL_PARAMETER_UNITS: dict[str, tuple[str, str, float]] = {
+    "sigma": ("lbf/in", "N/m", LBF_N / INCH_M),
+    "sigma0": ("lbf/in", "N/m", LBF_N / INCH_M),
+    "fc": ("lbf", "N", LBF_N),
+    "alpha0": ("lbf", "N", LBF_N),
+    "alpha1": ("lbf", "N", LBF_N),
+    "sigma1": ("lbf s/in", "N s/m", LBF_N / INCH_M),
+    "alpha2": ("lbf s/in", "N s/m", LBF_N / INCH_M),
+    "v0": ("in/s", "m/s", INCH_M),
+    "vd": ("in/s", "m/s", INCH_M),
+    "zeta0": ("1", "1", 1.0),
+    "omega_rad_s": ("rad/s", "rad/s", 1.0),
+    "f_linear_hz": ("Hz", "Hz", 1.0),
+}
+"""Dahl / LuGre parameter (results/tables/model_fits.parquet) -> (unit as fitted, SI
+unit, factor to SI)."""

@@ -125,6 +125,10 @@ def identify_mode(
     )
 
 
+RUN_COLUMNS = ["configuration", "run", "path", "status", "reason", "record_start"]
+"""Columns of the runs table (``record_start``: ISO 8601 recording start, empty when the
+file states none; :mod:`workflow.io.recording_time`)."""
+
 SEGMENT_COLUMNS = [
     "configuration",
     "run",
@@ -338,6 +342,7 @@ def analyse_run_file(
         "path": run_path,
         "status": "excluded" if problems else "used",
         "reason": "; ".join(problems),
+        "record_start": "" if record is None else record.record_start,
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
 
@@ -466,7 +471,8 @@ def collect_tables(
     from workflow.io.tables import read_columns
 
     statuses = pd.DataFrame(read_run_statuses(status_paths) + list(excluded_paths))
-    runs = statuses[["configuration", "run", "path", "status", "reason"]].reset_index(drop=True)
+    statuses = statuses.reindex(columns=RUN_COLUMNS).fillna({"record_start": ""})
+    runs = statuses.reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
     frames = [frame for frame in frames if len(frame)]
     all_segments = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(empty_segments())

@@ -22,7 +22,8 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
-from workflow.outputs.figures import STYLE, VELOCITY_LABEL, add_note, plain_log_axis  # noqa: E402
+from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
+from workflow.outputs.figures import STYLE, add_note, plain_log_axis, velocity, velocity_label  # noqa: E402
 
 __all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
@@ -73,7 +74,9 @@ def residual_ticks(limit: float) -> list[float]:
     return sorted([0.0, *ticks, *(-tick for tick in ticks)])
 
 
-def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapping) -> plt.Figure:
+def residuals_figure(
+    residuals: pd.DataFrame, configuration: str, document: Mapping, units: UnitSystem = INCH_SECOND
+) -> plt.Figure:
     """Residuals vs amplitude of the baseline and the extended model of one configuration.
 
     Parameters
@@ -84,6 +87,8 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
     document : mapping
         The campaign's diagnosis document (or this configuration's entry): names the
         cause and the models in the title and legends.
+    units : UnitSystem
+        The unit of the amplitude axis.
 
     Returns
     -------
@@ -106,7 +111,7 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
             ax.axhline(0.0, color="0.4", lw=0.8)
             for role in roles:
                 sub = rows[(rows["role"] == role) & (rows["curve"] == curve)]
-                v = sub["velocity_amplitude_in_s"].to_numpy(float)
+                v = velocity(sub, units)
                 r = sub["residual"].to_numpy(float)
                 colour = ROLE_COLOURS[role]
                 ax.scatter(v, r, s=5, alpha=0.25, color=colour, lw=0)
@@ -135,7 +140,7 @@ def residuals_figure(residuals: pd.DataFrame, configuration: str, document: Mapp
             if not len(rows[rows["curve"] == curve]):
                 ax.text(0.5, 0.5, "no residuals", ha="center", va="center", transform=ax.transAxes)
         axes[0].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-        axes[-1].set_xlabel(VELOCITY_LABEL)
+        axes[-1].set_xlabel(velocity_label(units))
         ratio = f", gain ratio {gain:.2f}" if gain is not None else ""
         fig.suptitle(f"{configuration}: cause {cause}{ratio}")
         fig.tight_layout()
@@ -223,13 +228,15 @@ def candidates_figure(document: Mapping) -> plt.Figure:
     return fig
 
 
-def heldout_figure(document: Mapping) -> plt.Figure:
+def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Figure:
     """Across configurations: error predicting a left-out bearing area, per configuration.
 
     Parameters
     ----------
     document : mapping
         The campaign's diagnosis document (``across_configurations``).
+    units : UnitSystem
+        The unit of the bearing areas on the axis.
 
     Returns
     -------
@@ -274,7 +281,8 @@ def heldout_figure(document: Mapping) -> plt.Figure:
             if len(values) == 2:
                 ax.plot([position, position], values, color="0.6", lw=1, zorder=0)
         ax.axhspan(0, 2, color="0.85", alpha=0.6, lw=0, label="within ±2 scatter")
-        ax.set_xticks(x, [f"{n}\n{configs[n].get('bearing_area_in2', float('nan')):.2f} in²" for n in names])
+        areas = [units.per_in2 * (configs[n].get("bearing_area_in2") or float("nan")) for n in names]
+        ax.set_xticks(x, [f"{n}\n{area:.3g} {units.area}" for n, area in zip(names, areas)])
         ax.set_xlim(-0.5, len(names) - 0.5)
         ax.set_yscale("log")
         plain_log_axis(ax.yaxis)
@@ -282,7 +290,7 @@ def heldout_figure(document: Mapping) -> plt.Figure:
         finite = finite[np.isfinite(finite)]
         if finite.size:
             ax.set_ylim(min(0.5, finite.min() / 1.5), finite.max() * 1.5)
-        ax.set_xlabel("left-out configuration (bearing area, in²)")
+        ax.set_xlabel(f"left-out configuration (bearing area, {units.area})")
         ax.set_ylabel("prediction error of the left-out\nconfiguration (RMS residual / scatter, 1)")
         ratio = across.get("ratio")
         title = "Prediction of a left-out bearing area from the others' ln(area) law"

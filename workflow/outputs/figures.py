@@ -1,5 +1,9 @@
 """Figures in one style: units on every axis, legends naming runs and models,
 logarithmic amplitude axes (amplitudes span decades), legible at report size.
+
+The tables hold velocities in in/s, areas in in², forces in lbf; every figure takes a
+:class:`~workflow.io.units.UnitSystem` (config ``units``) and shows its axes, labels and
+notes in it.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
+from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 log = logging.getLogger(__name__)
@@ -37,7 +42,6 @@ STYLE = {
     "axes.formatter.useoffset": False,
 }
 
-VELOCITY_LABEL = "velocity amplitude (in/s)"
 DAMPING_LABEL = "equivalent damping ratio ζ (%)"
 FREQUENCY_LABEL = "damped frequency of the mode (Hz)"
 
@@ -85,12 +89,22 @@ def plain_log_axis(axis: matplotlib.axis.Axis) -> None:
     axis.set_minor_formatter(PlainLogFormatter(minor=True))
 
 
-def amplitude_axis(axis: plt.Axes) -> None:
+def velocity_label(units: UnitSystem = INCH_SECOND) -> str:
+    """``velocity amplitude (in/s)``, or in the unit system's velocity unit."""
+    return f"velocity amplitude ({units.velocity})"
+
+
+def velocity(frame: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> np.ndarray:
+    """A table's ``velocity_amplitude_in_s`` in the unit system's velocity unit."""
+    return units.per_in_s * frame["velocity_amplitude_in_s"].to_numpy(float)
+
+
+def amplitude_axis(axis: plt.Axes, units: UnitSystem = INCH_SECOND) -> None:
     """Logarithmic velocity-amplitude x axis with plain tick labels (0.2, 0.5, 1, 2 ...),
     which stay legible whether the data span a fraction of a decade or several."""
     axis.set_xscale("log")
     plain_log_axis(axis.xaxis)
-    axis.set_xlabel(VELOCITY_LABEL)
+    axis.set_xlabel(velocity_label(units))
 
 
 def legend_beside(axis: plt.Axes, **options) -> None:
@@ -171,11 +185,17 @@ def misfit_ranges(
     return ranges
 
 
-def misfit_sentence(name: str, quantity: str, ranges: list[tuple[float, float, float]]) -> str | None:
-    """'NAME misses the measured QUANTITY at 0.2-0.5 in/s (by 3.1 scatter) ...' or None."""
+def misfit_sentence(
+    name: str, quantity: str, ranges: list[tuple[float, float, float]], units: UnitSystem = INCH_SECOND
+) -> str | None:
+    """'NAME misses the measured QUANTITY at 0.2-0.5 in/s (by 3.1 scatter) ...' or None.
+
+    ``ranges`` are :func:`misfit_ranges` of amplitudes in in/s; the sentence gives them
+    in ``units``."""
     if not ranges:
         return None
-    parts = [f"{low:.3g}-{high:.3g} in/s" for low, high, _ in ranges]
+    scale = units.per_in_s
+    parts = [f"{scale * low:.3g}-{scale * high:.3g} {units.velocity}" for low, high, _ in ranges]
     worst = max(offset for _, _, offset in ranges)
     return (
         f"{name} misses the measured {quantity} at {', '.join(parts)}: there its mean is off by up to "
@@ -210,6 +230,7 @@ def _plot_runs(
     markersize: float = 3.0,
     alpha: float = 0.8,
     labels: bool = True,
+    units: UnitSystem = INCH_SECOND,
 ) -> list[str]:
     """One marker series per run (coloured in run order); returns the run names."""
     runs = list(dict.fromkeys(segments["run"]))
@@ -217,7 +238,7 @@ def _plot_runs(
     for run in runs:
         part = segments[segments["run"] == run]
         axis.plot(
-            part["velocity_amplitude_in_s"],
+            velocity(part, units),
             scale * part[column],
             "o",
             markersize=markersize,
@@ -277,6 +298,7 @@ def damping_vs_amplitude(
     title: str,
     curve: pd.DataFrame | None = None,
     models: dict[str, pd.DataFrame] | None = None,
+    units: UnitSystem = INCH_SECOND,
 ) -> plt.Figure:
     """Paper figures 10-12 (and 14-15 with ``models``): local damping vs velocity amplitude.
 
@@ -290,15 +312,17 @@ def damping_vs_amplitude(
         ``zeta_low``, ``zeta_high`` (confidence band).
     models : dict, optional
         Model name -> DataFrame with ``velocity_amplitude_in_s`` and ``zeta``.
+    units : UnitSystem
+        The units of the axes and notes.
     """
     with plt.rc_context(STYLE):
         figure, axis = plt.subplots(figsize=(8.4, 4.6))
-        _plot_runs(axis, segments, "zeta", scale=100)
+        _plot_runs(axis, segments, "zeta", scale=100, units=units)
         notes = []
         fitted = {}
         if curve is not None and len(curve):
             axis.fill_between(
-                curve["velocity_amplitude_in_s"],
+                velocity(curve, units),
                 100 * curve["zeta_low"],
                 100 * curve["zeta_high"],
                 color="k",
@@ -306,7 +330,7 @@ def damping_vs_amplitude(
                 label="95 % band (bootstrap over runs)",
             )
             axis.plot(
-                curve["velocity_amplitude_in_s"],
+                velocity(curve, units),
                 100 * curve["zeta"],
                 color="k",
                 linewidth=1.6,
@@ -314,22 +338,22 @@ def damping_vs_amplitude(
             )
             fitted["The polynomial fit"] = curve
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
-            axis.plot(frame["velocity_amplitude_in_s"], 100 * frame["zeta"], style, linewidth=2.0, label=name)
+            axis.plot(velocity(frame, units), 100 * frame["zeta"], style, linewidth=2.0, label=name)
             fitted[name] = frame
         for name, frame in fitted.items():
-            notes.append(damping_misfit(segments, frame, name))
-        _finish_amplitude_panel(figure, axis, segments, DAMPING_LABEL, title, notes)
+            notes.append(damping_misfit(segments, frame, name, units))
+        _finish_amplitude_panel(figure, axis, segments, DAMPING_LABEL, title, notes, units)
     return figure
 
 
 def _finish_amplitude_panel(
-    figure, axis, segments: pd.DataFrame, ylabel: str, title: str, notes: list
+    figure, axis, segments: pd.DataFrame, ylabel: str, title: str, notes: list, units: UnitSystem
 ) -> None:
     """Axes, labels, legend and notes of a curve against velocity amplitude; a note on the
     panel itself when no segment was usable."""
     if segments.empty:
         axis.text(0.5, 0.5, "no usable segment", ha="center", va="center", transform=axis.transAxes)
-    amplitude_axis(axis)
+    amplitude_axis(axis, units)
     axis.set_ylabel(ylabel)
     axis.set_title(title)
     legend_beside(axis)
@@ -337,22 +361,26 @@ def _finish_amplitude_panel(
     add_note(figure, [note for note in notes if note])
 
 
-def damping_misfit(segments: pd.DataFrame, frame: pd.DataFrame, name: str) -> str | None:
+def damping_misfit(
+    segments: pd.DataFrame, frame: pd.DataFrame, name: str, units: UnitSystem = INCH_SECOND
+) -> str | None:
     """The sentence saying where a fitted damping curve misses the segments (or None)."""
     amplitude = segments["velocity_amplitude_in_s"].to_numpy(float)
     zeta = segments["zeta"].to_numpy(float)
     predicted = curve_at(frame, "zeta", amplitude)
     with np.errstate(invalid="ignore", divide="ignore"):
         ranges = misfit_ranges(amplitude, np.log(zeta), np.log(predicted))
-    return misfit_sentence(name, "damping", ranges)
+    return misfit_sentence(name, "damping", ranges, units)
 
 
-def frequency_misfit(segments: pd.DataFrame, frame: pd.DataFrame, name: str) -> str | None:
+def frequency_misfit(
+    segments: pd.DataFrame, frame: pd.DataFrame, name: str, units: UnitSystem = INCH_SECOND
+) -> str | None:
     """The sentence saying where a fitted frequency curve misses the segments (or None)."""
     amplitude = segments["velocity_amplitude_in_s"].to_numpy(float)
     predicted = curve_at(frame, "frequency_hz", amplitude)
     ranges = misfit_ranges(amplitude, segments["frequency_hz"].to_numpy(float), predicted)
-    return misfit_sentence(name, "frequency", ranges)
+    return misfit_sentence(name, "frequency", ranges, units)
 
 
 def frequency_vs_amplitude(
@@ -360,22 +388,23 @@ def frequency_vs_amplitude(
     *,
     title: str,
     models: dict[str, pd.DataFrame] | None = None,
+    units: UnitSystem = INCH_SECOND,
 ) -> plt.Figure:
     """Backbone: local damped frequency vs velocity amplitude, per run (and models)."""
     with plt.rc_context(STYLE):
         figure, axis = plt.subplots(figsize=(8.4, 4.6))
-        _plot_runs(axis, segments, "frequency_hz")
+        _plot_runs(axis, segments, "frequency_hz", units=units)
         notes = []
         for (name, frame), style in zip((models or {}).items(), ("-", "--", "-.", ":")):
-            axis.plot(
-                frame["velocity_amplitude_in_s"], frame["frequency_hz"], style, linewidth=2.0, label=name
-            )
-            notes.append(frequency_misfit(segments, frame, name))
-        _finish_amplitude_panel(figure, axis, segments, FREQUENCY_LABEL, title, notes)
+            axis.plot(velocity(frame, units), frame["frequency_hz"], style, linewidth=2.0, label=name)
+            notes.append(frequency_misfit(segments, frame, name, units))
+        _finish_amplitude_panel(figure, axis, segments, FREQUENCY_LABEL, title, notes, units)
     return figure
 
 
-def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> plt.Figure:
+def area_fits(
+    curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str, units: UnitSystem = INCH_SECOND
+) -> plt.Figure:
     """Paper figure 13: fitted damping vs amplitude per configuration, and vs bearing area.
 
     Parameters
@@ -390,19 +419,17 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
     with plt.rc_context(STYLE):
         figure, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.6))
         for name, part in curves.groupby("configuration", sort=False):
-            area = part["bearing_area_in2"].iloc[0]
-            label = f"{name} ({area:.2f} in²)" if np.isfinite(area) else name
-            (line,) = left.plot(
-                part["velocity_amplitude_in_s"], 100 * part["zeta"], linewidth=1.8, label=label
-            )
+            area = units.per_in2 * part["bearing_area_in2"].iloc[0]
+            label = f"{name} ({area:.3g} {units.area})" if np.isfinite(area) else name
+            (line,) = left.plot(velocity(part, units), 100 * part["zeta"], linewidth=1.8, label=label)
             left.fill_between(
-                part["velocity_amplitude_in_s"],
+                velocity(part, units),
                 100 * part["zeta_low"],
                 100 * part["zeta_high"],
                 color=line.get_color(),
                 alpha=0.15,
             )
-        amplitude_axis(left)
+        amplitude_axis(left, units)
         left.set_ylabel(DAMPING_LABEL)
         left.set_title("polynomial fits with 95 % bands")
         if curves.empty:
@@ -416,25 +443,21 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
                 "bearing_area_in2"
             )
             colour = colours[f"{amplitude:.3g}"]
+            area = units.per_in2 * part["bearing_area_in2"]
+            label = f"{units.per_in_s * amplitude:.3g} {units.velocity}"
             if {"zeta_low", "zeta_high"} <= set(part.columns):
                 right.errorbar(
-                    part["bearing_area_in2"],
+                    area,
                     100 * part["zeta"],
                     yerr=[100 * (part["zeta"] - part["zeta_low"]), 100 * (part["zeta_high"] - part["zeta"])],
                     fmt="o-",
                     color=colour,
                     capsize=3,
-                    label=f"{amplitude:.3g} in/s",
+                    label=label,
                 )
             else:
-                right.plot(
-                    part["bearing_area_in2"],
-                    100 * part["zeta"],
-                    "o-",
-                    color=colour,
-                    label=f"{amplitude:.3g} in/s",
-                )
-        right.set_xlabel("bearing area (in²)")
+                right.plot(area, 100 * part["zeta"], "o-", color=colour, label=label)
+        right.set_xlabel(f"bearing area ({units.area})")
         right.set_ylabel(DAMPING_LABEL)
         right.set_title("damping vs bearing area at common amplitudes")
         if amplitudes:
@@ -455,28 +478,58 @@ def area_fits(curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str) -> 
     return figure
 
 
-def friction_loops(loops: list[tuple[float, np.ndarray, np.ndarray]], *, title: str) -> plt.Figure:
+PARAMETER_SYMBOLS = {
+    "sigma": "σ",
+    "sigma0": "σ0",
+    "sigma1": "σ1",
+    "fc": "Fc",
+    "alpha0": "α0",
+    "alpha1": "α1",
+    "alpha2": "α2",
+    "v0": "v0",
+    "vd": "vd",
+}
+"""Dahl / LuGre parameter -> its symbol in the paper."""
+
+
+def parameter_text(params: dict[str, float], units: UnitSystem = INCH_SECOND) -> str:
+    """``σ = 39.5 lbf/in, Fc = 38 lbf``: friction-model parameters (given in inch-pound
+    units) with their units, in ``units``."""
+    parts = []
+    for name, value in params.items():
+        unit, unit_si, factor_si = MODEL_PARAMETER_UNITS[name]
+        if units.name == "si":
+            unit, value = unit_si, value * factor_si
+        parts.append(f"{PARAMETER_SYMBOLS.get(name, name)} = {value:.3g} {unit}")
+    return ", ".join(parts)
+
+
+def friction_loops(
+    loops: list[tuple[float, np.ndarray, np.ndarray]], *, title: str, units: UnitSystem = INCH_SECOND
+) -> plt.Figure:
     """Paper figures 7 and 8: friction force vs displacement for several amplitudes.
 
     Parameters
     ----------
     loops : list of (amplitude_in, displacement_in, force_lbf)
+    units : UnitSystem
+        The units of the axes and labels.
     """
     with plt.rc_context(STYLE):
         figure, axis = plt.subplots()
         colours = run_colours([f"{amplitude:g}" for amplitude, _, _ in loops])
         for amplitude, displacement, force in loops:
             axis.plot(
-                displacement,
-                force,
+                units.per_in * np.asarray(displacement),
+                units.per_lbf * np.asarray(force),
                 color=colours[f"{amplitude:g}"],
                 linewidth=1.4,
-                label=f"amplitude {amplitude:g} in",
+                label=f"amplitude {units.per_in * amplitude:.3g} {units.length}",
             )
         axis.axhline(0, color="k", linewidth=0.5)
         axis.axvline(0, color="k", linewidth=0.5)
-        axis.set_xlabel("relative displacement (in)")
-        axis.set_ylabel("friction force (lbf)")
+        axis.set_xlabel(f"relative displacement ({units.length})")
+        axis.set_ylabel(f"friction force ({units.force})")
         axis.set_title(title)
         axis.legend(loc="upper left")
         figure.tight_layout()
@@ -488,17 +541,18 @@ def model_comparison(
     models: dict[str, pd.DataFrame],
     *,
     title: str,
+    units: UnitSystem = INCH_SECOND,
 ) -> plt.Figure:
     """Paper figures 14 and 15: measured damping and frequency vs velocity amplitude
     with the fitted simulations (two panels sharing the amplitude axis)."""
     with plt.rc_context(STYLE):
         figure, (top, bottom) = plt.subplots(2, 1, figsize=(8.4, 7.0), sharex=True)
-        _plot_runs(top, segments, "zeta", scale=100, markersize=2.5, alpha=0.6)
-        _plot_runs(bottom, segments, "frequency_hz", markersize=2.5, alpha=0.6, labels=False)
+        _plot_runs(top, segments, "zeta", scale=100, markersize=2.5, alpha=0.6, units=units)
+        _plot_runs(bottom, segments, "frequency_hz", markersize=2.5, alpha=0.6, labels=False, units=units)
         notes = []
         for (name, frame), style in zip(models.items(), ("-", "--", "-.", ":")):
             top.plot(
-                frame["velocity_amplitude_in_s"],
+                velocity(frame, units),
                 100 * frame["zeta"],
                 style,
                 color="k",
@@ -506,25 +560,28 @@ def model_comparison(
                 label=name,
             )
             bottom.plot(
-                frame["velocity_amplitude_in_s"],
+                velocity(frame, units),
                 frame["frequency_hz"],
                 style,
                 color="k",
                 linewidth=2.0,
                 label=name,
             )
-            notes += [damping_misfit(segments, frame, name), frequency_misfit(segments, frame, name)]
+            notes += [
+                damping_misfit(segments, frame, name, units),
+                frequency_misfit(segments, frame, name, units),
+            ]
         if any(notes):
             notes.append(
                 "Such a misfit is a finding, not a failed fit: it is what the diagnosis "
                 "(verdict page, discovery figures) sets out to explain."
             )
-        amplitude_axis(top)
+        amplitude_axis(top, units)
         top.set_xlabel("")
         top.set_ylabel(DAMPING_LABEL)
         top.set_title(title)
         legend_beside(top, fontsize=7)
-        amplitude_axis(bottom)
+        amplitude_axis(bottom, units)
         bottom.set_ylabel(FREQUENCY_LABEL)
         if models:
             legend_beside(bottom)

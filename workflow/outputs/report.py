@@ -21,7 +21,11 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+import numpy as np
 import pandas as pd
+
+from workflow.io.recording_time import run_order
+from workflow.io.units import INCH_SECOND, UnitSystem
 
 #: What each cause of the output contract means, in plain words.
 CAUSE_WORDS: dict[str, str] = {
@@ -186,8 +190,16 @@ def html_table(
     return "\n".join(lines)
 
 
-def amplitude_range(low: Any, high: Any) -> str:
-    return f"{fmt(low)}–{fmt(high)} in/s"
+def amplitude_range(low_in_s: Any, high_in_s: Any, units: UnitSystem = INCH_SECOND) -> str:
+    """``0.1–3 in/s``: a range of velocity amplitudes given in in/s, shown in ``units``."""
+    return (
+        f"{fmt(_scaled(low_in_s, units.per_in_s))}–{fmt(_scaled(high_in_s, units.per_in_s))} {units.velocity}"
+    )
+
+
+def _scaled(value: Any, factor: float) -> Any:
+    """``value`` times ``factor`` when it is a number; as it is otherwise (None, text)."""
+    return value * factor if isinstance(value, (int, float)) and not isinstance(value, bool) else value
 
 
 # ------------------------------------------------------------------ the verdict
@@ -223,7 +235,7 @@ def candidate_margin(entry: Mapping) -> dict | None:
     }
 
 
-def explains_sentences(entry: dict) -> list[str]:
+def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str]:
     """Whether the model the verdict rests on explains the data, and where it does not
     (``explains_data`` and ``evidence.explains_data`` of diagnosis.json)."""
     explained = (entry.get("evidence") or {}).get("explains_data") or {}
@@ -235,7 +247,8 @@ def explains_sentences(entry: dict) -> list[str]:
         return [f"{model} explains the data: every half decade of amplitude is within {limit} scatters."]
     failing = explained.get("failing_bins") or []
     where = "; ".join(
-        f"{b['curve']} at {fmt(b['v_low_in_s'])}-{fmt(b['v_high_in_s'])} in/s "
+        f"{b['curve']} at {fmt(units.per_in_s * b['v_low_in_s'])}-{fmt(units.per_in_s * b['v_high_in_s'])} "
+        f"{units.velocity} "
         f"({fmt(b['mean_over_scatter'])} scatters)"
         for b in failing[:4]
     )
@@ -320,7 +333,7 @@ def _direction(low: float, high: float, flat: float) -> str:
     return "rises" if change > 0 else "falls"
 
 
-def trend_sentence(trend: Mapping) -> str:
+def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
     """What the measured damping and frequency do from low to high amplitude, in words
     taken from the numbers (direction, both ends, the frequency's relative change)."""
     zeta = _direction(trend["zeta_low"], trend["zeta_high"], FLAT_CHANGE)
@@ -328,7 +341,8 @@ def trend_sentence(trend: Mapping) -> str:
     # a joint's frequency moves by a fraction of a percent: 0.1 % is already a trend
     frequency = _direction(trend["frequency_low_hz"], trend["frequency_high_hz"], 1e-3)
     return (
-        f"Measured from {fmt(trend['amplitude_low_in_s'])} to {fmt(trend['amplitude_high_in_s'])} in/s, "
+        f"Measured from {fmt(units.per_in_s * trend['amplitude_low_in_s'])} to "
+        f"{fmt(units.per_in_s * trend['amplitude_high_in_s'])} {units.velocity}, "
         f"the damping {zeta} ({fmt(100 * trend['zeta_low'])} % to {fmt(100 * trend['zeta_high'])} %) "
         f"and the frequency {frequency} ({fmt(trend['frequency_low_hz'], 5)} Hz to "
         f"{fmt(trend['frequency_high_hz'], 5)} Hz, {100 * frequency_change:+.2f} %)."
@@ -396,7 +410,7 @@ def campaign_headline(document: Mapping) -> str:
     return text
 
 
-def _configuration_row(name: str, entry: Mapping, area: float | None) -> list[str]:
+def _configuration_row(name: str, entry: Mapping, area_in2: float | None, units: UnitSystem) -> list[str]:
     gain = entry.get("gain") or {}
     margin = candidate_margin(entry)
     if margin and margin["ratio"] is not None:
@@ -408,7 +422,7 @@ def _configuration_row(name: str, entry: Mapping, area: float | None) -> list[st
         next_text, margin_text = "–", "–"
     return [
         esc(name),
-        fmt(area),
+        fmt(_scaled(area_in2, units.per_in2)),
         esc(model_name(entry.get("baseline", {}).get("model"))),
         tag(cause_name(entry.get("cause")), "none" if entry.get("cause") == "none" else "cause"),
         esc(model_name(entry.get("extended_model", {}).get("model"))),
@@ -420,7 +434,7 @@ def _configuration_row(name: str, entry: Mapping, area: float | None) -> list[st
     ]
 
 
-def _sureness_items(name: str, entry: Mapping) -> list[str]:
+def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[str]:
     """Plain-sentence evidence for one configuration (escaped HTML list items)."""
     evidence = entry.get("evidence") or {}
     gain = entry.get("gain") or {}
@@ -489,7 +503,7 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
             )
     for flag in _flags(entry):
         items.append(f"Fitted parameter to read with care, {flag}.")
-    items.extend(explains_sentences(entry))
+    items.extend(explains_sentences(entry, units))
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
         # the order the runs were taken in: timestamps when the diagnosis found them
@@ -505,7 +519,7 @@ def _sureness_items(name: str, entry: Mapping) -> list[str]:
     return [esc(item) for item in items]
 
 
-def hypothesis_summary(hypotheses: pd.DataFrame) -> list[list[str]]:
+def hypothesis_summary(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> list[list[str]]:
     """One row per hypothesis and configuration: verdicts over the amplitudes tested."""
     rows = []
     if hypotheses is None or hypotheses.empty:
@@ -553,7 +567,11 @@ def hypothesis_summary(hypotheses: pd.DataFrame) -> list[list[str]]:
                 esc(hypothesis),
                 esc(configuration),
                 verdicts,
-                esc(amplitude_range(part["amplitude_low_in_s"].min(), part["amplitude_high_in_s"].max())),
+                esc(
+                    amplitude_range(
+                        part["amplitude_low_in_s"].min(), part["amplitude_high_in_s"].max(), units
+                    )
+                ),
                 esc(statistic),
                 esc(estimates),
             ]
@@ -574,6 +592,7 @@ def verdict_html(
     hypotheses: pd.DataFrame | None = None,
     areas: Mapping[str, float] | None = None,
     segments: pd.DataFrame | None = None,
+    units: UnitSystem = INCH_SECOND,
 ) -> str:
     """The report's first page: the verdict of ``results/diagnosis.json`` in plain words.
 
@@ -589,6 +608,9 @@ def verdict_html(
         Configuration -> bearing area (in²), for the table.
     segments : DataFrame, optional
         ``results/tables/segments.parquet``: the measured trends are said from it.
+    units : UnitSystem
+        Config ``units``: the page's amplitudes and areas are shown in it (the quoted
+        discrepancy sentences of diagnosis.json keep its in/s).
 
     Returns
     -------
@@ -617,12 +639,19 @@ def verdict_html(
             + "".join(
                 f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
                 f"{esc(e.get('discrepancy', ''))}"
-                + (f" {esc(trend_sentence(trends[n]))}" if n in trends else "")
+                + (f" {esc(trend_sentence(trends[n], units))}" if n in trends else "")
                 + "".join(f" {tag('check: ' + flag, 'flag')}" for flag in _flags(e))
                 + "</li>"
                 for n, e in entries.items()
             )
             + "</ul>"
+        )
+    if entries and units.velocity != INCH_SECOND.velocity:
+        parts.append(
+            '<p class="note">The first sentence of each line quotes diagnosis.json, whose '
+            f"amplitudes are in in/s (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} {units.velocity}), "
+            "as do the statistics of the hypotheses, which are defined on in/s; the rest of this "
+            f"page is in {units.velocity}.</p>"
         )
     skipped = document.get("skipped_configurations") or {}
     if skipped:
@@ -638,7 +667,7 @@ def verdict_html(
         html_table(
             [
                 "configuration",
-                "area (in²)",
+                f"area ({units.area})",
                 "baseline",
                 "cause",
                 "extended model",
@@ -648,7 +677,7 @@ def verdict_html(
                 "next-best candidate",
                 "its error (× verdict's)",
             ],
-            [_configuration_row(n, e, areas.get(n)) for n, e in entries.items()],
+            [_configuration_row(n, e, areas.get(n), units) for n, e in entries.items()],
             numeric=(1, 5, 6, 7, 9),
         )
     )
@@ -669,7 +698,7 @@ def verdict_html(
     for name, entry in entries.items():
         parts.append(
             f"<h3>{esc(name)}</h3><ul>"
-            + "".join(f"<li>{item}</li>" for item in _sureness_items(name, entry))
+            + "".join(f"<li>{item}</li>" for item in _sureness_items(name, entry, units))
             + "</ul>"
         )
     if across:
@@ -689,7 +718,7 @@ def verdict_html(
 
     # hypotheses
     parts.append("<h2>The paper's hypotheses</h2>")
-    rows = hypothesis_summary(hypotheses) if hypotheses is not None else []
+    rows = hypothesis_summary(hypotheses, units) if hypotheses is not None else []
     if rows:
         parts.append(
             html_table(
@@ -776,8 +805,27 @@ def hypotheses_html(hypotheses: pd.DataFrame) -> str:
     return page("Hypotheses", body)
 
 
+def runs_in_recorded_order(runs: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, str]]:
+    """The runs table with each configuration's rows in run order, and which order that is.
+
+    Run order is the order of the recording start times (``record_start``) when every
+    file of the configuration states one, else of the file names
+    (:func:`workflow.io.recording_time.run_order`); rows that are not run files (a glob
+    that matched nothing) keep their place after the runs.
+    """
+    starts = runs["record_start"] if "record_start" in runs else pd.Series("", index=runs.index)
+    parts, orders = [], {}
+    for name, part in runs.groupby("configuration", sort=False):
+        names = part["run"].astype(str)
+        ordered, orders[name] = run_order(list(names), dict(zip(names, starts[part.index].fillna(""))))
+        rank = {run: i for i, run in enumerate(ordered)}
+        parts.append(part.iloc[np.argsort(names.map(rank).to_numpy(), kind="stable")])
+    return (pd.concat(parts) if parts else runs), orders
+
+
 def runs_html(runs: pd.DataFrame) -> str:
-    """Every run file: used or excluded, and why."""
+    """Every run file: used or excluded, and why; each configuration's runs in run order."""
+    runs, orders = runs_in_recorded_order(runs)
     counts = runs.groupby("configuration", sort=False)["status"].value_counts().unstack(fill_value=0)
     summary = html_table(
         ["configuration", "used", "excluded"],
@@ -787,15 +835,25 @@ def runs_html(runs: pd.DataFrame) -> str:
         ],
         numeric=(1, 2),
     )
+    recorded = runs["record_start"].fillna("") if "record_start" in runs else pd.Series("", index=runs.index)
     rows = [
-        [esc(r.configuration), esc(r.run), esc(r.path), tag(r.status, r.status), esc(r.reason)]
+        [
+            esc(r.configuration),
+            esc(r.run),
+            esc(r.path),
+            esc(recorded[r.Index]),
+            tag(r.status, r.status),
+            esc(r.reason),
+        ]
         for r in runs.itertuples()
     ]
+    order_notes = "".join(f"<li>{esc(name)}: run order: {esc(order)}</li>" for name, order in orders.items())
     body = (
         "<h1>Runs and quality checks</h1>"
         + summary
+        + f"<ul>{order_notes}</ul>"
         + html_table(
-            ["configuration", "run", "file", "status", "reason"],
+            ["configuration", "run", "file", "recording start", "status", "reason"],
             rows,
             row_classes=["excluded" if r.status == "excluded" else "" for r in runs.itertuples()],
         )

@@ -20,6 +20,7 @@ Decisions where the contract leaves room:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from datetime import datetime
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,6 +35,7 @@ from workflow.io.campaign import (
     _column_role,
     _rates_agree,
 )
+from workflow.io.recording_time import iso_text
 
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
@@ -67,6 +69,9 @@ class Channel:
     role_name : str or None
         The name the ASCII column rules read for the role, when not ``name`` (Test.Lab
         names start with the function type, ``Time Acc1:+X``, which is not a time vector).
+    record_start : datetime or None
+        Wall-clock time the recording started, as the file states it (aware when the
+        file gives the time zone).
     """
 
     name: str
@@ -79,6 +84,7 @@ class Channel:
     role: str | None = None
     aliases: tuple[str, ...] = ()
     role_name: str | None = None
+    record_start: datetime | None = None
 
 
 @dataclass(frozen=True)
@@ -384,6 +390,7 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
             f"({n_samples} samples)",
         )
 
+    record_start = response.record_start or (force.record_start if force is not None else None)
     header = {"format": file_channels.format_name, "response channel": response.name}
     if force is not None:
         header["force channel"] = force.name
@@ -403,4 +410,5 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         column_names=tuple(c.name for c in file_channels.channels),
         sample_rate_source=sample_rate_source,
         pretrigger_source=pretrigger_source,
+        record_start=iso_text(record_start),
     )

@@ -10,7 +10,8 @@ str, numeric arrays squeezed), so the channel logic below serves both.
   ``x_values.increment`` and ``start_value``. Test.Lab stores SI values and gives the
   label's unit as ``label value = SI value * factor + offset``
   (``y_values.quantity.unit_transformation``); that conversion is applied, so the samples
-  are in the label's unit.
+  are in the label's unit. ``function_record.creation_time`` (``YYYY/MM/DD HH:MM:SS``,
+  local clock time) is when the recording started.
 - Other numeric vectors are channels named by their variable; ``t``/``time...`` is the
   time vector; a scalar ``fs`` (or ``sample_rate``, ``sampling_rate``) in Hz or ``dt``
   (or ``sample_interval``) in s gives the sample interval. Plain variables carry no
@@ -26,6 +27,7 @@ import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels
+from workflow.io.recording_time import parse_clock_time
 
 _RATE_NAMES_HZ = {"fs", "sample_rate", "sample_rate_hz", "samplerate", "sampling_rate", "sampling_frequency"}
 _INTERVAL_NAMES_S = {"dt", "sample_interval", "sample_interval_s", "sampling_interval"}
@@ -142,8 +144,14 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
     offset = _number(_field(group, "y_values", "quantity", "unit_transformation", "offset"))
     factor = 1.0 if factor is None else factor
     offset = 0.0 if offset is None else offset
+    created = _field(group, "function_record", "creation_time")
+    created = (
+        [created] * len(names) if created is None or isinstance(created, str) else list(np.ravel(created))
+    )
+    if len(created) != len(names):  # not one time per channel: no start time rather than a guess
+        created = [None] * len(names)
     channels = []
-    for name, column in zip(names, columns, strict=True):
+    for name, column, creation_time in zip(names, columns, created, strict=True):
         samples = np.asarray(column, dtype=np.float64)
         if factor != 1.0 or offset != 0.0:
             samples = samples * factor + offset
@@ -157,6 +165,7 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
                 interval_source="x_values.increment",
                 start_s=start_s,
                 role_name=name.removeprefix(_TESTLAB_TIME_FUNCTION),
+                record_start=parse_clock_time(creation_time),
             )
         )
     return channels

@@ -2,18 +2,22 @@
 
 Every channel of numbers is a channel named ``group/channel`` (its bare name also selects
 it when no other group has one of that name). Sample interval, start time and unit are the
-waveform properties ``wf_increment`` (s), ``wf_start_offset`` (s) and ``unit_string``.
+waveform properties ``wf_increment`` (s), ``wf_start_offset`` (s) and ``unit_string``; the
+recording's wall-clock start is the channel's ``wf_start_time`` (UTC), else a ``DateTime``
+property of its group or of the file.
 """
 
 from __future__ import annotations
 
 import logging
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels
+from workflow.io.recording_time import utc_from_datetime64
 
 
 class _WarningRecords(logging.Handler):
@@ -25,6 +29,14 @@ class _WarningRecords(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         self.messages.append(record.getMessage())
+
+
+def _date_time_property(properties: dict) -> datetime | None:
+    """The ``DateTime`` property (any case) of a TDMS group or file as an aware datetime, or None."""
+    for key, value in properties.items():
+        if key.lower() == "datetime":
+            return utc_from_datetime64(value)
+    return None
 
 
 def read_tdms_channels(path: Path, shown: str) -> FileChannels:
@@ -56,6 +68,7 @@ def read_tdms_channels(path: Path, shown: str) -> FileChannels:
         raise CampaignFormatError(shown, None, f"truncated TDMS file: {truncated[0]}")
     channels = []
     for (group, group_channels), group_arrays in zip(groups, arrays, strict=True):
+        group_start = _date_time_property(group.properties) or _date_time_property(tdms.properties)
         for channel, values in zip(group_channels, group_arrays, strict=True):
             if not (isinstance(values, np.ndarray) and np.issubdtype(values.dtype, np.number)):
                 continue  # strings and timestamps are not samples
@@ -73,6 +86,7 @@ def read_tdms_channels(path: Path, shown: str) -> FileChannels:
                     interval_source="wf_increment",
                     start_s=None if start is None else float(start),
                     aliases=(channel.name,),
+                    record_start=utc_from_datetime64(properties.get("wf_start_time")) or group_start,
                 )
             )
     return FileChannels("TDMS", channels)

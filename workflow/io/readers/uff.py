@@ -4,7 +4,9 @@ Every dataset 58 with function type 1 (time response) is a channel, named by its
 line. The role comes from the ordinate's specific data type (8 displacement, 11 velocity,
 12 acceleration: response; 9 reaction force, 13 excitation force: force), the unit from
 the ordinate's units label, the sample interval and start time from the abscissa
-increment and minimum. Other datasets (geometry, units, FRFs) are skipped.
+increment and minimum. Other datasets (geometry, units, FRFs) are skipped. The recording's
+date and time is ID line 3, where the format puts it (``DD-MMM-YY HH:MM:SS``), else ID
+line 2 when that holds one; local clock time, as the format names no time zone.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels, unit_label
+from workflow.io.recording_time import parse_clock_time
 
 TIME_RESPONSE_FUNCTION: int = 1
 """Dataset 58 function type of a time response."""
@@ -124,6 +127,7 @@ def read_uff_channels(path: Path, shown: str) -> FileChannels:
                 interval_source="abscissa increment",
                 start_s=start_s,
                 role=_ROLE_OF_DATA_TYPE.get(int(dataset.get("ordinate_spec_data_type", 0))),
+                record_start=parse_clock_time(dataset.get("id3")) or parse_clock_time(dataset.get("id2")),
             )
         )
     if not channels:
