@@ -920,8 +920,9 @@ def binned_discrepancy(
     observation; the mean over runs, its standard error over runs and a t test
     (``n_runs - 1`` degrees of freedom) follow. With one run, the segments are the
     observations and the standard error uses their AR(1) effective number. A bin
-    counts as a real misfit when ``p < alpha / (2 n_tests)`` (Bonferroni over all bins
-    and both curves with half of ``alpha``; the run-order test has the other half) and ``|mean|`` exceeds the model accuracy (``TOL_LN_ZETA`` or
+    counts as a real misfit when ``p < p_limit = alpha / (2 n)``, ``n`` the number of
+    bins x curves tested (Bonferroni with half of ``alpha``; the run-order test has the
+    other half), and ``|mean|`` exceeds the model accuracy (``TOL_LN_ZETA`` or
     ``TOL_REL_F``).
 
     Returns
