@@ -2,9 +2,34 @@
 # and its gain on held-out data (results/diagnosis.json, output contract).
 
 
-rule diagnose:
+rule diagnose_configuration:
+    # One job per configuration, so that the configurations are diagnosed side by side;
+    # each reads every segment because the fits' reference velocity is the campaign's.
     input:
         segments="results/tables/segments.parquet",
+        campaign_settings="results/interim/campaign.json",
+    output:
+        "results/interim/diagnosis/{configuration}.npz",
+    log:
+        "results/logs/diagnose_configuration/{configuration}.log",
+    benchmark:
+        "results/benchmarks/diagnose_configuration/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    params:
+        decay=asdict(SETTINGS.analysis.decay()),
+        discovery=asdict(SETTINGS.discovery),
+    script:
+        "../scripts/diagnose_configuration.py"
+
+
+rule diagnose:
+    input:
+        configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(
@@ -23,11 +48,8 @@ rule diagnose:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=3000,
-        runtime=30,
-    params:
-        decay=asdict(SETTINGS.analysis.decay()),
-        discovery=asdict(SETTINGS.discovery),
+        mem_mb=1000,
+        runtime=10,
     script:
         "../scripts/diagnose.py"
 
