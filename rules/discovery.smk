@@ -54,36 +54,23 @@ rule diagnose:
         "../scripts/diagnose.py"
 
 
-rule figure_discovery_residuals:
+rule figures_discovery:
+    # Every diagnosis figure in one job: they read the same two files, so a job per
+    # figure would only repeat start-up (Python, matplotlib, pandas).
     input:
         diagnosis="results/diagnosis.json",
         residuals="results/tables/diagnosis_residuals.parquet",
     output:
-        report(
-            "results/figures/discovery_residuals_{configuration}.png",
-            caption="../report/discovery_residuals.rst",
-            category="5 Diagnosis",
-            subcategory="5.1 Residuals per configuration",
-            labels={"figure": "residuals: {configuration}"},
-        ),
-    log:
-        "results/logs/figure_discovery_residuals/{configuration}.log",
-    benchmark:
-        "results/benchmarks/figure_discovery_residuals/{configuration}.tsv"
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    script:
-        "../scripts/figure_discovery_residuals.py"
-
-
-rule figure_discovery_summary:
-    input:
-        diagnosis="results/diagnosis.json",
-    output:
+        residuals=[
+            report(
+                f"results/figures/discovery_residuals_{name}.png",
+                caption="../report/discovery_residuals.rst",
+                category="5 Diagnosis",
+                subcategory="5.1 Residuals per configuration",
+                labels={"figure": f"residuals: {name}"},
+            )
+            for name in CONFIGURATIONS
+        ],
         candidates=report(
             "results/figures/discovery_candidates.png",
             caption="../report/discovery_candidates.rst",
@@ -99,14 +86,16 @@ rule figure_discovery_summary:
             labels={"item": "figure: prediction of a left-out bearing area"},
         ),
     log:
-        "results/logs/figure_discovery_summary.log",
+        "results/logs/figures_discovery.log",
     benchmark:
-        "results/benchmarks/figure_discovery_summary.tsv"
+        "results/benchmarks/figures_discovery.tsv"
     conda:
         LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=5,
+        runtime=10,
+    params:
+        configurations=CONFIGURATIONS,
     script:
-        "../scripts/figure_discovery_summary.py"
+        "../scripts/figures_discovery.py"

@@ -7,8 +7,8 @@ import json
 
 import numpy as np
 import pandas as pd
-from test_discovery import DAHL, FAST, synthetic_segments
 
+from tests.test_discovery import DAHL, FAST, synthetic_segments
 from workflow.discovery import diagnosis as disc
 from workflow.io.interim import (
     DiagnosedConfiguration,
@@ -82,3 +82,32 @@ def test_the_interim_file_keeps_every_array_exactly(tmp_path):
     assert back.data.run_names == diagnosis.data.run_names
     assert np.array_equal(back.scatter.noise_ln_zeta, diagnosis.scatter.noise_ln_zeta)
     assert back.resamples == diagnosis.resamples
+
+
+def test_paper_fits_start_from_the_diagnosis_fits_no_worse_than_their_own():
+    """The time-domain fits start from the diagnosis's averaged Dahl and LuGre fits
+    instead of fitting them again: Dahl's is the very fit the paper-model rule made
+    itself (same settings, context-free), LuGre's is started from Dahl as well and so
+    fits at least as well."""
+    from workflow.models.paper import averaged_fit_params
+
+    segments = synthetic_segments("dahl", DAHL, seed=5, n_runs=4)
+    settings = disc.FitSettings()
+    diagnosis = disc.diagnose_configuration_segments(
+        segments, "c", disc.campaign_fit_context(segments), settings=settings
+    )
+    assert (
+        averaged_fit_params("dahl", segments, "acceleration", settings.seed) == diagnosis.fits["dahl"].params
+    )
+    own = averaged_fit_params("lugre", segments, "acceleration", settings.seed)
+    data = diagnosis.data
+    context = disc.campaign_fit_context(segments)
+    own_cost = disc.model_residuals(
+        disc.FitResult("lugre", disc.to_coords(disc.MODELS["lugre"], own), own, np.nan),
+        data,
+        diagnosis.scatter,
+        context,
+    )
+    assert diagnosis.fits["lugre"].cost <= np.mean(
+        np.concatenate([own_cost["z_norm"], own_cost["f_norm"]]) ** 2
+    ) * (1 + 1e-9)
