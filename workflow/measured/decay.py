@@ -365,9 +365,10 @@ def _line_fits(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     centred per row; returns (a at centre, b, rms residual), each of shape (K,)."""
     t_centred = t - t.mean(axis=1, keepdims=True)
     intercept = y.mean(axis=1)
-    slope = np.einsum("ij,ij->i", t_centred, y - intercept[:, None]) / np.einsum(
-        "ij,ij->i", t_centred, t_centred
-    )
+    y_centred = y - intercept[:, None]
+    # a dot product per row (not one einsum): the same sums, to the last bit, as a line
+    # fitted alone
+    slope = np.array([np.dot(a, b) / np.dot(a, a) for a, b in zip(t_centred, y_centred)])
     residual = y - intercept[:, None] - slope[:, None] * t_centred
     return intercept, slope, np.sqrt(np.mean(residual**2, axis=1))
 
