@@ -1,13 +1,15 @@
-"""Workflow timings on the demo campaign (issue 6 targets), as a table of medians.
+"""Workflow timings on the demo campaign (issues 6 and 16), as a table of medians.
 
-    python bench/bench_workflow.py [--repeats 3] [--target measured] [--scale]
+    python bench/bench_workflow.py [--repeats 3] [--target all] [--scale]
 
 For each repeat, in a fresh working directory: the demo campaign is generated
 first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run with
 nothing to do, and a run after changing ``analysis.segment_cycles``. ``--scale``
-adds a 300-run campaign (10 configurations x 30 runs) for the growth with runs, and
-the demo's 30 runs with records 4 times as long (32768 samples) for the growth with
-record length, each repeated as often. Per rule: wall time from Snakemake's
+adds, each repeated as often and cold: one impact hit recorded by three sensors at
+12.8 kHz for 5 s (64000 samples a channel, analysed as three one-run
+configurations), a 300-run campaign (10 configurations x 30 runs) for the growth with
+runs, and the demo's 30 runs with records 4 times as long (32768 samples) for the
+growth with record length. Per rule: wall time from Snakemake's
 ``benchmark:`` files, and each job's CPU split into start-up (interpreter, Snakemake's
 script preamble, imports) and work, with its peak memory, from the cost line that every
 script logs (workflow/runtime/logs.py).
@@ -97,10 +99,42 @@ def cold_runs(campaign: Path, target: str, repeats: int) -> tuple[list[float], P
     return seconds, workdir
 
 
+HIGH_RATE_HZ = 12800.0
+HIGH_RATE_SAMPLES = 64000
+SENSOR_GAINS = {"accelerometer": 1.0, "mid": 0.6, "end": 0.3}
+"""Mode 1 at each of the three sensors, relative to the accelerometer."""
+
+
+def high_rate_hit(root: Path) -> Path:
+    """One hit recorded by three sensors at 12.8 kHz for 5 s, as a campaign whose
+    configurations are the sensors (one run each): the virtual lab writes each sensor's
+    record, and they are gathered into one campaign folder."""
+    from workflow.lab.virtual_lab import LabSettings, generate_sensor_campaigns
+
+    settings = LabSettings(sample_rate_hz=HIGH_RATE_HZ, samples_per_run=HIGH_RATE_SAMPLES)
+    generate_sensor_campaigns(
+        root / "sensors",
+        SENSOR_GAINS,
+        seed=7,
+        runs_per_configuration=1,
+        configurations={"hit": None},
+        settings=settings,
+    )
+    campaign = root / "high_rate"
+    lines = (root / "sensors" / "accelerometer" / "campaign.yaml").read_text().splitlines()
+    lines = lines[: lines.index("configurations:") + 1]
+    for sensor in SENSOR_GAINS:
+        (campaign / sensor).mkdir(parents=True)
+        (root / "sensors" / sensor / "hit" / "run01.txt").rename(campaign / sensor / "run01.txt")
+        lines.append(f'  {sensor}: {{files: "{sensor}/*.txt"}}')
+    (campaign / "campaign.yaml").write_text("\n".join(lines) + "\n")
+    return campaign
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--target", default="measured")
+    parser.add_argument("--target", default="all")
     parser.add_argument("--scale", action="store_true")
     args = parser.parse_args()
     cold = f"cold {args.target}"
@@ -133,6 +167,7 @@ def main() -> None:
 
     reference = statistics.median(timings[cold])
     root = Path(tempfile.mkdtemp(prefix="lapjoint-scale-"))
+    high_rate = high_rate_hit(root)
     generate_campaign(
         root / "runs300",
         seed=3,
@@ -141,6 +176,7 @@ def main() -> None:
     )
     generate_campaign(root / "long", seed=3, samples_per_run=4 * 8192)
     for label, campaign in (
+        ("one hit, three sensors at 12.8 kHz for 5 s (three one-run configurations)", high_rate),
         ("300 runs (10 x 30)", root / "runs300"),
         ("30 runs of 32768 samples (4 x longer records)", root / "long"),
     ):

@@ -2,10 +2,35 @@
 # and its gain on held-out data (results/diagnosis.json, output contract).
 
 
-rule diagnose:
+rule diagnose_configuration:
+    # One job per configuration, so that the configurations are diagnosed side by side;
+    # each reads every segment because the fits' reference velocity is the campaign's.
     input:
         segments="results/tables/segments.parquet",
         runs="results/tables/runs.parquet",
+        campaign_settings="results/interim/campaign.json",
+    output:
+        "results/interim/diagnosis/{configuration}.npz",
+    log:
+        "results/logs/diagnose_configuration/{configuration}.log",
+    benchmark:
+        "results/benchmarks/diagnose_configuration/{configuration}.tsv"
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    params:
+        decay=asdict(SETTINGS.analysis.decay()),
+        discovery=asdict(SETTINGS.discovery),
+    script:
+        "../scripts/diagnose_configuration.py"
+
+
+rule diagnose:
+    input:
+        configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(
@@ -24,48 +49,31 @@ rule diagnose:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=3000,
-        runtime=30,
+        mem_mb=1000,
+        runtime=10,
     params:
         units=SETTINGS.units,
-        decay=asdict(SETTINGS.analysis.decay()),
-        discovery=asdict(SETTINGS.discovery),
     script:
         "../scripts/diagnose.py"
 
 
-rule figure_discovery_residuals:
+rule figures_discovery:
+    # Every diagnosis figure in one job: they read the same two files, so a job per
+    # figure would only repeat start-up (Python, matplotlib, pandas).
     input:
         diagnosis="results/diagnosis.json",
         residuals="results/tables/diagnosis_residuals.parquet",
     output:
-        report(
-            "results/figures/discovery_residuals_{configuration}.png",
-            caption="../report/discovery_residuals.rst",
-            category="5 Diagnosis",
-            subcategory="5.1 Residuals per configuration",
-            labels={"figure": "residuals: {configuration}"},
-        ),
-    log:
-        "results/logs/figure_discovery_residuals/{configuration}.log",
-    benchmark:
-        "results/benchmarks/figure_discovery_residuals/{configuration}.tsv"
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    params:
-        units=SETTINGS.units,
-    script:
-        "../scripts/figure_discovery_residuals.py"
-
-
-rule figure_discovery_summary:
-    input:
-        diagnosis="results/diagnosis.json",
-    output:
+        residuals=[
+            report(
+                f"results/figures/discovery_residuals_{name}.png",
+                caption="../report/discovery_residuals.rst",
+                category="5 Diagnosis",
+                subcategory="5.1 Residuals per configuration",
+                labels={"figure": f"residuals: {name}"},
+            )
+            for name in CONFIGURATIONS
+        ],
         candidates=report(
             "results/figures/discovery_candidates.png",
             caption="../report/discovery_candidates.rst",
@@ -81,16 +89,17 @@ rule figure_discovery_summary:
             labels={"item": "figure: prediction of a left-out bearing area"},
         ),
     log:
-        "results/logs/figure_discovery_summary.log",
+        "results/logs/figures_discovery.log",
     benchmark:
-        "results/benchmarks/figure_discovery_summary.tsv"
+        "results/benchmarks/figures_discovery.tsv"
     conda:
         LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=5,
+        runtime=10,
     params:
+        configurations=CONFIGURATIONS,
         units=SETTINGS.units,
     script:
-        "../scripts/figure_discovery_summary.py"
+        "../scripts/figures_discovery.py"

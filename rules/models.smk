@@ -39,6 +39,8 @@ rule fit_friction_models:
         segments="results/tables/segments.parquet",
         modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
+        # the averaged models' fits, the start of the time-domain fits
+        diagnosis="results/interim/diagnosis/{configuration}.npz",
     output:
         "results/models/{configuration}.json",
     log:
@@ -79,36 +81,45 @@ rule model_table:
         "../scripts/model_table.py"
 
 
-rule figure_models:
+rule figures_models:
+    # Figures 14 and 15 of every configuration in one job: a job per configuration
+    # would spend most of its time starting (Python, matplotlib, pandas).
     input:
         segments="results/tables/segments.parquet",
-        fit="results/models/{configuration}.json",
+        fits=expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
     output:
-        dahl=report(
-            "results/figures/fig14_dahl_{configuration}.png",
-            caption="../report/fig_models.rst",
-            category="4 Friction models",
-            subcategory="4.2 Fitted to the data (figs. 14, 15)",
-            labels={"configuration": "{configuration}", "model": "fig. 14: Dahl"},
-        ),
-        lugre=report(
-            "results/figures/fig15_lugre_{configuration}.png",
-            caption="../report/fig_models.rst",
-            category="4 Friction models",
-            subcategory="4.2 Fitted to the data (figs. 14, 15)",
-            labels={"configuration": "{configuration}", "model": "fig. 15: LuGre"},
-        ),
+        dahl=[
+            report(
+                f"results/figures/fig14_dahl_{name}.png",
+                caption="../report/fig_models.rst",
+                category="4 Friction models",
+                subcategory="4.2 Fitted to the data (figs. 14, 15)",
+                labels={"configuration": name, "model": "fig. 14: Dahl"},
+            )
+            for name in CONFIGURATIONS
+        ],
+        lugre=[
+            report(
+                f"results/figures/fig15_lugre_{name}.png",
+                caption="../report/fig_models.rst",
+                category="4 Friction models",
+                subcategory="4.2 Fitted to the data (figs. 14, 15)",
+                labels={"configuration": name, "model": "fig. 15: LuGre"},
+            )
+            for name in CONFIGURATIONS
+        ],
     log:
-        "results/logs/figure_models/{configuration}.log",
+        "results/logs/figures_models.log",
     benchmark:
-        "results/benchmarks/figure_models/{configuration}.tsv"
+        "results/benchmarks/figures_models.tsv"
     conda:
         LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=5,
+        runtime=10,
     params:
+        configurations=CONFIGURATIONS,
         units=SETTINGS.units,
     script:
-        "../scripts/figure_models.py"
+        "../scripts/figures_models.py"

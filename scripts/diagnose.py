@@ -1,26 +1,25 @@
-"""Rule diagnose: results/diagnosis.json and the residuals behind it."""
+"""Rule diagnose: results/diagnosis.json and the residuals behind it, from every
+configuration's diagnosis."""
 
-from workflow.discovery.diagnosis import FitSettings, diagnose_campaign, residual_table
-from workflow.io.interim import read_campaign
-from workflow.io.settings import DecaySettings
-from workflow.io.tables import read_table, write_json, write_table
+from workflow.discovery.diagnosis import FitContext, campaign_document, residual_table
+from workflow.io.interim import read_campaign, read_configuration_diagnosis
+from workflow.io.tables import write_json, write_table
 from workflow.io.units import UNIT_SYSTEMS
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
 campaign = read_campaign(snakemake.input.campaign_settings)
-segments = read_table(snakemake.input.segments)
-document, details = diagnose_campaign(
-    segments,
-    campaign.name,
-    response_quantity=campaign.response.quantity,
-    settings=FitSettings(**snakemake.params.discovery),
-    segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
-    runs=read_table(snakemake.input.runs),
-    return_details=True,
+# in the order of the segments table, as when one job diagnosed every configuration
+outcomes = sorted(
+    (read_configuration_diagnosis(path) for path in snakemake.input.configurations), key=lambda o: o.order
 )
+present = [outcome for outcome in outcomes if outcome.order >= 0]
+diagnoses = {o.configuration: o.diagnosis for o in present if o.diagnosis is not None}
+skipped = {o.configuration: o.skipped for o in present if o.diagnosis is None}
+context = FitContext(outcomes[0].reference_velocity_in_s)
+document = campaign_document(campaign.name, context, diagnoses, skipped)
 write_table(
-    residual_table(details), snakemake.output.residuals, unit_system=UNIT_SYSTEMS[snakemake.params.units]
+    residual_table(diagnoses), snakemake.output.residuals, unit_system=UNIT_SYSTEMS[snakemake.params.units]
 )
 write_json(snakemake.output.diagnosis, document)
 log.info("campaign verdict: %s", document["cause"])

@@ -1,11 +1,12 @@
 """Rule fit_friction_models: Dahl and LuGre (plus zeta0 and the linear frequency)
 fitted to one configuration's measured damping and frequency curves."""
 
-from workflow.io.interim import read_campaign
+from workflow.io.interim import read_campaign, read_configuration_diagnosis
 from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
 from workflow.models.paper import (
     MIN_SEGMENTS_TO_FIT,
+    averaged_fit_params,
     choose_modal_coordinate,
     fit_configuration,
 )
@@ -30,16 +31,28 @@ else:
     areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
     coordinate = choose_modal_coordinate(modes["mode_hz"].dropna().to_dict(), areas)
     mode = modes.loc[configuration]
+    models = ("dahl", "lugre")
+    settings = ModelSettings(**snakemake.params.models)
+    diagnosis = read_configuration_diagnosis(snakemake.input.diagnosis).diagnosis
+    if diagnosis is not None:
+        averaged = {model: diagnosis.fits[model].params for model in models}
+    else:
+        # the diagnosis skipped this configuration: fit the averaged models here
+        averaged = {
+            model: averaged_fit_params(model, mine, campaign.response.quantity, settings.seed)
+            for model in models
+        }
     document = fit_configuration(
         mine,
-        models=("dahl", "lugre"),
+        models=models,
         sample_rate_hz=float(mode["sample_rate_hz"]),
         record_duration_s=float(mode["record_duration_s"]),
         band_hz=(float(mode["band_low_hz"]), float(mode["band_high_hz"])),
         response_quantity=campaign.response.quantity,
         coordinate=coordinate,
         analysis=DecaySettings(**snakemake.params.decay),
-        settings=ModelSettings(**snakemake.params.models),
+        settings=settings,
+        averaged_params=averaged,
     )
     for model, fit in document["models"].items():
         log.info(

@@ -90,6 +90,32 @@ def test_log_decrement_is_exact_on_an_exact_envelope_and_phase():
     np.testing.assert_allclose(seg["frequency_hz"], f_hz * np.sqrt(1 - zeta**2), rtol=1e-9)
 
 
+def test_segments_analysed_side_by_side_equal_a_line_fit_of_each(monkeypatch):
+    """All segments' line fits at once (in blocks, here of a few segments, and with a
+    segment of another length and one whose envelope touches zero) equal a separate
+    least-squares line per segment to rounding (1e-10 relative)."""
+    rng = np.random.default_rng(3)
+    fs_hz = 2560.0
+    x = ring_down(125.0, 0.004, fs_hz, 3.2, snr_db=40.0, seed=4)
+    z = analytic_signal(bandpass(x, fs_hz, band(125.0)))
+    env, phase = np.abs(z), np.unwrap(np.angle(z))
+    env[4000] = 0.0
+    starts, stops = segment_bounds(100, x.size - 100, fs_hz, 125.0)
+    starts, stops = np.append(starts, 1234), np.append(stops, 1234 + int(rng.integers(50, 90)))
+    monkeypatch.setattr(decay, "SEGMENT_BLOCK_SAMPLES", 3 * int(stops[0] - starts[0]))
+    seg = log_decrement_segments(env, phase, fs_hz, starts, stops)
+    for k, (start, stop) in enumerate(zip(starts, stops)):
+        t = np.arange(start, stop) / fs_hz
+        if env[start:stop].min() <= 0:
+            assert np.isnan(seg["zeta"][k])
+            continue
+        slope = np.polyfit(t, np.log(env[start:stop]), 1)[0]
+        omega_d = np.polyfit(t, phase[start:stop], 1)[0]
+        assert seg["zeta"][k] == pytest.approx(-slope / np.hypot(slope, omega_d), rel=1e-10)
+        assert seg["frequency_hz"][k] == pytest.approx(omega_d / (2 * np.pi), rel=1e-10)
+        assert seg["amplitude"][k] == pytest.approx(env[start:stop].mean(), rel=1e-12)
+
+
 @pytest.mark.parametrize("f_hz, zeta, fs_hz, duration_s", LINEAR_CASES)
 def test_linear_decay_without_noise_is_unbiased_on_kept_segments(f_hz, zeta, fs_hz, duration_s):
     """The chain's bias, seen where noise is negligible (zeta_std < 0.2 % of zeta)."""

@@ -1918,46 +1918,29 @@ def diagnose_campaign(
         ``across_configurations``; all numbers finite (None where not applicable).
     """
     settings = settings or FitSettings()
-    names = list(dict.fromkeys(segments["configuration"].astype(str)))
-    v_all = segments["velocity_amplitude_in_s"].to_numpy(float)
-    v_all = v_all[np.isfinite(v_all) & (v_all > 0)]
-    context = FitContext(float(np.quantile(v_all, 0.9)) if v_all.size else 1.0)
+    context = campaign_fit_context(segments)
     diagnoses: dict[str, ConfigurationDiagnosis] = {}
     skipped = {}
-    for name in names:
+    for name in dict.fromkeys(segments["configuration"].astype(str)):
         quantity = (
             response_quantity
             if isinstance(response_quantity, str)
             else response_quantity.get(name, "acceleration")
         )
-        starts = {}
-        if runs is not None and "record_start" in runs:
-            rows = runs[runs["configuration"] == name]
-            starts = dict(zip(rows["run"].astype(str), rows["record_start"].fillna("").astype(str)))
-        data = prepare_configuration(segments, name, RESPONSE_ORDER[quantity], starts)
-        if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
-            skipped[name] = f"only {data.n} usable segments: too few to fit and validate models"
-            continue
-        diagnoses[name] = diagnose_configuration(
-            data, context, settings=settings, segment_cycles=segment_cycles
+        outcome = diagnose_configuration_segments(
+            segments,
+            name,
+            context,
+            response_quantity=quantity,
+            settings=settings,
+            segment_cycles=segment_cycles,
+            record_start=record_starts(runs, name),
         )
-    configurations = {n: d.document for n, d in diagnoses.items()}
-    cause = campaign_verdict(
-        [d["cause"] for d in configurations.values()], [d["gain"]["ratio"] for d in configurations.values()]
-    )
-    extended = CAUSE_MODELS.get(cause)
-    document = {
-        "campaign": campaign_name,
-        "cause": cause,
-        "confidence": campaign_confidence(diagnoses),
-        "campaign_rule": "most frequent configuration cause other than none (ties: lowest mean "
-        "gain ratio); none only when every configuration is none",
-        "configurations": configurations,
-        "across_configurations": across_configurations(diagnoses, context, extended),
-        "skipped_configurations": skipped,
-        "reference_velocity_in_s": context.reference_velocity_in_s,
-    }
-    document = _clean(document)
+        if isinstance(outcome, str):
+            skipped[name] = outcome
+        else:
+            diagnoses[name] = outcome
+    document = campaign_document(campaign_name, context, diagnoses, skipped)
     return (document, diagnoses) if return_details else document
 
 
@@ -2042,3 +2025,109 @@ def residual_table(diagnoses: Mapping[str, ConfigurationDiagnosis]) -> pd.DataFr
             }
         )
     return pd.concat(frames, ignore_index=True)[RESIDUAL_COLUMNS]
+
+
+# ------------------------------------------------- one configuration at a time
+CAMPAIGN_RULE = (
+    "most frequent configuration cause other than none (ties: lowest mean "
+    "gain ratio); none only when every configuration is none"
+)
+
+
+def campaign_fit_context(segments: pd.DataFrame) -> FitContext:
+    """The campaign's :class:`FitContext`: reference velocity = 0.9 quantile of every
+    configuration's segment velocity amplitudes (in/s; 1 when there are none).
+
+    It is computed from all segments even when one configuration is diagnosed, so that a
+    configuration's fits do not depend on which job fitted them.
+    """
+    v_all = segments["velocity_amplitude_in_s"].to_numpy(float)
+    v_all = v_all[np.isfinite(v_all) & (v_all > 0)]
+    return FitContext(float(np.quantile(v_all, 0.9)) if v_all.size else 1.0)
+
+
+def record_starts(runs: pd.DataFrame | None, name: str) -> dict[str, str]:
+    """Run name -> ISO 8601 recording start of configuration ``name``'s runs, from the runs
+    table (results/tables/runs.parquet; empty where a file states none, or no table)."""
+    if runs is None or "record_start" not in runs:
+        return {}
+    rows = runs[runs["configuration"].astype(str) == name]
+    return dict(zip(rows["run"].astype(str), rows["record_start"].fillna("").astype(str)))
+
+
+def diagnose_configuration_segments(
+    segments: pd.DataFrame,
+    name: str,
+    context: FitContext,
+    *,
+    response_quantity: str = "acceleration",
+    settings: FitSettings | None = None,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    record_start: Mapping[str, str] | None = None,
+) -> ConfigurationDiagnosis | str:
+    """:func:`diagnose_configuration` of configuration ``name`` of the segments table, or
+    why it is skipped (too few usable segments or amplitudes to fit and validate models).
+
+    Parameters
+    ----------
+    segments : DataFrame
+        The campaign's kept segments (results/tables/segments.parquet).
+    name : str
+    context : FitContext
+        The campaign's (:func:`campaign_fit_context`).
+    response_quantity : str
+        The configuration's recorded quantity (campaign.yaml ``response.quantity``).
+    settings : FitSettings, optional
+    segment_cycles : float
+        Log-decrement segment length, cycles.
+    record_start : mapping, optional
+        Run name -> recording start (:func:`record_starts`): the run order.
+    """
+    data = prepare_configuration(segments, name, RESPONSE_ORDER[response_quantity], record_start)
+    if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
+        return f"only {data.n} usable segments: too few to fit and validate models"
+    return diagnose_configuration(
+        data, context, settings=settings or FitSettings(), segment_cycles=segment_cycles
+    )
+
+
+def campaign_document(
+    campaign_name: str,
+    context: FitContext,
+    diagnoses: Mapping[str, ConfigurationDiagnosis],
+    skipped: Mapping[str, str],
+) -> dict:
+    """The ``results/diagnosis.json`` document from the configurations' diagnoses.
+
+    Parameters
+    ----------
+    campaign_name : str
+    context : FitContext
+        The campaign's (:func:`campaign_fit_context`).
+    diagnoses : mapping
+        Configuration -> :class:`ConfigurationDiagnosis`, in campaign order.
+    skipped : mapping
+        Configuration -> why it was not diagnosed.
+
+    Returns
+    -------
+    dict
+        ``campaign``, ``cause``, ``confidence``, ``configurations`` (per the output
+        contract), ``across_configurations``, ``skipped_configurations`` and the
+        reference velocity; all numbers finite (None where not applicable).
+    """
+    configurations = {n: d.document for n, d in diagnoses.items()}
+    cause = campaign_verdict(
+        [d["cause"] for d in configurations.values()], [d["gain"]["ratio"] for d in configurations.values()]
+    )
+    document = {
+        "campaign": campaign_name,
+        "cause": cause,
+        "confidence": campaign_confidence(diagnoses),
+        "campaign_rule": CAMPAIGN_RULE,
+        "configurations": configurations,
+        "across_configurations": across_configurations(diagnoses, context, CAUSE_MODELS.get(cause)),
+        "skipped_configurations": dict(skipped),
+        "reference_velocity_in_s": context.reference_velocity_in_s,
+    }
+    return _clean(document)

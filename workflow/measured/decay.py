@@ -360,13 +360,28 @@ def segment_bounds(
     return starts, starts + length
 
 
+def _line_fits(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares ``y = a + b t`` of each row of ``t``, ``y`` (shape (K, L)), t
+    centred per row; returns (a at centre, b, rms residual), each of shape (K,)."""
+    t_centred = t - t.mean(axis=1, keepdims=True)
+    intercept = y.mean(axis=1)
+    y_centred = y - intercept[:, None]
+    # a dot product per row (not one einsum): the same sums, to the last bit, as a line
+    # fitted alone
+    slope = np.array([np.dot(a, b) / np.dot(a, a) for a, b in zip(t_centred, y_centred)])
+    residual = y - intercept[:, None] - slope[:, None] * t_centred
+    return intercept, slope, np.sqrt(np.mean(residual**2, axis=1))
+
+
 def _line_fit(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares ``y = a + b t`` with t centred; returns (a at centre, b, rms residual)."""
-    t_centred = t - t.mean()
-    slope = float(np.dot(t_centred, y - y.mean()) / np.dot(t_centred, t_centred))
-    intercept = float(y.mean())
-    residual = y - intercept - slope * t_centred
-    return intercept, slope, float(np.sqrt(np.mean(residual**2)))
+    """:func:`_line_fits` of one line: (a at centre, b, rms residual)."""
+    intercept, slope, rms = _line_fits(t[None, :], y[None, :])
+    return float(intercept[0]), float(slope[0]), float(rms[0])
+
+
+SEGMENT_BLOCK_SAMPLES = 2**20
+"""Segments are analysed in blocks of at most this many samples (all their samples
+side by side, so that a long record's overlapping segments do not fill memory)."""
 
 
 def log_decrement_segments(
@@ -424,19 +439,26 @@ def log_decrement_segments(
             "min_envelope",
         )
     }
-    for k, (start, stop) in enumerate(zip(starts, stops)):
-        t = np.arange(start, stop) / fs_hz
-        values = envelope[start:stop]
-        out["t_s"][k] = t.mean()
-        out["amplitude"][k] = values.mean()
-        out["min_envelope"][k] = values.min()
-        if values.min() <= 0.0:
-            continue  # ln undefined: left NaN, flagged invalid_fit by analyse_decay
-        _, slope, out["fit_rms"][k] = _line_fit(t, np.log(values))
-        _, omega_d, out["phase_rms_rad"][k] = _line_fit(t, phase_rad[start:stop])
-        out["decay_rate_1_s"][k] = -slope
-        out["zeta"][k] = -slope / np.hypot(slope, omega_d)
-        out["frequency_hz"][k] = omega_d / (2.0 * np.pi)
+    lengths = stops - starts
+    for length in np.unique(lengths):
+        same = np.flatnonzero(lengths == length)
+        per_block = max(1, SEGMENT_BLOCK_SAMPLES // max(int(length), 1))
+        for rows in np.array_split(same, -(-same.size // per_block)):
+            samples = starts[rows, None] + np.arange(length)
+            t = samples / fs_hz
+            values = envelope[samples]
+            out["t_s"][rows] = t.mean(axis=1)
+            out["amplitude"][rows] = values.mean(axis=1)
+            out["min_envelope"][rows] = values.min(axis=1)
+            # ln undefined where the envelope touches 0: left NaN, flagged invalid_fit
+            # by analyse_decay
+            fit = values.min(axis=1) > 0.0
+            rows, samples, t = rows[fit], samples[fit], t[fit]
+            _, slope, out["fit_rms"][rows] = _line_fits(t, np.log(values[fit]))
+            _, omega_d, out["phase_rms_rad"][rows] = _line_fits(t, phase_rad[samples])
+            out["decay_rate_1_s"][rows] = -slope
+            out["zeta"][rows] = -slope / np.hypot(slope, omega_d)
+            out["frequency_hz"][rows] = omega_d / (2.0 * np.pi)
     out["start_index"] = starts.copy()
     out["stop_index"] = stops.copy()
     return out

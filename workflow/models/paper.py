@@ -4,6 +4,8 @@ and the tables and curves the figures and the report read.
 
 from __future__ import annotations
 
+import logging
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,6 +31,8 @@ SPECIMEN_FREQUENCY_TOLERANCE = 0.15
 
 #: Fewer kept segments than this: the configuration's models are not fitted.
 MIN_SEGMENTS_TO_FIT = 12
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -74,15 +78,11 @@ def run_start_velocities(segments: pd.DataFrame) -> np.ndarray:
     return segments.groupby("run", sort=False)["velocity_amplitude_in_s"].max().to_numpy(float)
 
 
-def averaged_start(model: str, segments: pd.DataFrame, response_quantity: str, seed: int) -> np.ndarray:
-    """Search point of the time-domain fit from the averaged model's fit.
-
-    The averaged (describing-function) model of :mod:`workflow.models.averaged` has the
-    same parameters as the time-domain search (stuck-joint frequency, the joint's
-    share of the stiffness, the velocity at which the joint slips, zeta0; LuGre's
-    stiction ratio and Stribeck velocity) and fits in seconds, so its optimum is a
-    good start for the expensive time-domain refinement.
-    """
+def averaged_fit_params(
+    model: str, segments: pd.DataFrame, response_quantity: str, seed: int
+) -> dict[str, float]:
+    """The averaged model's fit to one configuration's segments, for a configuration the
+    diagnosis did not fit (too few distinct amplitudes to validate models)."""
     from workflow.discovery import diagnosis as discovery
     from workflow.models import averaged as describing
 
@@ -94,7 +94,21 @@ def averaged_start(model: str, segments: pd.DataFrame, response_quantity: str, s
     fit = discovery.fit_model(
         model, data, discovery.scatter_of(data), context, settings=discovery.FitSettings(seed=seed)
     )
-    p = fit.params
+    return fit.params
+
+
+def averaged_start(model: str, params: dict[str, float]) -> np.ndarray:
+    """Search point of the time-domain fit from the averaged model's fitted parameters.
+
+    The averaged (describing-function) model of :mod:`workflow.models.averaged` has the
+    same parameters as the time-domain search (stuck-joint frequency, the joint's
+    share of the stiffness, the velocity at which the joint slips, zeta0; LuGre's
+    stiction ratio and Stribeck velocity) and fits in seconds, so its optimum is a
+    good start for the expensive time-domain refinement. The diagnosis fits it for
+    every configuration (``results/interim/diagnosis``); the paper-model fits start
+    from that fit rather than fitting it again.
+    """
+    p = params
     point = [
         p["f_lin_hz"],
         np.log10(p["joint_stiffness_fraction"]),
@@ -124,19 +138,22 @@ def fit_configuration(
     coordinate: ModalCoordinate,
     analysis: DecaySettings,
     settings: ModelSettings,
+    averaged_params: dict[str, dict[str, float]],
 ) -> dict:
     """Fit each friction model to one configuration's damping and frequency curves.
 
     ``analysis`` is the decay analysis the segments went through (the simulated
-    ring-downs go through the same); ``settings`` the search and simulation settings.
+    ring-downs go through the same); ``settings`` the search and simulation settings;
+    ``averaged_params`` each model's averaged-model fit (physical parameters), the
+    start of its time-domain fit.
 
     Returns a JSON-ready document: per model its parameters, one-sigma
     uncertainties, fit-quality numbers and the simulated curves.
     """
-    from workflow.models.fitting import RingdownFitContext, fit_friction_model
+    from workflow.models.fitting import RingdownFitContext, fit_friction_model, simulation_rate_hz
 
     context = RingdownFitContext(
-        fs_hz=sample_rate_hz,
+        fs_hz=simulation_rate_hz(sample_rate_hz, band_hz),
         band_hz=tuple(band_hz),
         record_duration_s=record_duration_s,
         slip_per_modal=1.0,
@@ -150,7 +167,10 @@ def fit_configuration(
         "response_per_modal_in": coordinate.response_per_modal,
         "models": {},
     }
+    name = str(segments["configuration"].iloc[0])
     for offset, model in enumerate(models):
+        started = time.perf_counter()
+        log.info("%s %s: time-domain fit from the averaged model's optimum", name, model)
         result = fit_friction_model(
             model,
             segments["velocity_amplitude_in_s"].to_numpy(float),
@@ -163,7 +183,14 @@ def fit_configuration(
             local_starts=settings.local_starts,
             max_iterations=settings.local_iterations,
             seed=settings.seed + offset,
-            initial_points=averaged_start(model, segments, response_quantity, settings.seed),
+            initial_points=averaged_start(model, averaged_params[model]),
+        )
+        log.info(
+            "%s %s: %d ring-downs simulated in %.1f s",
+            name,
+            model,
+            result.n_simulations,
+            time.perf_counter() - started,
         )
         document["models"][model] = {
             "params": {key: float(value) for key, value in result.params.items()},

@@ -1,0 +1,43 @@
+"""Rule figures_models: paper figures 14 (Dahl) and 15 (LuGre) of every configuration."""
+
+import json
+from pathlib import Path
+
+from workflow.io.tables import read_table
+from workflow.io.units import UNIT_SYSTEMS
+from workflow.models.paper import model_curve_frames
+from workflow.outputs import figures
+from workflow.runtime.logs import setup_script_logging
+
+log = setup_script_logging(snakemake.log[0], "figures_models")
+units = UNIT_SYSTEMS[snakemake.params.units]
+segments = read_table(snakemake.input.segments)
+for configuration, fit_path, dahl_path, lugre_path in zip(
+    snakemake.params.configurations,
+    snakemake.input.fits,
+    snakemake.output.dahl,
+    snakemake.output.lugre,
+    strict=True,
+):
+    mine = segments[segments["configuration"] == configuration]
+    document = json.loads(Path(fit_path).read_text())
+    # the simulated curves only where they are compared with data (their ends carry the
+    # simulation's own start-up and noise-floor effects)
+    low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
+    curves = {
+        model: frame[frame["velocity_amplitude_in_s"].between(low, high)]
+        for model, frame in model_curve_frames(document).items()
+    }
+    for model, path, label in (("dahl", dahl_path, "Dahl"), ("lugre", lugre_path, "LuGre")):
+        fit = document["models"].get(model)
+        if fit is None:
+            title = f"{configuration}: {label} not fitted ({document.get('skipped', 'no fit')})"
+            figures.save(figures.model_comparison(mine, {}, title=title, units=units), path)
+            continue
+        title = (
+            f"{configuration}: measured vs fitted {label} simulation\n"
+            f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)"
+        )
+        models = {f"{label} + ζ0 (fitted)": curves[model]}
+        figures.save(figures.model_comparison(mine, models, title=title, units=units), path)
+    log.info("%s: figures 14 and 15 drawn", configuration)
