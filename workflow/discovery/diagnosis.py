@@ -32,6 +32,8 @@ Steps (docs/discovery.md states the rule with its numbers):
 
 from __future__ import annotations
 
+import logging
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -72,6 +74,8 @@ __all__ = [
     "heldout_standard_error",
     "heldout_units",
 ]
+
+log = logging.getLogger(__name__)
 
 CAUSE_MODELS: dict[str, str] = {
     "microslip_power_law": "iwan",
@@ -1661,8 +1665,16 @@ def diagnose_configuration(
         nested = None
         if name != "dahl" and name in NESTED_DAHL and "dahl" in fits:
             nested = {**fits["dahl"].params, **NESTED_DAHL[name](data)}
+        started = time.perf_counter()
         fits[name] = fit_model(name, data, scatter, context, settings=settings, nested_start=nested)
         cv[name] = cross_validate(name, data, scatter, context, fits[name], settings=settings)
+        log.info(
+            "%s %s: fitted and cross-validated in %.1f s (held-out error %.3g)",
+            data.name,
+            name,
+            time.perf_counter() - started,
+            cv[name]["error"],
+        )
     residuals = {m: model_residuals(f, data, scatter, context) for m, f in fits.items()}
     evidence = {m: ModelEvidence(residuals[m], cv[m], len(MODELS[m].params)) for m in fits}
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
