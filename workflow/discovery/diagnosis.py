@@ -1493,14 +1493,13 @@ def evaluate_decision(
     n_eff = effective_observations(view)
     units = heldout_units(view)
     n_units = int(units.max()) + 1 if units.size else 0
+    # the scored segments are the data's (calibration segments are not), the same for every model
+    scored = next(iter(evidence.values())).heldout["scored"][segments]
+    unit_weights = np.bincount(units[scored], weights=weights[scored], minlength=n_units)
     errors, bic, residuals, unit_squares = {}, {}, {}, {}
-    unit_weights = None
     for m, ev in evidence.items():
-        scored = ev.heldout["scored"][segments]
         square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])[segments]
         unit_squares[m] = np.bincount(units[scored], weights=(weights * square)[scored], minlength=n_units)
-        if unit_weights is None:
-            unit_weights = np.bincount(units[scored], weights=weights[scored], minlength=n_units)
         errors[m] = {
             "error": _weighted_rms(square[scored], weights[scored]),
             "error_zeta": _weighted_rms(ev.heldout["squared_zeta"][segments][scored], weights[scored]),
