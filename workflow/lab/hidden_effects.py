@@ -116,7 +116,7 @@ def generate_case(
     sensor has the same physics, hits and run-to-run variations.
     """
     case = draw_case(cause, seed)
-    out = Path(work_dir) / f"{cause}_{seed}" / f"sensor{noise_stream}"
+    out = Path(work_dir) / f"{cause}_{seed}_sensor{noise_stream}"
     generate_campaign(
         out,
         seed=case["seed"],
