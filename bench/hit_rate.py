@@ -63,6 +63,8 @@ def _one(args):
                 **case,
                 "true_candidate_ratio": own,
                 "baseline_misfit": conf["evidence"]["baseline_misfit_significant"],
+                "explains_data": conf["explains_data"],
+                "extended_model": conf["extended_model"]["model"],
             }
     except Exception as error:  # report, do not hide
         case, verdict, ratio = {}, f"error: {error}", None
@@ -189,6 +191,12 @@ def main() -> None:
                 f"  {cause:24s} median {sorted(ratios)[len(ratios) // 2]:.3f}  "
                 f"max {max(ratios):.3f}  (n={len(ratios)})"
             )
+    print("\nexplains_data (the extended model within 2 scatters everywhere) when the cause was named:")
+    for cause in args.causes:
+        named = [r for r in results if r[0] == cause and r[2] == cause]
+        if named:
+            explained = sum(bool(r[4].get("explains_data")) for r in named)
+            print(f"  {cause:24s} {explained / len(named):.2f}  (n={len(named)})")
     print("\nmisses:")
     for r in results:
         if r[2] != r[0]:

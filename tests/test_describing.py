@@ -124,6 +124,51 @@ def test_iwan_tip_energy_slope_is_the_derivative_of_the_stored_energy():
     np.testing.assert_allclose(np.gradient(energy, x)[smooth], slope[smooth], rtol=2e-2, atol=1e-4)
 
 
+def _cells_discrete(x, shares, per_cell=20000):
+    """A sum of Jenkins elements with thresholds log-uniform within each cell (midpoint rule in ln t)."""
+    edges = dsc.threshold_cell_edges(len(shares))
+    onsets, weights = [], []
+    for k, share in enumerate(shares):
+        u = np.linspace(np.log(edges[k]), np.log(edges[k + 1]), per_cell + 1)
+        onsets.append(np.exp(0.5 * (u[1:] + u[:-1])))
+        weights.append(np.full(per_cell, share / per_cell))
+    t, w = np.concatenate(onsets), np.concatenate(weights)
+    d = np.sum(w * dsc.jenkins_dissipation(x, t))
+    g = np.sum(w * np.where(t >= x, 1.0, dsc.jenkins_inphase(t / x)))
+    stuck = x * np.sum(w[t > x])
+    return d, g, stuck
+
+
+@pytest.mark.parametrize("x", [0.002, 0.05, 0.3, 0.9, 3.0])
+def test_threshold_cells_match_a_sum_of_jenkins_elements(x):
+    shares = np.array([0.1, 0.35, 0.05, 0.5])
+    av = dsc.iwan_cells_averages(x, shares)
+    d, g, slope = _cells_discrete(x, shares)
+    # midpoint rule over 20000 elements a cell: relative error ~ (ln 10 / 2 / 20000)^2
+    assert av.dissipation == pytest.approx(d, rel=1e-7, abs=1e-15)
+    assert av.inphase == pytest.approx(g, abs=1e-7)
+    # the stuck stiffness counts whole elements: one element's weight is 2.5e-5 of the joint
+    assert av.tip_energy_slope == pytest.approx(slope, abs=3e-5 * x)
+
+
+def test_threshold_cells_are_a_stuck_joint_below_and_a_slipped_one_above():
+    shares = np.array([0.25, 0.25, 0.5])
+    below = dsc.iwan_cells_averages(0.5 * dsc.threshold_cell_edges(3)[0], shares)
+    assert below.dissipation == 0.0 and below.inphase == pytest.approx(1.0)
+    above = dsc.iwan_cells_averages(1e4, shares)
+    # every element slides: in-phase stiffness ~ (16 / 3 pi) sum t^1.5, dissipation ~ 4 x sum t
+    assert above.inphase < 1e-4
+    assert above.tip_energy_slope == 0.0
+
+
+def test_threshold_cells_batch_shapes_follow_the_parameters():
+    y = np.geomspace(0.01, 2.0, 7)
+    shares = np.array([[0.5, 0.5], [0.9, 0.1]])[:, None, :]  # two parameter sets, shape (2, 1, 2)
+    av = dsc.iwan_cells_averages(y, shares)
+    assert av.inphase.shape == (2, 7)
+    np.testing.assert_allclose(av.inphase[1], dsc.iwan_cells_averages(y, [0.9, 0.1]).inphase, rtol=1e-12)
+
+
 def test_power_stiffness_harmonic_factor():
     assert dsc.power_stiffness_harmonic_factor(2.0) == pytest.approx(0.75)  # cubic spring
     assert dsc.power_stiffness_harmonic_factor(0.0) == pytest.approx(1.0)  # linear spring

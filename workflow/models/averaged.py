@@ -58,6 +58,8 @@ Joint laws (dimensionless, per :class:`JointAverages`)
   have density ``R t^chi`` on ``(0, 1)`` (``-1 < chi``) plus a macro-slip element of
   weight ``S`` at ``t = 1``: ``D ~ y^(3 + chi)`` and ``zeta ~ y^(1 + chi)`` below
   macro-slip.
+* Iwan with the threshold density set by the data: the stiffness share of each
+  half-decade cell of slip thresholds, below the top of the measured amplitudes.
 * Extensions used by :mod:`workflow.discovery.diagnosis`: quadratic damping ``c2 xi'|xi'|``,
   a non-dissipative power-law stiffness, and a run-order drift of the slip scale.
 
@@ -83,6 +85,9 @@ __all__ = [
     "jenkins_dissipation",
     "jenkins_inphase",
     "iwan_averages",
+    "iwan_cells_averages",
+    "iwan_cells_model",
+    "threshold_cell_edges",
     "lugre_averages",
     "power_stiffness_harmonic_factor",
     "ring_down_observables",
@@ -249,6 +254,74 @@ def iwan_averages(x: ArrayLike, chi: ArrayLike, macro_ratio: ArrayLike, n_nodes:
     macro = s_macro * np.where(below, 1.0, jenkins_inphase(1.0 / safe_x))
     g = np.where(x > 0, slipped + stuck_distributed + macro, 1.0)
     slope = x * (stuck_distributed + np.where(below, s_macro, 0.0))
+    return JointAverages(d, g, tip_energy_slope=slope)
+
+
+def _jenkins_log_integral_table(n: int = 20001) -> tuple[np.ndarray, np.ndarray]:
+    """``H(tau) = int_0^tau h(s) / s ds`` of :func:`jenkins_inphase` on ``0 <= tau <= 1``.
+
+    ``h(s) ~ (16 / 3 pi) s^1.5`` near 0, so the integrand is bounded; the trapezoid rule
+    on 20001 points is accurate to ~1e-9 (linear interpolation between them adds
+    ~1e-10).
+    """
+    tau = np.linspace(0.0, 1.0, n)
+    integrand = np.zeros(n)
+    integrand[1:] = jenkins_inphase(tau[1:]) / tau[1:]
+    table = np.concatenate([[0.0], np.cumsum(0.5 * (integrand[1:] + integrand[:-1]) * np.diff(tau))])
+    return tau, table
+
+
+_JENKINS_LOG_TAU, _JENKINS_LOG_H = _jenkins_log_integral_table()
+
+
+def threshold_cell_edges(n_cells: int) -> np.ndarray:
+    """Edges of the slip-threshold cells, half a decade wide, the top one at 1.
+
+    In units of the joint's slip scale (the measured amplitude range's top, see
+    :data:`MODELS` ``iwan_cells_<n>``): ``10^((k - n) / 2)`` for ``k = 0 .. n``.
+    """
+    return 10.0 ** ((np.arange(n_cells + 1) - n_cells) / 2.0)
+
+
+def iwan_cells_averages(y: ArrayLike, shares: ArrayLike) -> JointAverages:
+    """Cycle averages of a parallel Jenkins (Iwan) joint with a piecewise slip-threshold density.
+
+    The slip thresholds ``t`` (unit stiffness density) fill half-decade cells
+    (:func:`threshold_cell_edges`), uniformly in ``ln t`` within each: cell ``k`` holds
+    the stiffness share ``shares[k]`` with density ``c_k / t``, ``c_k = shares[k] /
+    ln(t_(k+1) / t_k)``. Any Masing joint made of Jenkins elements is such a joint for
+    some density (Iwan 1966); the cells let the data set it where the amplitudes reach.
+    With ``m = clip(x, t_k, t_(k+1))``, per cell:
+
+    * ``d = int c/t 4 t (x - t) dt = 4 c (x (m - t_k) - (m^2 - t_k^2) / 2)``;
+    * ``g = c (H(m/x) - H(t_k/x)) + c ln(t_(k+1) / m)`` with ``H(tau) = int_0^tau h(s)/s ds``
+      (slipping elements' in-phase stiffness, then the stuck ones');
+    * ``de/dx = x c ln(t_(k+1) / m)`` (only stuck elements store more energy).
+
+    Parameters
+    ----------
+    y : array_like
+        Slip amplitude over the top edge of the cells.
+    shares : array_like, shape ``B + (K,)``
+        Stiffness share of each cell (summing to 1); ``B`` broadcasts against ``y``'s shape.
+
+    Returns
+    -------
+    JointAverages
+    """
+    shares = np.asarray(shares, dtype=float)
+    edges = threshold_cell_edges(shares.shape[-1])
+    low, high = edges[:-1], edges[1:]
+    x = np.abs(np.asarray(y, dtype=float))[..., None]
+    c = shares / np.log(high / low)
+    m = np.clip(x, low, high)
+    d = np.sum(4.0 * c * (x * (m - low) - 0.5 * (m**2 - low**2)), axis=-1)
+    safe_x = np.where(x > 0, x, 1.0)
+    h_top = np.interp(np.minimum(m / safe_x, 1.0), _JENKINS_LOG_TAU, _JENKINS_LOG_H)
+    h_low = np.interp(np.minimum(low / safe_x, 1.0), _JENKINS_LOG_TAU, _JENKINS_LOG_H)
+    stuck = c * np.log(high / m)
+    g = np.sum(c * (h_top - h_low) + stuck, axis=-1)
+    slope = x[..., 0] * np.sum(stuck, axis=-1)
     return JointAverages(d, g, tip_energy_slope=slope)
 
 
@@ -435,10 +508,10 @@ class AveragedModel:
     Attributes
     ----------
     name : str
-        Model id (``dahl``, ``lugre``, ``iwan``, ``dahl_quadratic``,
+        Model id (``dahl``, ``lugre``, ``iwan``, ``iwan_cells_<n>``, ``dahl_quadratic``,
         ``dahl_stiffness``, ``dahl_drift``).
     joint : str
-        ``dahl``, ``lugre`` or ``iwan``.
+        ``dahl``, ``lugre``, ``iwan`` or ``iwan_cells``.
     params : tuple of ParamSpec
         Fitted parameters, in order.
     fixed : tuple of str
@@ -460,6 +533,11 @@ class AveragedModel:
     @property
     def uses_runs(self) -> bool:
         return any(p.name == "drift" for p in self.params)
+
+    @property
+    def cell_names(self) -> tuple[str, ...]:
+        """Names of the slip-threshold cell parameters (``iwan_cells`` joints), lowest first."""
+        return tuple(p.name for p in self.params if p.name.startswith("stiffness_fraction_cell_"))
 
 
 MODELS: dict[str, AveragedModel] = {
@@ -557,12 +635,52 @@ MODELS: dict[str, AveragedModel] = {
 }
 """The averaged models, by id."""
 
+MAX_THRESHOLD_CELLS = 12
+"""Most half-decade slip-threshold cells of an ``iwan_cells_<n>`` model (six decades)."""
+
+
+def iwan_cells_model(n_cells: int) -> AveragedModel:
+    """The Iwan joint whose slip-threshold density is set by the data, in ``n_cells`` cells.
+
+    Cell ``k`` (1 = lowest) holds the slip thresholds between ``10^((k - 1 - n) / 2)``
+    and ``10^((k - n) / 2)`` times ``anchor_velocity_in_s``, the top of the measured
+    amplitude range (fixed, not fitted: thresholds above it never slip and are part of
+    the linear stiffness); its parameter is the share of the small-amplitude modal
+    stiffness those elements release at full slip. Their sum is the joint stiffness
+    fraction.
+    """
+    if not 1 <= n_cells <= MAX_THRESHOLD_CELLS:
+        raise ValueError(f"n_cells must be 1 .. {MAX_THRESHOLD_CELLS}, got {n_cells}")
+    cells = tuple(
+        ParamSpec(
+            f"stiffness_fraction_cell_{k}",
+            "1",
+            "log",
+            f"modal stiffness share released by slip thresholds between 10^{(k - 1 - n_cells) / 2:g} "
+            f"and 10^{(k - n_cells) / 2:g} of the top measured amplitude",
+        )
+        for k in range(1, n_cells + 1)
+    )
+    return AveragedModel(
+        f"iwan_cells_{n_cells}",
+        "iwan_cells",
+        _BASE[:2] + cells,
+        "Iwan joint with the slip-threshold density recovered from the data (half-decade cells) "
+        "+ linear viscous damping",
+        fixed=("anchor_velocity_in_s",),
+    )
+
+
+MODELS.update({f"iwan_cells_{n}": iwan_cells_model(n) for n in range(1, MAX_THRESHOLD_CELLS + 1)})
+
 
 def _joint_averages(model: AveragedModel, y, velocity, params) -> JointAverages:
     if model.joint == "dahl":
         return dahl_averages(y)
     if model.joint == "iwan":
         return iwan_averages(y, params["chi"], params["macro_ratio"])
+    if model.joint == "iwan_cells":
+        return iwan_cells_averages(y, params["threshold_shares"])
     if model.joint == "lugre":
         beta = np.asarray(params["joint_stiffness_fraction"], dtype=float)
         tau_omega = 2.0 * np.asarray(params["micro_damping_ratio"]) * np.asarray(params["zeta0"]) / beta
@@ -616,6 +734,11 @@ def model_curves_on_grid(
     """
     v = np.asarray(velocity_grid, dtype=float)
     p = {k: np.asarray(val, dtype=float) for k, val in params.items()}
+    if model.joint == "iwan_cells":
+        cells = np.stack(np.broadcast_arrays(*(p[name] for name in model.cell_names)), axis=-1)
+        p["joint_stiffness_fraction"] = cells.sum(axis=-1)
+        p["threshold_shares"] = cells / p["joint_stiffness_fraction"][..., None]
+        p["slip_velocity_in_s"] = p["anchor_velocity_in_s"]
     if model.uses_runs:
         if run_position is None:
             raise ValueError(f"model {model.name} needs run_position")

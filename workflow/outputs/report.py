@@ -144,6 +144,8 @@ def esc(text: Any) -> str:
 
 
 def model_name(model_id: str | None) -> str:
+    if model_id and model_id.startswith("iwan_cells_"):
+        return "Iwan micro-slip, slip thresholds from the data"
     return MODEL_NAMES.get(model_id or "", model_id or "?")
 
 
@@ -255,6 +257,40 @@ def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str
     more = f" and {len(failing) - 4} more" if len(failing) > 4 else ""
     return [
         f"{model} does not explain all the data: it misses by more than {limit} scatters in {where}{more}."
+    ]
+
+
+def threshold_sentences(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[str]:
+    """The slip-threshold distribution recovered from the data, when the power law did not
+    explain a micro-slip joint (``evidence.threshold_distribution`` of diagnosis.json)."""
+    refinement = (entry.get("evidence") or {}).get("threshold_distribution")
+    if not refinement:
+        return []
+    cells = refinement.get("cells") or []
+    head = (
+        f"The power law does not explain the data, so the spread of slip thresholds was recovered "
+        f"from the data in {len(cells)} half-decade cells: held-out error "
+        f"{fmt(refinement.get('heldout_error'))} against the power law's "
+        f"{fmt(refinement.get('iwan_heldout_error'))}, BIC {fmt(refinement.get('bic'))} against "
+        f"{fmt(refinement.get('iwan_bic'))}; "
+    )
+    head += (
+        "it is the extended model."
+        if refinement.get("adopted")
+        else "it does not lower both, so the power law stays the extended model."
+    )
+    shares = []
+    for cell in cells:
+        error = cell.get("standard_error")
+        spread = f" ± {fmt(100 * error, 2)}" if error is not None else " (not identified)"
+        shares.append(
+            f"{fmt(units.per_in_s * cell['threshold_low_in_s'])}-{fmt(units.per_in_s * cell['threshold_high_in_s'])} "
+            f"{units.velocity}: {fmt(100 * cell['stiffness_fraction'], 2)}{spread} %"
+        )
+    return [
+        head,
+        "Share of the modal stiffness released by the slip thresholds of each cell (± one "
+        "standard error): " + "; ".join(shares) + ".",
     ]
 
 
@@ -458,10 +494,11 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
     if cause not in ("none", "unknown"):
         candidate = (evidence.get("candidates") or {}).get(cause, {})
         text = (
-            f"{model_name(entry.get('extended_model', {}).get('model'))} lowers the held-out "
-            f"error from {fmt(gain.get('baseline'))} to {fmt(gain.get('extended'))} "
-            f"(ratio {ratio(gain.get('ratio'))}; a clear gain needs a ratio below "
-            f"{ratio(evidence.get('clear_gain_threshold'))})"
+            f"{model_name(candidate.get('model') or entry.get('extended_model', {}).get('model'))} "
+            f"lowers the held-out error from {fmt(gain.get('baseline'))} to "
+            f"{fmt(candidate.get('heldout_error', gain.get('extended')))} "
+            f"(ratio {ratio(candidate.get('ratio_to_baseline', gain.get('ratio')))}; a clear gain "
+            f"needs a ratio below {ratio(evidence.get('clear_gain_threshold'))})"
         )
         if candidate.get("delta_bic") is not None:
             text += (
@@ -501,6 +538,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"ratio {ratio(margin['ratio'])}) but was not accepted: "
                 f"{evidence.get('decision_rule', 'see the decision rule')}."
             )
+    items.extend(threshold_sentences(entry, units))
     for flag in _flags(entry):
         items.append(f"Fitted parameter to read with care, {flag}.")
     items.extend(explains_sentences(entry, units))
