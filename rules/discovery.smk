@@ -15,6 +15,9 @@ rule diagnose_configuration:
         "results/logs/diagnose_configuration/{configuration}.log",
     benchmark:
         "results/benchmarks/diagnose_configuration/{configuration}.tsv"
+    # The study's longest chain is a configuration's diagnosis, its time-domain fit and
+    # figures 14-15 (rules/models.smk): they go before the figures of the measured data.
+    priority: 1
     conda:
         LAPJOINT_ENV
     threads: 1

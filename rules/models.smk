@@ -47,6 +47,7 @@ rule fit_friction_models:
         "results/logs/fit_friction_models/{configuration}.log",
     benchmark:
         "results/benchmarks/fit_friction_models/{configuration}.tsv"
+    priority: 1  # the longest chain (rules/discovery.smk, diagnose_configuration)
     conda:
         LAPJOINT_ENV
     threads: 1
@@ -112,6 +113,7 @@ rule figures_models:
         "results/logs/figures_models.log",
     benchmark:
         "results/benchmarks/figures_models.tsv"
+    priority: 1  # the end of the longest chain: not left to run alone at the end
     conda:
         LAPJOINT_ENV
     threads: 1

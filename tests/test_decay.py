@@ -303,3 +303,23 @@ def test_per_run_analysis_does_not_import_scipy_signal():
     code = "import sys, workflow.measured.decay, workflow.measured.runs; print('scipy.signal' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_the_band_power_kept_between_records_gives_the_same_filter():
+    """Records of one length, rate and band share the filter's |H|^2 (computed once and
+    kept read-only): filtering with it kept gives what filtering anew gives, bit for bit."""
+    rng = np.random.default_rng(5)
+    fs_hz, band_hz = 2560.0, (100.0, 150.0)
+    records = rng.normal(size=(3, 4096))
+    decay._padded_band_power.cache_clear()
+    fresh = []
+    for x in records:
+        fresh.append(decay.bandpass(x, fs_hz, band_hz, 10))
+        decay._padded_band_power.cache_clear()
+    kept = [decay.bandpass(x, fs_hz, np.array(band_hz), 10) for x in records]
+    assert decay._padded_band_power.cache_info().hits == 2
+    for a, b in zip(fresh, kept):
+        assert np.array_equal(a, b)
+    _, _, padded = decay._zero_phase_spectrum(records[0], fs_hz, band_hz, 10)
+    with pytest.raises(ValueError):
+        decay._padded_band_power(padded, fs_hz, band_hz, 10)[0] = 0.0

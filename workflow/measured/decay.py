@@ -53,6 +53,7 @@ come out in that unit.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -172,10 +173,20 @@ def _zero_phase_spectrum(
     padded = 1 << int(np.ceil(np.log2(extended.size + 40.0 * tau_samples)))
     spectrum = np.fft.fft(extended, padded)
     del extended
-    frequency_hz = np.abs(np.fft.fftfreq(padded, d=1.0 / fs_hz))
     # In place: a long record's padded spectrum is the largest array of a run's analysis.
-    spectrum *= butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order)
+    spectrum *= _padded_band_power(padded, float(fs_hz), (float(band_hz[0]), float(band_hz[1])), order)
     return spectrum, extension, padded
+
+
+@functools.lru_cache(maxsize=2)
+def _padded_band_power(padded: int, fs_hz: float, band_hz: tuple[float, float], order: int) -> np.ndarray:
+    """|H|^2 on the FFT grid of ``padded`` samples (read-only). Kept for the next call:
+    the records of a run group or of a fit's simulated batch share their length, rate
+    and band, and this was a quarter of each one's analysis."""
+    frequency_hz = np.abs(np.fft.fftfreq(padded, d=1.0 / fs_hz))
+    power = butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order)
+    power.flags.writeable = False
+    return power
 
 
 def bandpass(

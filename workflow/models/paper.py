@@ -7,11 +7,14 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from workflow.io.settings import DecaySettings, ModelSettings
+
+if TYPE_CHECKING:  # pandas is imported where tables are built: figures 7-8 draw without it
+    import pandas as pd
 
 #: Paper figure 7 (Dahl) and figure 8 (LuGre) parameter values, in the paper's units.
 PAPER_DAHL = {"sigma": (2 * np.pi) ** 2, "fc": 38.0}
@@ -206,6 +209,8 @@ def fit_configuration(
 
 def fit_table(documents: dict[str, dict]) -> pd.DataFrame:
     """One row per configuration, model and parameter: value, uncertainty, fit quality."""
+    import pandas as pd
+
     rows: list[dict] = []
     for configuration, document in documents.items():
         for model, fit in document["models"].items():
@@ -239,6 +244,8 @@ def fit_table(documents: dict[str, dict]) -> pd.DataFrame:
 
 def model_curve_frames(document: dict) -> dict[str, pd.DataFrame]:
     """Model name -> simulated curves (velocity amplitude, zeta, frequency) for plotting."""
+    import pandas as pd
+
     frames = {}
     for model, fit in document["models"].items():
         curves = fit["curves"]

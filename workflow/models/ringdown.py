@@ -51,8 +51,6 @@ from collections.abc import Mapping
 import numba
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
-from scipy.signal import hilbert
 
 from workflow.models import friction
 
@@ -405,6 +403,9 @@ def reference_ringdown(
     dict
         ``t_s``, ``displacement``, ``velocity``, ``acceleration`` (n,), ``nfev``.
     """
+    # here, not at the top: the fits import this module and never need SciPy's integrators
+    from scipy.integrate import solve_ivp
+
     phi = float(slip_per_modal)
     p = {k: float(v) for k, v in params.items()}
     if model == "dahl":
@@ -473,6 +474,8 @@ def envelope_relative_error(
     numpy.ndarray
         Relative error per signal (dimensionless).
     """
+    from scipy.signal import hilbert  # only the integrator's checks need it (tests, bench)
+
     es = np.abs(hilbert(np.asarray(signal, float), axis=-1))
     er = np.abs(hilbert(np.asarray(reference, float), axis=-1))
     n = es.shape[-1]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import textwrap
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -18,11 +19,13 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
+
+if TYPE_CHECKING:  # tables come in as DataFrames; figures 7-8 are drawn without pandas
+    import pandas as pd
 
 log = logging.getLogger(__name__)
 

@@ -55,8 +55,13 @@ def drawn_texts(figure: plt.Figure) -> list[Text]:
 
 
 def overlapping_texts(figure: plt.Figure) -> list[tuple[str, str]]:
-    """Pairs of drawn texts whose extents overlap (text of each pair)."""
-    figure.canvas.draw()
+    """Pairs of drawn texts whose extents overlap (text of each pair).
+
+    The figure is laid out without being rendered: text extents need the positions a
+    draw computes, not its pixels, and :func:`workflow.outputs.figures.save` renders the
+    figure once more anyway (the extents, and the PNG written after, are the same as
+    after a full draw; a full draw was a fifth of a figure job's work)."""
+    figure.draw_without_rendering()
     renderer = figure.canvas.get_renderer()
     boxes = []
     for text in drawn_texts(figure):
