@@ -620,3 +620,27 @@ def test_contact_patch_joint_is_explained_by_the_slip_thresholds_recovered_from_
     cells = refinement["cells"]
     assert all(c["stiffness_fraction"] > 0 for c in cells)
     assert sum(c["stiffness_fraction"] for c in cells) < 0.05
+
+
+def test_power_law_written_as_cells_keeps_the_stiffness_released_below_the_top_amplitude():
+    """The refinement's start: Segalman's density t^chi integrated over each half-decade
+    cell; below the top amplitude (macro-slip above it) the cells hold exactly the
+    stiffness the power law releases there, beta (V_top / V_s)^(chi + 1) / (1 + macro)."""
+    model = disc.MODELS["iwan_cells_4"]
+    iwan = {
+        "f_lin_hz": 120.0,
+        "zeta0": 8e-4,
+        "joint_stiffness_fraction": 0.02,
+        "slip_velocity_in_s": 20.0,
+        "chi": -0.5,
+        "macro_ratio": 0.1,
+        "anchor_velocity_in_s": 4.0,
+    }
+    cells = disc.iwan_as_cells(iwan, model)
+    shares = np.array([cells[name] for name in model.cell_names])
+    assert shares.sum() == pytest.approx(0.02 * (4.0 / 20.0) ** 0.5 / 1.1, rel=1e-12)
+    # each cell t^(chi+1) between its edges; the lowest also holds everything below it
+    edges = 4.0 * np.array([10**-2, 10**-1.5, 10**-1, 10**-0.5, 1.0]) / 20.0
+    expected = 0.02 / 1.1 * np.diff(np.sqrt(edges))
+    expected[0] += 0.02 / 1.1 * np.sqrt(edges[0])
+    np.testing.assert_allclose(shares, expected, rtol=1e-12)

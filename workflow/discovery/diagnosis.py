@@ -1432,16 +1432,22 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
     }
 
 
+def at_bounds(model: AveragedModel, coords: np.ndarray, data: ConfigurationData) -> np.ndarray:
+    """Per parameter, -1 / 1 where the fit sits on the lower / upper edge of its fit range
+    (within a thousandth of it: not identified by the data), else 0."""
+    lo, hi = parameter_box(model, data)
+    unit = (np.asarray(coords, dtype=float) - lo) / (hi - lo)
+    return np.where(unit <= 1e-3, -1, np.where(unit >= 1 - 1e-3, 1, 0))
+
+
 def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: ConfigurationData) -> list[str]:
     """Parameters of a fit that sit on an edge of their fit range (not identified there)."""
     model = MODELS[model] if isinstance(model, str) else model
-    lo, hi = parameter_box(model, data)
-    unit = (np.asarray(coords, dtype=float) - lo) / (hi - lo)
     flags = []
-    for spec, u, c in zip(model.params, unit, coords):
-        if u <= 1e-3 or u >= 1 - 1e-3:
+    for spec, edge, c in zip(model.params, at_bounds(model, coords, data), coords):
+        if edge:
             value = float(np.exp(c)) if spec.scale == "log" else float(c)
-            side = "lower" if u <= 1e-3 else "upper"
+            side = "lower" if edge < 0 else "upper"
             flags.append(
                 f"{spec.name} = {value:.3g} at the {side} edge of its fit range: not identified by the data"
             )
@@ -1709,7 +1715,7 @@ def iwan_as_cells(iwan_params: Mapping[str, float], model: AveragedModel) -> dic
     measured amplitudes (never slips) into the linear stiffness.
     """
     chi, macro = float(iwan_params["chi"]), float(iwan_params["macro_ratio"])
-    anchor = float(iwan_params.get("anchor_velocity_in_s", 0.0))
+    anchor = float(iwan_params["anchor_velocity_in_s"])
     edges = threshold_cell_edges(len(model.cell_names)) * anchor / float(iwan_params["slip_velocity_in_s"])
 
     def cumulative(t: np.ndarray) -> np.ndarray:
@@ -1771,21 +1777,20 @@ def threshold_distribution(
     """The recovered slip-threshold cells: velocity range, stiffness share, its standard error."""
     model = MODELS[fit.model]
     errors = fit_standard_errors(fit, data, scatter, context)
-    lo, hi = parameter_box(model, data)
+    on_edge = at_bounds(model, fit.coords, data) != 0
     edges = threshold_cell_edges(len(model.cell_names)) * data.anchor_velocity_in_s
     names = model.param_names
     cells = []
     for k, name in enumerate(model.cell_names):
         i = names.index(name)
         value = fit.params[name]
-        at_edge = min(fit.coords[i] - lo[i], hi[i] - fit.coords[i]) <= 1e-3 * (hi[i] - lo[i])
         cells.append(
             {
                 "threshold_low_in_s": float(edges[k]),
                 "threshold_high_in_s": float(edges[k + 1]),
                 "stiffness_fraction": float(value),
                 # at an edge of its fit range the share is not identified: no error bar
-                "standard_error": None if at_edge else float(value * errors[i]),
+                "standard_error": None if on_edge[i] else float(value * errors[i]),
             }
         )
     return cells
