@@ -578,3 +578,47 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
     (sentence,) = report.explains_sentences(entry)
     assert "explains the data" in sentence and "not" not in sentence
     assert report.explains_sentences({"extended_model": {"model": "iwan"}}) == []
+
+
+def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
+    cells = [
+        {
+            "threshold_low_in_s": 0.1,
+            "threshold_high_in_s": 0.316,
+            "stiffness_fraction": 1e-7,
+            "standard_error": None,
+        },
+        {
+            "threshold_low_in_s": 0.316,
+            "threshold_high_in_s": 1.0,
+            "stiffness_fraction": 0.004,
+            "standard_error": 2e-4,
+        },
+    ]
+    entry = {
+        "evidence": {
+            "threshold_distribution": {
+                "model": "iwan_cells_2",
+                "adopted": True,
+                "heldout_error": 1.7,
+                "bic": 145.0,
+                "iwan_heldout_error": 5.1,
+                "iwan_bic": 257.0,
+                "cells": cells,
+            }
+        }
+    }
+    head, shares = report.threshold_sentences(entry)
+    assert (
+        "2 half-decade cells" in head
+        and "1.7" in head
+        and "5.1" in head
+        and "it is the extended model" in head
+    )
+    assert "0.316-1 in/s: 0.4 ± 0.02 %" in shares and "(not identified)" in shares
+    _, in_si = report.threshold_sentences(entry, SI)
+    assert "0.00803-0.0254 m/s" in in_si
+    entry["evidence"]["threshold_distribution"]["adopted"] = False
+    assert "the power law stays the extended model" in report.threshold_sentences(entry)[0]
+    assert report.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []
+    assert report.model_name("iwan_cells_6") == "Iwan micro-slip, slip thresholds from the data"

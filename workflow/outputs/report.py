@@ -282,10 +282,11 @@ def threshold_sentences(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list
     shares = []
     for cell in cells:
         error = cell.get("standard_error")
-        spread = f" ± {fmt(100 * error, 2)}" if error is not None else " (not identified)"
+        share = fmt(100 * cell["stiffness_fraction"], 2)
+        share = f"{share} ± {fmt(100 * error, 2)} %" if error is not None else f"{share} % (not identified)"
         shares.append(
             f"{fmt(units.per_in_s * cell['threshold_low_in_s'])}-{fmt(units.per_in_s * cell['threshold_high_in_s'])} "
-            f"{units.velocity}: {fmt(100 * cell['stiffness_fraction'], 2)}{spread} %"
+            f"{units.velocity}: {share}"
         )
     return [
         head,
