@@ -284,6 +284,41 @@ def test_decision_rule_branches():
     squares["b"] = runs + 2 * se
     assert disc.decide(1.0, 0.0, True, far, unit_squares=squares, unit_weights=weights)[0] == "a"
     assert disc.decide(1.0, 0.0, True, {"a": _cand(0.3, -5)}, envelope_structure=True)[0] == "unknown"
+    # a candidate whose fit lacks its cause's signature is not eligible
+    unsigned = {"a": _cand(0.40, -50) | {"shows_signature": False}, "b": _cand(0.45, -40)}
+    assert disc.decide(1.0, 0.0, True, unsigned)[0] == "b"
+
+
+@pytest.mark.parametrize(
+    "effect, size, shows",
+    [("quadratic_damping", 0.003, False), ("quadratic_damping", 0.006, False), ("stiffness_nonlinearity", 0.005, True)],
+)
+def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
+    """On the virtual lab's noise-free curves of a Dahl washer joint (0.6 in^2) with a
+    velocity-squared loss, ``dahl_stiffness`` fits as well as ``dahl_quadratic`` (a stiff
+    Dahl joint in pre-sliding whose softening a stiffness term cancels); the signature
+    check tells it apart from a real softening, whose frequency change outgrows the
+    friction's."""
+    from workflow.lab import virtual_lab as vl
+
+    lab = vl.LabSettings()
+    v = np.geomspace(0.07, 3.0, 60)
+    setup, curves = vl.setup_configuration("x", 0.6, lab)
+    zeta, frequency_hz = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "dahl", effect, size), v)
+    data = disc.ConfigurationData("x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0)
+    # the campaigns' typical scatter as weights
+    scatter = disc.Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
+    context = disc.FitContext(2.0)
+    fit = disc.fit_model("dahl_stiffness", data, scatter, context, settings=FAST)
+    signature = disc.stiffness_signature(fit, data)
+    assert signature["shows_signature"] is shows, signature
+    if not shows:
+        # as close as the velocity-squared loss itself, the stiffness term taking back
+        # most of the friction's frequency loss
+        residuals = disc.model_residuals(fit, data, scatter, context)
+        assert np.max(np.abs(residuals["z_noise"])) < 0.5 and np.max(np.abs(residuals["f_noise"])) < 0.5
+        whole, friction = signature["relative_frequency_change"], signature["friction_relative_frequency_change"]
+        assert abs(whole) < 0.5 * abs(friction)
 
 
 def test_campaign_verdict_rule():

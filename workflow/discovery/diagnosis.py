@@ -50,6 +50,7 @@ from workflow.models.averaged import (
     RESPONSE_ORDER,
     AveragedModel,
     CurveGrid,
+    model_curves,
     threshold_cell_edges,
 )
 
@@ -1283,7 +1284,8 @@ def decide(
     baseline_fails : bool
         Whether the baseline shows a significant misfit (binned or run-order).
     candidates : mapping
-        cause -> dict with ``heldout_error``, ``bic``, ``residual_significant``.
+        cause -> dict with ``heldout_error``, ``bic``, ``residual_significant`` and
+        optionally ``shows_signature`` (default true).
 
     envelope_structure : bool
         Whether the ring-downs are not single-mode decays (:func:`envelope_structure`).
@@ -1302,8 +1304,9 @@ def decide(
     ----
     * ``unknown`` when the envelopes are not single-mode free decays: no model of a
       single mode (baseline or candidate) can remove that misfit.
-    * A candidate is *eligible* when its held-out error is below the baseline's and
-      its BIC is below the baseline's.
+    * A candidate is *eligible* when its held-out error is below the baseline's, its
+      BIC is below the baseline's, and its fit shows its cause's signature
+      (:func:`stiffness_signature`).
     * ``none`` when the baseline has no significant misfit and no eligible candidate
       cuts the held-out error below ``CLEAR_GAIN`` x the baseline's.
     * Otherwise the best eligible candidate by held-out error; candidates whose squared
@@ -1323,7 +1326,9 @@ def decide(
             "beating in the band)"
         )
     eligible = {
-        c: v for c, v in candidates.items() if v["heldout_error"] < baseline_error and v["bic"] < baseline_bic
+        c: v
+        for c, v in candidates.items()
+        if v["heldout_error"] < baseline_error and v["bic"] < baseline_bic and v.get("shows_signature", True)
     }
     clear = {c: v for c, v in eligible.items() if v["heldout_error"] < CLEAR_GAIN * baseline_error}
     if not baseline_fails and not clear:
@@ -1454,17 +1459,56 @@ def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: Configurat
     return flags
 
 
+def stiffness_signature(fit: FitResult, data: ConfigurationData) -> dict:
+    """Whether a ``dahl_stiffness`` fit shows the stiffness-nonlinearity signature.
+
+    The output contract's signature: the frequency shifts with amplitude more than the
+    friction that fits the damping explains. Over the measured amplitudes the relative
+    change of the fitted model's damped frequency is compared with that of its friction
+    alone (the same fit with the stiffness term switched off); the signature is there
+    when the whole change is larger in magnitude.
+
+    Why: Dahl's pre-sliding damping grows in proportion to amplitude, its softening
+    with its square, so a stiff Dahl joint deep in pre-sliding, with a stiffness term
+    that cancels its softening, reproduces a velocity-squared loss (damping in
+    proportion to amplitude, frequency put) as closely as ``dahl_quadratic`` does. Such
+    a fit's stiffness term works against the friction's frequency change; that of an
+    amplitude-dependent stiffness the data show adds to it or outgrows it.
+
+    Returns
+    -------
+    dict
+        ``relative_frequency_change`` (model, lowest to highest amplitude),
+        ``friction_relative_frequency_change`` (stiffness term off) and
+        ``shows_signature`` (bool).
+    """
+    velocity = np.array([float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s))])
+    changes = []
+    for params in (fit.params, {**fit.params, "stiffness_shift": 0.0}):
+        _, frequency_hz = model_curves(fit.model, params, velocity, response_order=data.response_order)
+        changes.append(float(frequency_hz[1] / frequency_hz[0] - 1.0))
+    whole, friction = changes
+    return {
+        "relative_frequency_change": whole,
+        "friction_relative_frequency_change": friction,
+        "shows_signature": bool(abs(whole) > abs(friction)),
+    }
+
+
 @dataclass
 class ModelEvidence:
     """What the decision needs of one fitted model, per segment.
 
     ``residuals`` are the all-data fit's (:func:`model_residuals`); ``heldout`` the
-    cross-validation's (:func:`cross_validate`); ``n_params`` the fitted parameters.
+    cross-validation's (:func:`cross_validate`); ``n_params`` the fitted parameters;
+    ``shows_signature`` whether a candidate's fit shows its cause's signature
+    (:func:`stiffness_signature`; true where there is no such check).
     """
 
     residuals: dict[str, np.ndarray]
     heldout: dict
     n_params: int
+    shows_signature: bool = True
 
 
 def _subset(
@@ -1591,6 +1635,7 @@ def evaluate_decision(
                 any(b["significant"] for b in cb) or (ct is not None and ct["significant"])
             ),
             "significant_bins": int(sum(b["significant"] for b in cb)),
+            "shows_signature": evidence[m].shows_signature,
         }
     cause, reason = decide(
         errors[base]["error"],
@@ -1825,6 +1870,8 @@ def diagnose_configuration(
         )
     residuals = {m: model_residuals(f, data, scatter, context) for m, f in fits.items()}
     evidence = {m: ModelEvidence(residuals[m], cv[m], len(MODELS[m].params)) for m in fits}
+    signature = stiffness_signature(fits["dahl_stiffness"], data)
+    evidence["dahl_stiffness"].shows_signature = signature["shows_signature"]
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
     envelope_significant = bool(envelope and envelope["significant"])
     result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
@@ -1877,6 +1924,7 @@ def diagnose_configuration(
     )
     cause, reason, base = result["cause"], result["reason"], result["baseline"]
     errors, bins, trend, candidates = result["errors"], result["bins"], result["trend"], result["candidates"]
+    candidates["stiffness_nonlinearity"]["signature"] = signature
     for entry in candidates.values():
         m = entry["model"]
         entry["in_sample_rms"] = float(np.sqrt(fits[m].cost))
