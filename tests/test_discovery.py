@@ -291,7 +291,11 @@ def test_decision_rule_branches():
 
 @pytest.mark.parametrize(
     "effect, size, shows",
-    [("quadratic_damping", 0.003, False), ("quadratic_damping", 0.006, False), ("stiffness_nonlinearity", 0.005, True)],
+    [
+        ("quadratic_damping", 0.003, False),
+        ("quadratic_damping", 0.006, False),
+        ("stiffness_nonlinearity", 0.005, True),
+    ],
 )
 def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
     """On the virtual lab's noise-free curves of a Dahl washer joint (0.6 in^2) with a
@@ -305,7 +309,9 @@ def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
     v = np.geomspace(0.07, 3.0, 60)
     setup, curves = vl.setup_configuration("x", 0.6, lab)
     zeta, frequency_hz = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "dahl", effect, size), v)
-    data = disc.ConfigurationData("x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0)
+    data = disc.ConfigurationData(
+        "x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0
+    )
     # the campaigns' typical scatter as weights
     scatter = disc.Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
     context = disc.FitContext(2.0)
@@ -317,7 +323,10 @@ def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
         # most of the friction's frequency loss
         residuals = disc.model_residuals(fit, data, scatter, context)
         assert np.max(np.abs(residuals["z_noise"])) < 0.5 and np.max(np.abs(residuals["f_noise"])) < 0.5
-        whole, friction = signature["relative_frequency_change"], signature["friction_relative_frequency_change"]
+        whole, friction = (
+            signature["relative_frequency_change"],
+            signature["friction_relative_frequency_change"],
+        )
         assert abs(whole) < 0.5 * abs(friction)
 
 
