@@ -622,3 +622,17 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
     assert "the power law stays the extended model" in report.threshold_sentences(entry)[0]
     assert report.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []
     assert report.model_name("iwan_cells_6") == "Iwan micro-slip, slip thresholds from the data"
+
+
+def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_aside():
+    signature = {
+        "relative_frequency_change": -3.0e-5,
+        "friction_relative_frequency_change": -4.2e-4,
+        "shows_signature": False,
+    }
+    entry = {"evidence": {"candidates": {"stiffness_nonlinearity": {"signature": signature}}}}
+    (sentence,) = report.signature_sentences(entry)
+    assert "not eligible" in sentence and "-0.003 %" in sentence and "-0.042 %" in sentence
+    signature["shows_signature"] = True
+    assert report.signature_sentences(entry) == []
+    assert report.signature_sentences({"evidence": {}}) == []

@@ -237,6 +237,23 @@ def candidate_margin(entry: Mapping) -> dict | None:
     }
 
 
+def signature_sentences(entry: Mapping) -> list[str]:
+    """Why the stiffness candidate was set aside when its fit lacks the stiffness
+    signature (``evidence.candidates.stiffness_nonlinearity.signature``)."""
+    candidate = ((entry.get("evidence") or {}).get("candidates") or {}).get("stiffness_nonlinearity") or {}
+    signature = candidate.get("signature") or {}
+    if signature.get("shows_signature", True):
+        return []
+    whole = signature.get("relative_frequency_change")
+    friction = signature.get("friction_relative_frequency_change")
+    return [
+        f"{cause_name('stiffness_nonlinearity')} is not eligible: over the measured amplitudes its fit "
+        f"changes the frequency by {fmt(100 * whole, 2)} %, less than its friction alone "
+        f"({fmt(100 * friction, 2)} %); its stiffness term cancels the friction's frequency change "
+        "instead of showing one the friction cannot explain (the contract's signature)."
+    ]
+
+
 def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str]:
     """Whether the model the verdict rests on explains the data, and where it does not
     (``explains_data`` and ``evidence.explains_data`` of diagnosis.json)."""
@@ -449,6 +466,7 @@ def campaign_headline(document: Mapping) -> str:
 
 def _configuration_row(name: str, entry: Mapping, area_in2: float | None, units: UnitSystem) -> list[str]:
     gain = entry.get("gain") or {}
+    items.extend(signature_sentences(entry))
     margin = candidate_margin(entry)
     if margin and margin["ratio"] is not None:
         next_text = esc(cause_name(margin["next"]))
