@@ -32,6 +32,9 @@ rule diagnose_configuration:
 
 
 rule diagnose:
+    # The diagnosis's figures, the report and the summary wait for it: ahead of the
+    # measured data's figures, so that they do not end the study alone on one core.
+    priority: 1
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
@@ -63,6 +66,7 @@ rule diagnose:
 rule figures_discovery:
     # Every diagnosis figure in one job: they read the same two files, so a job per
     # figure would only repeat start-up (Python, matplotlib, pandas).
+    priority: 1  # after diagnose, before the measured data's figures
     input:
         diagnosis="results/diagnosis.json",
         residuals="results/tables/diagnosis_residuals.parquet",
