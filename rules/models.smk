@@ -3,9 +3,6 @@
 
 
 rule figure_friction_loops:
-    # It needs no data: it fills a core late instead of delaying the measured chain,
-    # whose jobs are then done on both cores at the start.
-    priority: -1
     output:
         dahl=report(
             "results/figures/fig07_dahl_loops.png",
