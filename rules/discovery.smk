@@ -5,28 +5,34 @@
 rule diagnose_configuration:
     # One job per configuration, so that the configurations are diagnosed side by side;
     # each reads every segment because the fits' reference velocity is the campaign's.
+    # The configuration's time-domain fits (Dahl, LuGre; results/models) follow in the
+    # same job: they start from the diagnosis's averaged fits, and in a job of their own
+    # half of their time was start-up (pandas, SciPy's stats, Numba) and teardown.
     input:
         segments="results/tables/segments.parquet",
         runs="results/tables/runs.parquet",
+        modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
-        "results/interim/diagnosis/{configuration}.npz",
+        diagnosis="results/interim/diagnosis/{configuration}.npz",
+        models="results/models/{configuration}.json",
     log:
         "results/logs/diagnose_configuration/{configuration}.log",
     benchmark:
         "results/benchmarks/diagnose_configuration/{configuration}.tsv"
-    # The study's longest chain is a configuration's diagnosis, its time-domain fit and
-    # figures 14-15 (rules/models.smk): they go before the figures of the measured data.
+    # The study's longest chain is a configuration's diagnosis and fits, then figures
+    # 14-15 (rules/models.smk): they go before the figures of the measured data.
     priority: 1
     conda:
         LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=3000,
-        runtime=30,
+        runtime=60,
     params:
         decay=asdict(SETTINGS.analysis.decay()),
         discovery=asdict(SETTINGS.discovery),
+        models=asdict(SETTINGS.models),
     script:
         "../scripts/diagnose_configuration.py"
 
