@@ -36,10 +36,18 @@ rule figure_friction_loops:
 
 
 rule model_table:
+    # The table and its report page in one job: the page alone was a job of start-up.
     input:
         expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
     output:
-        "results/tables/model_fits.parquet",
+        table="results/tables/model_fits.parquet",
+        page=report(
+            "results/report/model_fits.html",
+            caption="../report/model_fits.rst",
+            category="4 Friction models",
+            subcategory="4.3 Fitted parameters",
+            labels={"table": "Dahl and LuGre parameters"},
+        ),
     log:
         "results/logs/model_table.log",
     benchmark:
