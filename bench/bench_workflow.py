@@ -1,6 +1,7 @@
 """Workflow timings on the demo campaign (issues 6 and 16), as a table of medians.
 
     python bench/bench_workflow.py [--repeats 3] [--target all] [--scale]
+    python bench/bench_workflow.py --only high_rate runs300 [--repeats 3]
 
 For each repeat, in a fresh working directory: the demo campaign is generated
 first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run with
@@ -9,15 +10,18 @@ adds, each repeated as often and cold: one impact hit recorded by three sensors 
 12.8 kHz for 5 s (64000 samples a channel, analysed as three one-run
 configurations), a 300-run campaign (10 configurations x 30 runs) for the growth with
 runs, and the demo's 30 runs with records 4 times as long (32768 samples) for the
-growth with record length. Per rule: wall time from Snakemake's
+growth with record length; ``--only`` runs just the named ones of these (cold, no demo).
+Per rule: wall time from Snakemake's
 ``benchmark:`` files, and each job's CPU split into start-up (interpreter, Snakemake's
 script preamble, imports) and work, with its peak memory, from the cost line that every
-script logs (workflow/runtime/logs.py).
+script logs (workflow/runtime/logs.py), summed over the rule's jobs (``cpu_s``) and over
+every job (the total the tables print under them).
 """
 
 import argparse
 import glob
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -71,7 +75,13 @@ def rule_table(workdir: Path) -> pd.DataFrame:
         if found:
             rule, start_up, work, peak = found.groups()
             costs.append(
-                {"rule": rule, "start_up_s": float(start_up), "work_s": float(work), "peak_mb": float(peak)}
+                {
+                    "rule": rule,
+                    "start_up_s": float(start_up),
+                    "work_s": float(work),
+                    "cpu_s": float(start_up) + float(work),
+                    "peak_mb": float(peak),
+                }
             )
     wall = (
         pd.DataFrame(walls)
@@ -84,10 +94,18 @@ def rule_table(workdir: Path) -> pd.DataFrame:
         .agg(
             median_start_up_s=("start_up_s", "median"),
             median_work_s=("work_s", "median"),
+            cpu_s=("cpu_s", "sum"),
             peak_mb=("peak_mb", "max"),
         )
     )
-    return wall.join(cost, how="outer").round(2)
+    return wall.join(cost, how="outer").round(2).sort_values("cpu_s", ascending=False)
+
+
+def print_rule_table(workdir: Path) -> None:
+    """The per-rule table of a run and the CPU seconds of all its jobs."""
+    table = rule_table(workdir)
+    print(table.to_string())
+    print(f"CPU of all jobs (start-up + work): {table['cpu_s'].sum():.1f} s")
 
 
 def cold_runs(campaign: Path, target: str, repeats: int) -> tuple[list[float], Path]:
@@ -131,12 +149,62 @@ def high_rate_hit(root: Path) -> Path:
     return campaign
 
 
+SCALE_CAMPAIGNS = {
+    "high_rate": "one hit, three sensors at 12.8 kHz for 5 s (three one-run configurations)",
+    "runs300": "300 runs (10 x 30)",
+    "long": "30 runs of 32768 samples (4 x longer records)",
+}
+
+
+def scale_campaigns(root: Path, names: list[str]) -> dict[str, Path]:
+    """The named campaigns of :data:`SCALE_CAMPAIGNS`, generated under ``root``."""
+    from workflow.lab.virtual_lab import generate_campaign
+
+    campaigns = {}
+    for name in names:
+        if name == "high_rate":
+            campaigns[name] = high_rate_hit(root)
+        elif name == "runs300":
+            campaigns[name] = root / "runs300"
+            generate_campaign(
+                campaigns[name],
+                seed=3,
+                runs_per_configuration=30,
+                configurations={f"c{index:02d}": 0.17 + 0.12 * index for index in range(10)},
+            )
+        else:
+            campaigns[name] = root / "long"
+            generate_campaign(campaigns[name], seed=3, samples_per_run=4 * 8192)
+    return campaigns
+
+
+def run_scale(names: list[str], target: str, repeats: int, reference: float | None) -> None:
+    """Cold runs of the named scale campaigns, each with its per-rule table."""
+    root = Path(tempfile.mkdtemp(prefix="lapjoint-scale-"))
+    for name, campaign in scale_campaigns(root, names).items():
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        seconds, workdir = cold_runs(campaign, target, repeats)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu_s = (after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime) / repeats
+        median = statistics.median(seconds)
+        versus = f" = {median / reference:.2f} x the 30-run demo time" if reference else ""
+        print(
+            f"\n{SCALE_CAMPAIGNS[name]}, cold {target}: {median:.1f} s (median of {repeats}){versus}, "
+            f"{cpu_s:.1f} s CPU a run (Snakemake and its jobs, mean)"
+        )
+        print_rule_table(workdir)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--target", default="all")
     parser.add_argument("--scale", action="store_true")
+    parser.add_argument("--only", nargs="+", choices=list(SCALE_CAMPAIGNS))
     args = parser.parse_args()
+    if args.only:
+        run_scale(args.only, args.target, args.repeats, None)
+        return
     cold = f"cold {args.target}"
     timings: dict[str, list[float]] = {
         "demo generation": [],
@@ -160,33 +228,9 @@ def main() -> None:
         print(f"| {name} | {statistics.median(values):.1f} |")
     print()
     print("Per rule, cold run (last repeat):")
-    print(rule_table(last).to_string())
-    if not args.scale:
-        return
-    from workflow.lab.virtual_lab import generate_campaign
-
-    reference = statistics.median(timings[cold])
-    root = Path(tempfile.mkdtemp(prefix="lapjoint-scale-"))
-    high_rate = high_rate_hit(root)
-    generate_campaign(
-        root / "runs300",
-        seed=3,
-        runs_per_configuration=30,
-        configurations={f"c{index:02d}": 0.17 + 0.12 * index for index in range(10)},
-    )
-    generate_campaign(root / "long", seed=3, samples_per_run=4 * 8192)
-    for label, campaign in (
-        ("one hit, three sensors at 12.8 kHz for 5 s (three one-run configurations)", high_rate),
-        ("300 runs (10 x 30)", root / "runs300"),
-        ("30 runs of 32768 samples (4 x longer records)", root / "long"),
-    ):
-        seconds, workdir = cold_runs(campaign, args.target, args.repeats)
-        median = statistics.median(seconds)
-        print(
-            f"\n{label}, cold {args.target}: {median:.1f} s (median of {args.repeats}) "
-            f"= {median / reference:.2f} x the 30-run demo time"
-        )
-        print(rule_table(workdir).to_string())
+    print_rule_table(last)
+    if args.scale:
+        run_scale(list(SCALE_CAMPAIGNS), args.target, args.repeats, statistics.median(timings[cold]))
 
 
 if __name__ == "__main__":

@@ -5,33 +5,42 @@
 rule diagnose_configuration:
     # One job per configuration, so that the configurations are diagnosed side by side;
     # each reads every segment because the fits' reference velocity is the campaign's.
+    # The configuration's time-domain fits (Dahl, LuGre; results/models) follow in the
+    # same job: they start from the diagnosis's averaged fits, and in a job of their own
+    # half of their time was start-up (pandas, SciPy's stats, Numba) and teardown.
     input:
         segments="results/tables/segments.parquet",
         runs="results/tables/runs.parquet",
+        modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
-        "results/interim/diagnosis/{configuration}.npz",
+        diagnosis="results/interim/diagnosis/{configuration}.npz",
+        models="results/models/{configuration}.json",
     log:
         "results/logs/diagnose_configuration/{configuration}.log",
     benchmark:
         "results/benchmarks/diagnose_configuration/{configuration}.tsv"
-    # The study's longest chain is a configuration's diagnosis, its time-domain fit and
-    # figures 14-15 (rules/models.smk): they go before the figures of the measured data.
+    # The study's longest chain is a configuration's diagnosis and fits, then figures
+    # 14-15 (rules/models.smk): they go before the figures of the measured data.
     priority: 1
     conda:
         LAPJOINT_ENV
     threads: 1
     resources:
         mem_mb=3000,
-        runtime=30,
+        runtime=60,
     params:
         decay=asdict(SETTINGS.analysis.decay()),
         discovery=asdict(SETTINGS.discovery),
+        models=asdict(SETTINGS.models),
     script:
         "../scripts/diagnose_configuration.py"
 
 
 rule diagnose:
+    # The diagnosis's figures, the report and the summary wait for it: ahead of the
+    # measured data's figures, so that they do not end the study alone on one core.
+    priority: 1
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
@@ -63,6 +72,7 @@ rule diagnose:
 rule figures_discovery:
     # Every diagnosis figure in one job: they read the same two files, so a job per
     # figure would only repeat start-up (Python, matplotlib, pandas).
+    priority: 1  # after diagnose, before the measured data's figures
     input:
         diagnosis="results/diagnosis.json",
         residuals="results/tables/diagnosis_residuals.parquet",

@@ -1,5 +1,6 @@
-# The paper's models: friction loops (figures 7, 8), Dahl and LuGre fitted to each
-# configuration's damping and frequency curves, and their comparison (figures 14, 15).
+# The paper's models: friction loops (figures 7, 8), the table of Dahl and LuGre fitted to
+# each configuration's damping and frequency curves (by diagnose_configuration,
+# rules/discovery.smk, from its averaged fits), and their comparison (figures 14, 15).
 
 
 rule figure_friction_loops:
@@ -34,38 +35,19 @@ rule figure_friction_loops:
         "../scripts/figure_friction_loops.py"
 
 
-rule fit_friction_models:
-    input:
-        segments="results/tables/segments.parquet",
-        modes="results/tables/modes.parquet",
-        campaign_settings="results/interim/campaign.json",
-        # the averaged models' fits, the start of the time-domain fits
-        diagnosis="results/interim/diagnosis/{configuration}.npz",
-    output:
-        "results/models/{configuration}.json",
-    log:
-        "results/logs/fit_friction_models/{configuration}.log",
-    benchmark:
-        "results/benchmarks/fit_friction_models/{configuration}.tsv"
-    priority: 1  # the longest chain (rules/discovery.smk, diagnose_configuration)
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=3000,
-        runtime=30,
-    params:
-        decay=asdict(SETTINGS.analysis.decay()),
-        models=asdict(SETTINGS.models),
-    script:
-        "../scripts/fit_friction_models.py"
-
-
 rule model_table:
+    # The table and its report page in one job: the page alone was a job of start-up.
     input:
         expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
     output:
-        "results/tables/model_fits.parquet",
+        table="results/tables/model_fits.parquet",
+        page=report(
+            "results/report/model_fits.html",
+            caption="../report/model_fits.rst",
+            category="4 Friction models",
+            subcategory="4.3 Fitted parameters",
+            labels={"table": "Dahl and LuGre parameters"},
+        ),
     log:
         "results/logs/model_table.log",
     benchmark:

@@ -86,31 +86,6 @@ rule report_summary:
         "../scripts/report_summary.py"
 
 
-rule report_model_fits:
-    input:
-        "results/tables/model_fits.parquet",
-    output:
-        report(
-            "results/report/model_fits.html",
-            caption="../report/model_fits.rst",
-            category="4 Friction models",
-            subcategory="4.3 Fitted parameters",
-            labels={"table": "Dahl and LuGre parameters"},
-        ),
-    log:
-        "results/logs/report_model_fits.log",
-    benchmark:
-        "results/benchmarks/report_model_fits.tsv"
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    script:
-        "../scripts/report_model_fits.py"
-
-
 rule run_summary:
     # Last job of `all` (it waits for the report's pages and every figure); the
     # Snakefile's onsuccess prints its file on the console.

@@ -1,5 +1,6 @@
 """Rule diagnose_configuration: one configuration's diagnosis (baselines, candidates,
-verdict and its resamples), for the campaign's diagnose rule and the paper-model fits."""
+verdict and its resamples), for the campaign's diagnose rule, then the paper's models
+(Dahl, LuGre) fitted to its curves in the time domain from the diagnosis's averaged fits."""
 
 import time
 
@@ -10,14 +11,16 @@ from workflow.discovery.diagnosis import (
     record_starts,
 )
 from workflow.io.interim import DiagnosedConfiguration, read_campaign, write_configuration_diagnosis
-from workflow.io.settings import DecaySettings
-from workflow.io.tables import read_table
+from workflow.io.settings import DecaySettings, ModelSettings
+from workflow.io.tables import read_table, write_json
+from workflow.models.paper import configuration_models_document
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose_configuration")
 configuration = snakemake.wildcards.configuration
 campaign = read_campaign(snakemake.input.campaign_settings)
 segments = read_table(snakemake.input.segments)
+decay = DecaySettings(**snakemake.params.decay)
 # the reference velocity comes from every configuration's segments, not this one's
 context = campaign_fit_context(segments)
 rows = (segments["configuration"].astype(str) == configuration).to_numpy().nonzero()[0]
@@ -31,7 +34,7 @@ if rows.size:
         context,
         response_quantity=campaign.response.quantity,
         settings=FitSettings(**snakemake.params.discovery),
-        segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
+        segment_cycles=decay.segment_cycles,
         record_start=record_starts(read_table(snakemake.input.runs), configuration),
     )
     if isinstance(result, str):
@@ -51,7 +54,7 @@ if rows.size:
 else:
     log.info("%s: no segments: left out of the diagnosis", configuration)
 write_configuration_diagnosis(
-    snakemake.output[0],
+    snakemake.output.diagnosis,
     DiagnosedConfiguration(
         configuration,
         int(rows[0]) if rows.size else -1,
@@ -60,3 +63,30 @@ write_configuration_diagnosis(
         skipped,
     ),
 )
+
+document = configuration_models_document(
+    segments,
+    configuration,
+    read_table(snakemake.input.modes).set_index("configuration"),
+    {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()},
+    response_quantity=campaign.response.quantity,
+    analysis=decay,
+    settings=ModelSettings(**snakemake.params.models),
+    averaged_params=None
+    if diagnosis is None
+    else {model: diagnosis.fits[model].params for model in ("dahl", "lugre")},
+)
+if "skipped" in document:
+    # a configuration whose runs were all excluded: the others still get their fits
+    log.warning("%s: models not fitted: %s", configuration, document["skipped"])
+for model, fit in document["models"].items():
+    log.info(
+        "%s %s: rms ln zeta %.3f, rms rel f %.2e, %d ring-downs, %s",
+        configuration,
+        model,
+        fit["rms_log_zeta"],
+        fit["rms_rel_frequency"],
+        fit["n_simulations"],
+        fit["params"],
+    )
+write_json(snakemake.output.models, {"configuration": configuration, **document})

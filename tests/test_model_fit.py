@@ -1,8 +1,10 @@
 """Tests of friction-model fitting (workflow.models.fitting)."""
 
 import numpy as np
+import pandas as pd
 import pytest
 
+from workflow.io.settings import AnalysisSettings, ModelSettings
 from workflow.measured.decay import analyse_decay
 from workflow.models.fitting import (
     RingdownFitContext,
@@ -12,6 +14,7 @@ from workflow.models.fitting import (
     simulated_curves,
     simulation_rate_hz,
 )
+from workflow.models.paper import MIN_SEGMENTS_TO_FIT, configuration_models_document
 from workflow.models.ringdown import simulate_ringdown
 
 FS, T, BAND = 2560.0, 3.2, (100.0, 150.0)
@@ -203,3 +206,27 @@ def test_a_simulated_ring_down_does_not_depend_on_its_batch(model):
     for index in range(theta.shape[0]):
         for key, value in space.to_physical(theta[index : index + 1]).items():
             assert value[0] == mapped[key][index], (index, key)
+
+
+def test_a_configuration_with_too_few_segments_gets_no_models_and_the_reason():
+    segments = pd.DataFrame(
+        {
+            "configuration": ["few"] * (MIN_SEGMENTS_TO_FIT - 1) + ["many"] * 20,
+            "run": "run01",
+            "velocity_amplitude_in_s": 1.0,
+            "zeta": 0.01,
+            "frequency_hz": 125.0,
+        }
+    )
+    document = configuration_models_document(
+        segments,
+        "few",
+        pd.DataFrame(),  # not read: nothing is fitted
+        {"few": None, "many": None},
+        response_quantity="acceleration",
+        analysis=AnalysisSettings().decay(),
+        settings=ModelSettings(),
+        averaged_params=None,
+    )
+    assert document["models"] == {}
+    assert f"only {MIN_SEGMENTS_TO_FIT - 1} usable segments" in document["skipped"]

@@ -25,7 +25,7 @@ RULES = rule_blocks()
 
 
 def test_rules_were_found():
-    assert {"analyse_runs", "identify_mode", "fit_friction_models", "diagnose"} <= set(RULES)
+    assert {"analyse_runs", "identify_mode", "diagnose_configuration", "diagnose"} <= set(RULES)
 
 
 @pytest.mark.parametrize("name", sorted(RULES))

@@ -39,8 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy import optimize, special
-from scipy.stats import qmc
+from scipy import special
 
 from workflow.io.recording_time import FILE_NAME_ORDER, run_order
 from workflow.io.settings import AnalysisSettings, DiscoverySettings
@@ -307,6 +306,8 @@ def _robust_trend(x: np.ndarray, y: np.ndarray, degree: int, groups: np.ndarray 
         design = np.hstack([design, (groups[:, None] == labels[None, 1:]).astype(float)])
     coef, *_ = np.linalg.lstsq(design, y, rcond=None)
     scale = 1.4826 * np.median(np.abs(y - design @ coef)) + 1e-15
+    from scipy import optimize  # here: the campaign's diagnose job fits nothing
+
     fit = optimize.least_squares(lambda c: (design @ c - y) / scale, coef, loss="soft_l1")
     return design @ fit.x
 
@@ -638,6 +639,8 @@ class _Problem:
 
 
 def _local_fit(problem: _Problem, start: np.ndarray, max_nfev: int) -> tuple[np.ndarray, float]:
+    from scipy import optimize  # here: the campaign's diagnose job fits nothing
+
     res = optimize.least_squares(
         lambda u: problem.residuals(u)[0],
         np.clip(start, 1e-6, 1 - 1e-6),
@@ -696,6 +699,8 @@ def fit_model(
         starts = []
         if nested_start is not None:
             starts.append(np.clip((to_coords(model, nested_start) - problem.lo) / span, 0.0, 1.0))
+        from scipy.stats import qmc  # here: scipy.stats is a second of start-up
+
         sampler = qmc.Sobol(len(model.params), scramble=True, seed=settings.seed)
         n = 2 ** int(np.ceil(np.log2(max(settings.global_samples, 2))))
         unit = sampler.random(n)

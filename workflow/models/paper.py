@@ -207,6 +207,71 @@ def fit_configuration(
     return document
 
 
+def configuration_models_document(
+    segments: pd.DataFrame,
+    configuration: str,
+    modes: pd.DataFrame,
+    bearing_areas_in2: dict[str, float | None],
+    *,
+    response_quantity: str,
+    analysis: DecaySettings,
+    settings: ModelSettings,
+    averaged_params: dict[str, dict[str, float]] | None,
+) -> dict:
+    """One configuration's Dahl and LuGre time-domain fits as ``results/models`` holds them.
+
+    Parameters
+    ----------
+    segments : DataFrame
+        Kept segments of every configuration (the segments table).
+    configuration : str
+    modes : DataFrame
+        The modes table indexed by configuration (mode, band, sample rate, record length).
+    bearing_areas_in2 : dict
+        Configuration -> bearing area, in² (None when not given): with the modes, they
+        decide the modal coordinate (:func:`choose_modal_coordinate`).
+    response_quantity : str
+        The campaign's measured quantity.
+    analysis, settings
+        As :func:`fit_configuration`.
+    averaged_params : dict or None
+        Model -> the diagnosis's averaged fit (the start of each time-domain fit); None
+        when the diagnosis skipped the configuration: the averaged models are fitted here.
+
+    Returns
+    -------
+    dict
+        :func:`fit_configuration`'s document, or ``models`` empty and ``skipped`` saying
+        why when fewer than :data:`MIN_SEGMENTS_TO_FIT` segments are usable.
+    """
+    mine = segments[segments["configuration"] == configuration]
+    if len(mine) < MIN_SEGMENTS_TO_FIT:
+        return {
+            "models": {},
+            "skipped": f"only {len(mine)} usable segments "
+            f"(at least {MIN_SEGMENTS_TO_FIT} needed to fit); see runs.parquet",
+        }
+    coordinate = choose_modal_coordinate(modes["mode_hz"].dropna().to_dict(), bearing_areas_in2)
+    mode = modes.loc[configuration]
+    models = ("dahl", "lugre")
+    if averaged_params is None:
+        averaged_params = {
+            model: averaged_fit_params(model, mine, response_quantity, settings.seed) for model in models
+        }
+    return fit_configuration(
+        mine,
+        models=models,
+        sample_rate_hz=float(mode["sample_rate_hz"]),
+        record_duration_s=float(mode["record_duration_s"]),
+        band_hz=(float(mode["band_low_hz"]), float(mode["band_high_hz"])),
+        response_quantity=response_quantity,
+        coordinate=coordinate,
+        analysis=analysis,
+        settings=settings,
+        averaged_params=averaged_params,
+    )
+
+
 def fit_table(documents: dict[str, dict]) -> pd.DataFrame:
     """One row per configuration, model and parameter: value, uncertainty, fit quality."""
     import pandas as pd
