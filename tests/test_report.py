@@ -633,6 +633,7 @@ def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_asid
     entry = {"evidence": {"candidates": {"stiffness_nonlinearity": {"signature": signature}}}}
     (sentence,) = report.signature_sentences(entry)
     assert "not eligible" in sentence and "-0.003 %" in sentence and "-0.042 %" in sentence
+    assert any("not eligible" in item for item in report._sureness_items("joint", {**entry, "cause": "none"}))
     signature["shows_signature"] = True
     assert report.signature_sentences(entry) == []
     assert report.signature_sentences({"evidence": {}}) == []

@@ -466,7 +466,6 @@ def campaign_headline(document: Mapping) -> str:
 
 def _configuration_row(name: str, entry: Mapping, area_in2: float | None, units: UnitSystem) -> list[str]:
     gain = entry.get("gain") or {}
-    items.extend(signature_sentences(entry))
     margin = candidate_margin(entry)
     if margin and margin["ratio"] is not None:
         next_text = esc(cause_name(margin["next"]))
@@ -531,6 +530,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 "amplitude bin(s) still significant): the extended model is better, "
                 "not perfect."
             )
+    items.extend(signature_sentences(entry))
     margin = candidate_margin(entry)
     if margin and margin["ratio"] is not None:
         if margin["ratio"] >= 1 and cause in ("none", "unknown"):
