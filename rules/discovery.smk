@@ -38,9 +38,6 @@ rule diagnose_configuration:
 
 
 rule diagnose:
-    # The diagnosis's figures, the report and the summary wait for it: ahead of the
-    # measured data's figures, so that they do not end the study alone on one core.
-    priority: 1
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
@@ -57,6 +54,9 @@ rule diagnose:
         "results/logs/diagnose.log",
     benchmark:
         "results/benchmarks/diagnose.tsv"
+    # The diagnosis's figures, the report and the summary wait for it: ahead of the
+    # measured data's figures, so that they do not end the study alone on one core.
+    priority: 1
     conda:
         LAPJOINT_ENV
     threads: 1
@@ -72,7 +72,6 @@ rule diagnose:
 rule figures_discovery:
     # Every diagnosis figure in one job: they read the same two files, so a job per
     # figure would only repeat start-up (Python, matplotlib, pandas).
-    priority: 1  # after diagnose, before the measured data's figures
     input:
         diagnosis="results/diagnosis.json",
         residuals="results/tables/diagnosis_residuals.parquet",
@@ -105,6 +104,7 @@ rule figures_discovery:
         "results/logs/figures_discovery.log",
     benchmark:
         "results/benchmarks/figures_discovery.tsv"
+    priority: 1  # after diagnose, before the measured data's figures
     conda:
         LAPJOINT_ENV
     threads: 1
