@@ -1343,7 +1343,8 @@ def decide(
         )
     if not eligible:
         return "unknown", (
-            "the baseline misfit is significant but no candidate lowers both the held-out error and the BIC"
+            "the baseline misfit is significant but no candidate lowers both the held-out error and the BIC "
+            "with its cause's signature"
         )
     leader = min(eligible, key=lambda c: eligible[c]["heldout_error"])
     reach = eligible[leader]["heldout_error"] ** 2
