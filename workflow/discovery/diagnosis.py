@@ -1876,8 +1876,9 @@ def diagnose_configuration(
         )
     residuals = {m: model_residuals(f, data, scatter, context) for m, f in fits.items()}
     evidence = {m: ModelEvidence(residuals[m], cv[m], len(MODELS[m].params)) for m in fits}
-    signature = stiffness_signature(fits["dahl_stiffness"], data)
-    evidence["dahl_stiffness"].shows_signature = signature["shows_signature"]
+    stiffness_model = CAUSE_MODELS["stiffness_nonlinearity"]
+    signature = stiffness_signature(fits[stiffness_model], data)
+    evidence[stiffness_model].shows_signature = signature["shows_signature"]
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
     envelope_significant = bool(envelope and envelope["significant"])
     result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
