@@ -10,11 +10,16 @@ the runtime. Runs differ from run to run as in a real lab (the lab's default
 causes it can hide: none, microslip_power_law, run_drift, unknown).
 
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
+
+``--keep DIR`` stores what each campaign's decision was taken on (the data, every model's
+residuals and held-out residuals); ``--redecide DIR`` takes those decisions again with
+today's decision rule in seconds, without refitting: the fits do not depend on the rule.
 """
 
 from __future__ import annotations
 
 import argparse
+import pickle
 import sys
 import tempfile
 import time
@@ -26,7 +31,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from workflow.discovery.diagnosis import EXPLAINS_LIMIT, diagnose_campaign  # noqa: E402
+from workflow.discovery.diagnosis import EXPLAINS_LIMIT, diagnose_campaign, evaluate_decision  # noqa: E402
 from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case  # noqa: E402
 from workflow.lab.virtual_lab import TIME_DOMAIN_EFFECTS, LabSettings  # noqa: E402
 
@@ -48,14 +53,14 @@ def lab_settings(variability: bool) -> LabSettings:
 
 
 def _one(args):
-    cause, seed, work, variability, integrator = args
+    cause, seed, work, variability, integrator, keep = args
     start = time.perf_counter()
     try:
         case, out = generate_case(
             cause, seed, Path(work), settings=lab_settings(variability), integrator=integrator
         )
         segments = campaign_segments(out)
-        doc = diagnose_campaign(segments, out.name)
+        doc, details = diagnose_campaign(segments, out.name, return_details=True)
         conf = next(iter(doc["configurations"].values()), None)
         ratio = conf["gain"]["ratio"] if conf else None
         verdict = doc["cause"] if conf else "no data"
@@ -79,9 +84,52 @@ def _one(args):
                     scatter["relative_frequency_median"],
                 )
                 case["truth_baseline_misfit"] = round(max(worst_zeta, worst_f), 2)
+            if integrator == "averaged" and cause == "run_drift":
+                v = segments["velocity_amplitude_in_s"].to_numpy(float)
+                v = v[np.isfinite(v) & (v > 0)]
+                scatter = conf["evidence"]["scatter"]
+                case["truth_drift_change"] = round(
+                    drift_change_on_truth(
+                        case,
+                        (float(v.min()), float(v.max())),
+                        scatter["ln_zeta_median"],
+                        scatter["relative_frequency_median"],
+                    ),
+                    2,
+                )
+        if keep and details:
+            keep_evidence(Path(keep) / f"{cause}_{seed}.pkl", case, next(iter(details.values())))
     except Exception as error:  # report, do not hide
         case, verdict, ratio = {}, f"error: {error}", None
     return cause, seed, verdict, ratio, case, time.perf_counter() - start
+
+
+def keep_evidence(path: Path, case: dict, diagnosis) -> None:
+    """Store what a campaign's decision was taken on, to re-decide it without refitting."""
+    envelope = diagnosis.document["evidence"]["envelope_structure"]
+    stored = {
+        "case": case,
+        "data": diagnosis.data,
+        "evidence": diagnosis.evidence,
+        "envelope_significant": bool(envelope and envelope["significant"]),
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "wb") as f:
+        pickle.dump(stored, f)
+
+
+def redecide(path: Path) -> tuple:
+    """A stored campaign's verdict and gain ratio under today's decision rule (same fits)."""
+    with open(path, "rb") as f:
+        stored = pickle.load(f)
+    cause, seed = path.stem.rsplit("_", 1)
+    start = time.perf_counter()
+    result = evaluate_decision(
+        stored["data"], stored["evidence"], envelope_significant=stored["envelope_significant"]
+    )
+    # the candidate's own ratio: a micro-slip verdict's threshold refinement is not re-fitted
+    ratio = result["candidates"].get(result["cause"], {}).get("ratio_to_baseline")
+    return cause, int(seed), result["cause"], ratio, stored["case"], time.perf_counter() - start
 
 
 TRUTH_CAUSES = ("microslip_power_law", "quadratic_damping", "stiffness_nonlinearity")
@@ -128,6 +176,33 @@ def baseline_misfit_on_truth(
         if best is None or rms < best[0]:
             best = (rms, model, float(np.max(np.abs(r["z_noise"]))), float(np.max(np.abs(r["f_noise"]))))
     return best[1], best[2], best[3]
+
+
+def drift_change_on_truth(
+    case: dict, velocity_range_in_s: tuple[float, float], scatter_ln_zeta: float, scatter_rel_f: float
+) -> float:
+    """Is the drift in the data? Its first and last runs' noise-free curves, compared.
+
+    The lab's nominal beam with the friction limit of the first run and of the last (the
+    drift alone, no random spread), over the measured amplitude range: the largest change
+    of ``ln zeta`` or of the relative frequency between them, in measured scatters.
+    """
+    from workflow.lab import virtual_lab as vl
+
+    lab = vl.LabSettings()
+    v = np.geomspace(*velocity_range_in_s, 60)
+    setup, curves = vl.setup_configuration("x", case["bearing_area_in2"], lab)
+    first, last = (
+        vl.truth_curves(
+            setup,
+            vl.mode_table(setup, curves, lab, case["joint"], case["effect"], case["effect_size"], fraction),
+            v,
+        )
+        for fraction in (0.0, 1.0)
+    )
+    change_zeta = np.max(np.abs(np.log(last[0] / first[0]))) / scatter_ln_zeta
+    change_f = np.max(np.abs(last[1] / first[1] - 1.0)) / scatter_rel_f
+    return float(max(change_zeta, change_f))
 
 
 def visibility() -> None:
@@ -190,9 +265,27 @@ def main() -> None:
         action="store_true",
         help="print where the hidden effects are visible (truth curves) and exit",
     )
+    parser.add_argument("--keep", metavar="DIR", help="store each campaign's decision evidence in DIR")
+    parser.add_argument(
+        "--redecide",
+        metavar="DIR",
+        help="re-decide the campaigns stored by --keep with today's decision rule (no refit)",
+    )
     args = parser.parse_args()
     if args.visibility:
         visibility()
+        return
+    if args.redecide:
+        start = time.perf_counter()
+        stored = sorted(Path(args.redecide).glob("*.pkl"))
+        results = [redecide(p) for p in stored]
+        args.causes = [c for c in CASES if any(r[0] == c for r in results)]
+        seeds = sorted({r[1] for r in results})
+        print(
+            f"re-decided {len(results)} stored campaigns (seeds {seeds[0]}-{seeds[-1]}) from {args.redecide} "
+            f"in {time.perf_counter() - start:.1f} s; gain ratios are the candidates' own\n"
+        )
+        report(results, args.causes)
         return
     integrator = "time_domain" if args.time_domain else "averaged"
     hideable = [c for c in CASES if not args.time_domain or CASES[c][1] in TIME_DOMAIN_EFFECTS]
@@ -202,7 +295,7 @@ def main() -> None:
         parser.error(f"the {integrator} path cannot hide {sorted(set(args.causes) - set(hideable))}")
     with tempfile.TemporaryDirectory() as work:
         tasks = [
-            (c, s, work, not args.no_variability, integrator)
+            (c, s, work, not args.no_variability, integrator, args.keep)
             for c in args.causes
             for s in range(args.first_seed, args.first_seed + args.seeds)
         ]
@@ -215,9 +308,14 @@ def main() -> None:
         f"{len(results)} campaigns, {args.seeds} seeds per cause, wall {wall:.0f} s, "
         f"mean {sum(r[5] for r in results) / len(results):.1f} s per campaign\n"
     )
+    report(results, args.causes)
+
+
+def report(results: list[tuple], causes: list[str]) -> None:
+    """Confusion table, gain ratios, explains_data, hit rate where the effect is in the data, misses."""
     header = "hidden cause".ljust(24) + "".join(v[:12].rjust(13) for v in VERDICTS) + "   other  hit"
     print(header)
-    for cause in args.causes:
+    for cause in causes:
         rows = [r for r in results if r[0] == cause]
         n = len(rows)
         counts = [sum(r[2] == v for r in rows) / n for v in VERDICTS]
@@ -225,7 +323,7 @@ def main() -> None:
         hit = sum(r[2] == cause for r in rows) / n
         print(cause.ljust(24) + "".join(f"{c:13.2f}" for c in counts) + f"{other:8.2f}{hit:5.2f}")
     print("\ngain ratio (extended / baseline held-out error) when the cause was named:")
-    for cause in args.causes:
+    for cause in causes:
         ratios = [r[3] for r in results if r[0] == cause and r[2] == cause and r[3] is not None]
         if ratios:
             print(
@@ -233,18 +331,20 @@ def main() -> None:
                 f"max {max(ratios):.3f}  (n={len(ratios)})"
             )
     print("\nexplains_data (the extended model within 2 scatters everywhere) when the cause was named:")
-    for cause in args.causes:
+    for cause in causes:
         named = [r for r in results if r[0] == cause and r[2] == cause]
         if named:
             explained = sum(bool(r[4].get("explains_data")) for r in named)
             print(f"  {cause:24s} {explained / len(named):.2f}  (n={len(named)})")
     print(
         "\nwhere the effect is in the data (the best baseline fitted to the case's noise-free truth "
-        f"misses it by more than {EXPLAINS_LIMIT:g} scatters somewhere):"
+        f"misses it by more than {EXPLAINS_LIMIT:g} scatters somewhere; run drift: its first and last "
+        f"runs' noise-free curves differ by more than {EXPLAINS_LIMIT:g} scatters somewhere):"
     )
-    for cause in args.causes:
-        rows = [r for r in results if r[0] == cause and "truth_baseline_misfit" in r[4]]
-        visible = [r for r in rows if r[4]["truth_baseline_misfit"] > EXPLAINS_LIMIT]
+    for cause in causes:
+        key = "truth_drift_change" if cause == "run_drift" else "truth_baseline_misfit"
+        rows = [r for r in results if r[0] == cause and key in r[4]]
+        visible = [r for r in rows if r[4][key] > EXPLAINS_LIMIT]
         if rows:
             hit = sum(r[2] == cause for r in visible) / len(visible) if visible else float("nan")
             print(f"  {cause:24s} in the data {len(visible)}/{len(rows)}, hit rate there {hit:.2f}")

@@ -1397,6 +1397,9 @@ class ConfigurationDiagnosis:
     residuals: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     resamples: list[dict] = field(default_factory=list)
     """Cause and gain ratio on each bootstrap resample (:func:`resample_decisions`)."""
+    evidence: dict[str, ModelEvidence] = field(default_factory=dict)
+    """What the decision was taken on (:func:`evaluate_decision`), per model; not kept in
+    the interim files."""
 
 
 EXPLAINS_LIMIT = 2.0
@@ -2017,7 +2020,7 @@ def diagnose_configuration(
         "explains_data": explained["explains_data"],
         "confidence": cause_fractions([r["cause"] for r in resamples]),
     }
-    return ConfigurationDiagnosis(_clean(document), fits, data, scatter, residuals, resamples)
+    return ConfigurationDiagnosis(_clean(document), fits, data, scatter, residuals, resamples, evidence)
 
 
 # ------------------------------------------------------- across configurations
