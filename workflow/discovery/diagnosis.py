@@ -753,7 +753,8 @@ def model_residuals(
     ``ln_zeta_shared``, the damping residual of the shared model before the offsets, and
     ``ln_zeta_calibrated``, the damping residual with each run's offsets set by its own
     lowest-amplitude segments (``calibration``, :func:`calibration_segments`) as a
-    held-out run's are.
+    held-out run's are, and ``ln_zeta_slope``, the shared model's log-log damping slope
+    (:func:`damping_curve_slope`).
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
@@ -762,7 +763,7 @@ def model_residuals(
     f_res = data.frequency_hz / freq - 1.0
     n_runs = max(data.n_runs, 1)
     delta_f, delta_z = np.zeros(n_runs), np.zeros(n_runs)
-    ln_shared = ln_res
+    ln_shared, shared_zeta = ln_res, zeta
     calibration = np.zeros(data.n, dtype=bool)
     ln_calibrated = ln_res
     if data.n_runs >= 2:
@@ -791,6 +792,9 @@ def model_residuals(
         "delta_zeta0": delta_z,
         "ln_zeta_shared": ln_shared,
         "ln_zeta_calibrated": ln_calibrated,
+        "ln_zeta_slope": damping_curve_slope(
+            data.velocity_in_s, np.log(np.maximum(shared_zeta, 1e-12)), data.run_index
+        ),
         "calibration": calibration,
     }
 
@@ -1023,6 +1027,31 @@ def binned_discrepancy(
     return rows
 
 
+def damping_curve_slope(
+    velocity_in_s: np.ndarray, ln_zeta_model: np.ndarray, run_index: np.ndarray
+) -> np.ndarray:
+    """Log-log slope ``d ln zeta / d ln V`` of each run's model damping curve at its segments.
+
+    A change of the joint's friction limit moves its damping curve along ``ln V`` (the
+    slip velocity scales with it, the linear damping stays), so ``-slope`` is the change of
+    ``ln zeta`` per unit change of ``ln Fc``: the shape a run-to-run change of the joint
+    leaves in the residuals (:func:`run_order_trend`). Central differences along each
+    run's segments sorted by amplitude (one-sided at the ends); 0 where a run has fewer
+    than two distinct amplitudes.
+    """
+    slope = np.zeros(velocity_in_s.size)
+    ln_v = np.log(velocity_in_s)
+    for run in np.unique(run_index):
+        members = np.flatnonzero(run_index == run)
+        ordered = members[np.argsort(ln_v[members], kind="stable")]
+        x, inverse = np.unique(ln_v[ordered], return_inverse=True)
+        if x.size < 2:
+            continue
+        y = np.bincount(inverse, weights=ln_zeta_model[ordered]) / np.bincount(inverse)
+        slope[ordered] = np.gradient(y, x)[inverse]
+    return slope
+
+
 def run_order_trend(
     data: ConfigurationData,
     residuals: Mapping[str, np.ndarray],
@@ -1031,16 +1060,22 @@ def run_order_trend(
     alpha: float = ALPHA,
     run_position: np.ndarray | None = None,
 ) -> dict | None:
-    """Linear trend of the runs' damping residual with run order.
+    """Linear trend with run order of the runs' shift of the damping curve.
 
     Each run's residual is the shared model's, with the run's own frequency and linear
     damping set by its lowest-amplitude segments (``ln_zeta_calibrated`` and
     ``calibration`` when present, as for a held-out run; else ``ln_zeta_shared``, else
-    ``ln_zeta``), averaged over its other segments with every quarter decade of
-    amplitude weighted equally (:func:`amplitude_weights`). The calibration takes out
-    the random spread of the runs' linear damping, which would otherwise hide a change of
-    the joint where it acts, at the amplitudes it slips; what random spread is left only
-    widens the scatter of the runs' means, which the t test counts, while a steady change
+    ``ln_zeta``). Of that residual the test takes the amount of the shape a change of the
+    joint's friction limit leaves (``-ln_zeta_slope``, :func:`damping_curve_slope`; a
+    constant shape without it), a weighted least-squares projection over the run's
+    other segments with every quarter decade of amplitude weighted equally
+    (:func:`amplitude_weights`): the run's relative change of friction limit against the
+    shared model. Projecting on the shape weighs each amplitude by how much a change of
+    the joint shows there, and no more (the most powerful linear statistic for that shape
+    under independent scatter), where a plain mean would dilute the change at the top of
+    the range with the stuck joint's segments below. The calibration takes out the random
+    spread of the runs' linear damping; a random spread of the joint left over only widens
+    the scatter of the runs' projections, which the t test counts, while a steady change
     with run order tilts them. Offsets fitted to all of a run's segments would absorb a
     trend.
 
@@ -1052,30 +1087,38 @@ def run_order_trend(
         Position in run order of each of the ``data.n_runs`` runs (default ``0 .. n-1``;
         a resample of runs passes the drawn runs' positions).
 
-    Returns None with fewer than 4 runs; else ``slope_per_run`` (ln zeta per run),
-    ``change_over_sequence`` (slope times (n_runs - 1)), ``t``, ``p``,
-    ``significant`` (``p < alpha / n_tests`` and the change over the sequence larger
-    than the model accuracy), ``order`` (which run order, ``data.run_order``) and
-    ``runs`` (the run names in that order).
+    Returns None with fewer than 4 runs; else ``slope_per_run`` (of the projection, per
+    run: ``ln Fc``, or ``ln zeta`` without a slope), ``change_over_sequence`` (the change
+    of ``ln zeta`` the trend makes from the first run to the last, at the scored amplitude
+    where it is largest), ``t``, ``p``, ``significant`` (``p < alpha / n_tests`` and the change over
+    the sequence larger than the model accuracy), ``order`` (which run order,
+    ``data.run_order``) and ``runs`` (the run names in that order).
     """
     x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
     if data.n_runs < 4 or np.unique(x).size < 3:
         return None
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
+    shape = -residuals["ln_zeta_slope"] if "ln_zeta_slope" in residuals else np.ones(data.n)
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
     if "calibration" in residuals:
         w = w * ~residuals["calibration"]
-    counts = np.bincount(data.run_index, weights=w, minlength=data.n_runs)
-    means = np.bincount(data.run_index, weights=w * r, minlength=data.n_runs) / np.maximum(counts, 1e-300)
+    counts = np.bincount(data.run_index, weights=w * shape * shape, minlength=data.n_runs)
+    means = np.bincount(data.run_index, weights=w * shape * r, minlength=data.n_runs) / np.maximum(
+        counts, 1e-300
+    )
     keep = counts > 0
     x, y = x[keep], means[keep]
+    if x.size < 4 or np.unique(x).size < 3:
+        return None
     dx = x - x.mean()
     slope = float(np.sum(dx * (y - y.mean())) / np.sum(dx * dx))
     dof = x.size - 2
     stderr = float(np.sqrt(np.sum((y - y.mean() - slope * dx) ** 2) / dof / np.sum(dx * dx)))
     t = slope / max(stderr, 1e-300)
     p = float(2.0 * special.stdtr(dof, -abs(t)))
-    change = slope * float(np.ptp(x))
+    scored_shape = shape[w > 0]
+    largest = float(scored_shape[np.argmax(np.abs(scored_shape))]) if scored_shape.size else 0.0
+    change = slope * float(np.ptp(x)) * largest
     return {
         "slope_per_run": slope,
         "change_over_sequence": change,
@@ -1228,9 +1271,9 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
         )
     if trend is not None and trend["significant"]:
         parts.append(
-            f"the runs' damping residual drifts with run order ({trend['order']}) by "
+            f"the runs' damping curve shifts with run order ({trend['order']}) by "
             f"{format_percent(_misfit_percent('damping', trend['change_over_sequence']))} from the "
-            f"first to the last run (t = {trend['t']:.1f})"
+            f"first to the last run where the shift is largest (t = {trend['t']:.1f})"
         )
     if not parts:
         worst = max(bins, key=lambda b: abs(b["t"]), default=None)
@@ -1611,6 +1654,7 @@ def evaluate_decision(
                 "rel_f",
                 "ln_zeta_shared",
                 "ln_zeta_calibrated",
+                "ln_zeta_slope",
                 "calibration",
                 "z_noise",
                 "f_noise",

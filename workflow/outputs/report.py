@@ -568,7 +568,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
         items.append(
             f"Run-order trend of the damping ({order}): "
             f"{fmt(100 * (trend.get('change_over_sequence') or 0), 2)} % "
-            f"from the first run to the last, p = {fmt(trend['p'], 2)} "
+            f"from the first run to the last where the shift is largest, p = {fmt(trend['p'], 2)} "
             f"({'significant' if trend.get('significant') else 'not significant'})."
         )
     if evidence.get("decision_rule"):
