@@ -570,10 +570,10 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
     }
     (sentence,) = report.explains_sentences(entry)
     assert (
-        "does not explain" in sentence and "frequency at 1.67-5.28 in/s" in sentence and "-10.1" in sentence
+        "does not explain" in sentence and "frequency at 1.67–5.28 in/s" in sentence and "-10.1" in sentence
     )
     (in_si,) = report.explains_sentences(entry, SI)
-    assert "frequency at 0.0424-0.134 m/s" in in_si
+    assert "frequency at 0.0424–0.134 m/s" in in_si
     entry["explains_data"] = True
     (sentence,) = report.explains_sentences(entry)
     assert "explains the data" in sentence and "not" not in sentence
@@ -615,9 +615,9 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
         and "5.1" in head
         and "it is the extended model" in head
     )
-    assert "0.316-1 in/s: 0.4 ± 0.02 %" in shares and "(not identified)" in shares
+    assert "0.316–1 in/s: 0.4 ± 0.02 %" in shares and "(not identified)" in shares
     _, in_si = report.threshold_sentences(entry, SI)
-    assert "0.00803-0.0254 m/s" in in_si
+    assert "0.00803–0.0254 m/s" in in_si
     entry["evidence"]["threshold_distribution"]["adopted"] = False
     assert "the power law stays the extended model" in report.threshold_sentences(entry)[0]
     assert report.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []

@@ -266,8 +266,7 @@ def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str
         return [f"{model} explains the data: every half decade of amplitude is within {limit} scatters."]
     failing = explained.get("failing_bins") or []
     where = "; ".join(
-        f"{b['curve']} at {fmt(units.per_in_s * b['v_low_in_s'])}-{fmt(units.per_in_s * b['v_high_in_s'])} "
-        f"{units.velocity} "
+        f"{b['curve']} at {amplitude_range(b['v_low_in_s'], b['v_high_in_s'], units)} "
         f"({fmt(b['mean_over_scatter'])} scatters)"
         for b in failing[:4]
     )
@@ -302,8 +301,7 @@ def threshold_sentences(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list
         share = fmt(100 * cell["stiffness_fraction"], 2)
         share = f"{share} ± {fmt(100 * error, 2)} %" if error is not None else f"{share} % (not identified)"
         shares.append(
-            f"{fmt(units.per_in_s * cell['threshold_low_in_s'])}-{fmt(units.per_in_s * cell['threshold_high_in_s'])} "
-            f"{units.velocity}: {share}"
+            f"{amplitude_range(cell['threshold_low_in_s'], cell['threshold_high_in_s'], units)}: {share}"
         )
     return [
         head,
