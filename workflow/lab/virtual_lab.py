@@ -332,7 +332,13 @@ def _fit_dahl(setup: JointSetup, zeta0, patch_d, patch_loss, a):
     """Dahl (modal sigma, Fc) matching the patch model's damping over 0.1-10 in/s.
 
     Makes the Dahl-joint demo look like the same specimen (same damping level
-    and area ordering), with the single-state model's shape.
+    and area ordering), with the single-state model's shape. The rest stiffness is
+    bounded by the stuck contact's (the patches' stiffness in modal units, 3-4 % of
+    ``omega0^2``): a Dahl joint cannot be stiffer than the contact it stands for, and
+    where the patches stay in pre-sliding over the fitted range their damping fixes
+    only ``sigma^2 / Fc``, so without the bound the fit ends anywhere along that valley
+    (at up to 3.5 ``omega0^2`` at 0.7 in^2, a negative stiffness outside the joint,
+    and at a point that moved with the machine's floating point).
     """
     phi = abs(setup.mode.accelerometer_participation)
     v = phi * setup.omega0_rad_s * a
@@ -349,10 +355,11 @@ def _fit_dahl(setup: JointSetup, zeta0, patch_d, patch_loss, a):
     # modal force of the mid-range amplitude
     s = setup.joint_modes.slip_per_xi
     k = setup.joint_modes.patches.stiffness_lbf_in
-    sigma0 = 0.1 * float(np.sum(s**2 * k))
+    contact_stiffness = float(np.sum(s**2 * k))
+    sigma0 = 0.1 * contact_stiffness
     fc0 = sigma0 * np.median(a[sel])
     fit = scipy.optimize.least_squares(
-        residual, np.log([sigma0, fc0]), bounds=(np.log([1.0, 1e-9]), np.log([1e9, 1e6]))
+        residual, np.log([sigma0, fc0]), bounds=(np.log([1.0, 1e-9]), np.log([contact_stiffness, 1e6]))
     )
     return tuple(float(x) for x in np.exp(fit.x))
 
