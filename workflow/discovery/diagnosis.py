@@ -1087,16 +1087,15 @@ def run_order_trend(
         Position in run order of each of the ``data.n_runs`` runs (default ``0 .. n-1``;
         a resample of runs passes the drawn runs' positions).
 
-    Returns None with fewer than 4 runs; else ``slope_per_run`` (of the projection, per
-    run: ``ln Fc``, or ``ln zeta`` without a slope), ``change_over_sequence`` (the change
-    of ``ln zeta`` the trend makes from the first run to the last, at the scored amplitude
-    where it is largest), ``t``, ``p``, ``significant`` (``p < alpha / n_tests`` and the change over
-    the sequence larger than the model accuracy), ``order`` (which run order,
-    ``data.run_order``) and ``runs`` (the run names in that order).
+    Returns None with fewer than 4 runs with scored segments; else ``slope_per_run`` (of
+    the projection, per run: ``ln Fc``, or ``ln zeta`` without a slope),
+    ``change_over_sequence`` (the change of ``ln zeta`` the trend makes from the first run
+    to the last, at the scored amplitude where it is largest), ``t``, ``p``,
+    ``significant`` (``p < alpha / n_tests`` and the change over the sequence larger than
+    the model accuracy), ``order`` (which run order, ``data.run_order``) and ``runs`` (the
+    run names in that order).
     """
     x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
-    if data.n_runs < 4 or np.unique(x).size < 3:
-        return None
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
     shape = -residuals["ln_zeta_slope"] if "ln_zeta_slope" in residuals else np.ones(data.n)
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
@@ -1108,7 +1107,7 @@ def run_order_trend(
     )
     keep = counts > 0
     x, y = x[keep], means[keep]
-    if x.size < 4 or np.unique(x).size < 3:
+    if x.size < 4 or np.unique(x).size < 3:  # runs with scored segments
         return None
     dx = x - x.mean()
     slope = float(np.sum(dx * (y - y.mean())) / np.sum(dx * dx))

@@ -63,7 +63,7 @@ relative frequency, the campaigns' typical values) leaves a frequency misfit of 
 0.01-1.6 (size 0.002), 4.0-5.8 (0.004) and 6.5-7.6 (0.006) scatters at 0.4-0.8 in^2, but
 only 0.3-1.4 at 0.9 in^2 and about 2 at 1.0 in^2: there the Dahl joint's own slip onset
 falls in the range and the baseline reproduces the quadratic campaign within the
-scatter (the data do not show the effect). At the small end (0.2-0.3 %) a Dahl joint
+scatter (the data do not show the effect). At the small end (0.2 %) a Dahl joint
 that stays in pre-sliding (damping linear in amplitude, a frequency loss of order 1e-6)
 follows the campaign within two scatters: there ``none`` reads the data as the contract
 defines it. The computation is in docs/discovery.md ("Where the hidden
