@@ -319,6 +319,15 @@ def test_run_order_trend_measures_the_change_of_the_friction_limit():
         assert not disc.run_order_trend(data, shaped, n_tests=2)["significant"]
 
 
+def test_run_order_trend_reads_a_level_where_the_model_curve_is_flat():
+    """A stuck joint's model damping is flat: its slope is rounding (1e-5 here) and
+    defines no shape, so the test reads the runs' mean residual, as without a slope."""
+    data, plain, shaped = _runs_of_a_slipping_joint(-0.25, 0)
+    flat = {**plain, "ln_zeta_slope": 1e-5 * np.random.default_rng(2).standard_normal(data.n)}
+    assert disc.run_order_trend(data, flat, n_tests=2) == disc.run_order_trend(data, plain, n_tests=2)
+    assert disc.run_order_trend(data, shaped, n_tests=2) != disc.run_order_trend(data, plain, n_tests=2)
+
+
 def _cand(err, bic, sig=False):
     return {"heldout_error": err, "bic": bic, "residual_significant": sig}
 

@@ -1067,7 +1067,8 @@ def run_order_trend(
     ``calibration`` when present, as for a held-out run; else ``ln_zeta_shared``, else
     ``ln_zeta``). Of that residual the test takes the amount of the shape a change of the
     joint's friction limit leaves (``-ln_zeta_slope``, :func:`damping_curve_slope`; a
-    constant shape without it), a weighted least-squares projection over the run's
+    constant shape without it, or where the model's damping changes by less than its
+    accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares projection over the run's
     other segments with every quarter decade of amplitude weighted equally
     (:func:`amplitude_weights`): the run's relative change of friction limit against the
     shared model. Projecting on the shape weighs each amplitude by how much a change of
@@ -1097,10 +1098,17 @@ def run_order_trend(
     """
     x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
-    shape = -residuals["ln_zeta_slope"] if "ln_zeta_slope" in residuals else np.ones(data.n)
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
     if "calibration" in residuals:
         w = w * ~residuals["calibration"]
+    shape = np.ones(data.n)
+    if "ln_zeta_slope" in residuals and np.any(w > 0):
+        slope = residuals["ln_zeta_slope"]
+        # a curve flatter than the models' accuracy over the scored amplitudes defines no
+        # shape (its slope is rounding): a change of the damping is then read as a level
+        span = float(np.ptp(np.log(data.velocity_in_s[w > 0])))
+        if float(np.max(np.abs(slope[w > 0]))) * span >= TOL_LN_ZETA:
+            shape = -slope
     counts = np.bincount(data.run_index, weights=w * shape * shape, minlength=data.n_runs)
     means = np.bincount(data.run_index, weights=w * shape * r, minlength=data.n_runs) / np.maximum(
         counts, 1e-300
