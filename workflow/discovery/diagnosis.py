@@ -1068,13 +1068,12 @@ def run_order_trend(
     ``ln_zeta``). Of that residual the test takes the amount of the shape a change of the
     joint's friction limit leaves (``-ln_zeta_slope``, :func:`damping_curve_slope`; a
     constant shape without it, or where the model's damping changes by less than its
-    accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares projection over the run's
-    other segments with every quarter decade of amplitude weighted equally
-    (:func:`amplitude_weights`): the run's relative change of friction limit against the
-    shared model. Projecting on the shape weighs each amplitude by how much a change of
-    the joint shows there, and no more (the most powerful linear statistic for that shape
-    under independent scatter), where a plain mean would dilute the change at the top of
-    the range with the stuck joint's segments below. The calibration takes out the random
+    accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares
+    projection over the run's other segments with every quarter decade of amplitude
+    weighted equally (:func:`amplitude_weights`): the run's relative change of friction
+    limit against the shared model. Projecting on the shape weighs each amplitude by how
+    much a change of the joint shows there, where a plain mean would dilute the change at
+    the top of the range with the stuck joint's segments below. The calibration takes out the random
     spread of the runs' linear damping; a random spread of the joint left over only widens
     the scatter of the runs' projections, which the t test counts, while a steady change
     with run order tilts them. Offsets fitted to all of a run's segments would absorb a
