@@ -56,23 +56,12 @@ SENSOR_GAIN = 0.7
 """Mode-1 amplitude of the second sensor relative to the accelerometer's: its records are
 3 dB lower against the same noise floor. Much lower and an effect that sits a few
 scatters above the noise at the first sensor may fall into the second one's noise (at
-0.4, 8 dB, the quadratic-damping case of the base seed is called ``none`` with
-confidence 0.99): a detection limit, not a contradiction (docs/discovery.md)."""
+0.4, 8 dB, the base seed's quadratic damping is still named, but with confidence 0.87
+against the accelerometer's 1.00 and a gain ratio of 0.44 against 0.16): a detection
+limit, not a contradiction (docs/discovery.md)."""
 
 
-QUADRATIC_SENSOR_LIMIT = pytest.mark.xfail(
-    strict=True,
-    reason="issue 14: the base seed's quadratic damping (0.0047 at 0.56 in^2) is near the "
-    "detection margin: at the accelerometer quadratic_damping with confidence 0.68 (none 0.32, "
-    "gain ratio 0.63); at the 3 dB weaker sensor its held-out gain is only 0.85 and the verdict "
-    "none (0.97)",
-)
-
-
-@pytest.mark.parametrize(
-    "cause",
-    [pytest.param(c, marks=QUADRATIC_SENSOR_LIMIT) if c == "quadratic_damping" else c for c in CASES],
-)
+@pytest.mark.parametrize("cause", list(CASES))
 def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
     """The same ring-downs recorded by a second sensor (amplitudes scaled by the mode
     shape, its own noise), through the whole measured chain: the same cause, and each
