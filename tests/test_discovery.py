@@ -368,8 +368,8 @@ def test_decision_rule_branches():
 )
 def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
     """On the virtual lab's noise-free curves of a Dahl washer joint (0.6 in^2) with a
-    velocity-squared loss, ``dahl_stiffness`` fits as well as ``dahl_quadratic`` (a stiff
-    Dahl joint in pre-sliding whose softening a stiffness term cancels); the signature
+    velocity-squared loss, ``dahl_stiffness`` explains the curves within the scatter (a
+    stiff Dahl joint in pre-sliding whose softening a stiffness term cancels); the signature
     check tells it apart from a real softening, whose frequency change outgrows the
     friction's."""
     from workflow.lab import virtual_lab as vl
@@ -388,10 +388,11 @@ def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
     signature = disc.stiffness_signature(fit, data)
     assert signature["shows_signature"] is shows, signature
     if not shows:
-        # as close as the velocity-squared loss itself, the stiffness term taking back
-        # most of the friction's frequency loss
+        # within what explains the data (so no misfit sets it apart), the stiffness term
+        # taking back most of the friction's frequency loss
         residuals = disc.model_residuals(fit, data, scatter, context)
-        assert np.max(np.abs(residuals["z_noise"])) < 0.5 and np.max(np.abs(residuals["f_noise"])) < 0.5
+        worst = max(np.max(np.abs(residuals["z_noise"])), np.max(np.abs(residuals["f_noise"])))
+        assert worst < disc.EXPLAINS_LIMIT
         whole, friction = (
             signature["relative_frequency_change"],
             signature["friction_relative_frequency_change"],
