@@ -12,7 +12,7 @@ from workflow.io.tables import read_table
 from workflow.measured import decay
 from workflow.measured.runs import analysis_window
 from workflow.outputs import figures
-from workflow.runtime.logs import setup_script_logging
+from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figure_time_history")
 campaign_dir = Path(snakemake.params.campaign)
@@ -25,7 +25,7 @@ if used.empty:
     # show the first used run of the next configuration (campaign.yaml order).
     all_used = runs[runs["status"] == "used"]
     if all_used.empty:
-        raise SystemExit("no usable run in the campaign to show (see runs.parquet)")
+        raise ScriptStop("no usable run in the campaign to show (see runs.parquet)")
     log.warning(
         "configuration %s has no usable run (see runs.parquet); figure 9 shows %s",
         configuration,
