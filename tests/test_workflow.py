@@ -178,7 +178,7 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
     counts = job_counts(result.stdout)
     assert counts["demo_campaign"] == 1
-    assert counts["analyse_runs"] == 6  # 3 configurations x 10 runs, 5 per job
+    assert counts["analyse_runs"] == 3  # 3 configurations x 10 runs, 10 per job
     assert counts["identify_mode"] == 3
     assert counts["figures_measured"] == 1
     assert counts["run_summary"] == 1  # the summary closes `all`
