@@ -181,7 +181,7 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert counts["analyse_runs"] == 3  # 3 configurations x 10 runs, 10 per job
     assert counts["identify_mode"] == 3
     assert counts["figures_measured"] == 1
-    assert counts["run_summary"] == 1  # the summary closes `all`
+    assert counts["report_summary"] == 1  # the report pages and the summary close `all`
 
 
 def test_runs_table_is_also_a_csv_file(finished_run):
