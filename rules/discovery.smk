@@ -38,6 +38,9 @@ rule diagnose_configuration:
 
 
 rule diagnose:
+    # The campaign's diagnosis from its configurations', then every diagnosis figure, in
+    # one job: the figures read the two files written here, and in a job of their own
+    # a third of the time was start-up (Python, matplotlib, pandas).
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
@@ -50,33 +53,7 @@ rule diagnose:
             labels={"item": "file: diagnosis.json (download)"},
         ),
         residuals="results/tables/diagnosis_residuals.parquet",
-    log:
-        "results/logs/diagnose.log",
-    benchmark:
-        "results/benchmarks/diagnose.tsv"
-    # The diagnosis's figures, the report and the summary wait for it: ahead of the
-    # measured data's figures, so that they do not end the study alone on one core.
-    priority: 1
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=10,
-    params:
-        units=SETTINGS.units,
-    script:
-        "../scripts/diagnose.py"
-
-
-rule figures_discovery:
-    # Every diagnosis figure in one job: they read the same two files, so a job per
-    # figure would only repeat start-up (Python, matplotlib, pandas).
-    input:
-        diagnosis="results/diagnosis.json",
-        residuals="results/tables/diagnosis_residuals.parquet",
-    output:
-        residuals=[
+        residual_figures=[
             report(
                 f"results/figures/discovery_residuals_{name}.png",
                 caption="../report/discovery_residuals.rst",
@@ -101,10 +78,12 @@ rule figures_discovery:
             labels={"item": "figure: prediction of a left-out bearing area"},
         ),
     log:
-        "results/logs/figures_discovery.log",
+        "results/logs/diagnose.log",
     benchmark:
-        "results/benchmarks/figures_discovery.tsv"
-    priority: 1  # after diagnose, before the measured data's figures
+        "results/benchmarks/diagnose.tsv"
+    # The report and the summary wait for it: ahead of the measured data's figures, so
+    # that it does not end the study alone on one core.
+    priority: 1
     conda:
         LAPJOINT_ENV
     threads: 1
@@ -115,4 +94,4 @@ rule figures_discovery:
         configurations=CONFIGURATIONS,
         units=SETTINGS.units,
     script:
-        "../scripts/figures_discovery.py"
+        "../scripts/diagnose.py"

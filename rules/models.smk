@@ -35,10 +35,13 @@ rule figure_friction_loops:
         "../scripts/figure_friction_loops.py"
 
 
-rule model_table:
-    # The table and its report page in one job: the page alone was a job of start-up.
+rule figures_models:
+    # Figures 14 and 15 of every configuration, and the table of the fitted parameters
+    # with its report page, in one job: a job per configuration, or for the table,
+    # would spend most of its time starting (Python, matplotlib, pandas).
     input:
-        expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
+        segments="results/tables/segments.parquet",
+        fits=expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
     output:
         table="results/tables/model_fits.parquet",
         page=report(
@@ -48,29 +51,6 @@ rule model_table:
             subcategory="4.3 Fitted parameters",
             labels={"table": "Dahl and LuGre parameters"},
         ),
-    log:
-        "results/logs/model_table.log",
-    benchmark:
-        "results/benchmarks/model_table.tsv"
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    params:
-        units=SETTINGS.units,
-    script:
-        "../scripts/model_table.py"
-
-
-rule figures_models:
-    # Figures 14 and 15 of every configuration in one job: a job per configuration
-    # would spend most of its time starting (Python, matplotlib, pandas).
-    input:
-        segments="results/tables/segments.parquet",
-        fits=expand("results/models/{configuration}.json", configuration=CONFIGURATIONS),
-    output:
         dahl=[
             report(
                 f"results/figures/fig14_dahl_{name}.png",

@@ -14,6 +14,9 @@ else:
 
 
 rule report_summary:
+    # The report's pages, then results/summary.txt (the Snakefile's onsuccess prints it):
+    # the last job of `all`, it waits for every figure and the model parameters' page.
+    # One job for both: the summary alone was a job of start-up.
     input:
         diagnosis="results/diagnosis.json",
         runs="results/tables/runs.parquet",
@@ -23,7 +26,10 @@ rule report_summary:
         hypotheses="results/tables/hypotheses.parquet",
         damping_fits="results/tables/damping_fits.parquet",
         description=workflow.source_path("../report/workflow.rst"),
+        model_fits_page="results/report/model_fits.html",
+        figures=measured_outputs() + model_outputs() + discovery_outputs(),
     output:
+        summary="results/summary.txt",
         landing=str(LANDING_PAGE),
         verdict=report(
             "results/report/verdict.html",
@@ -84,27 +90,3 @@ rule report_summary:
         units=SETTINGS.units,
     script:
         "../scripts/report_summary.py"
-
-
-rule run_summary:
-    # Last job of `all` (it waits for the report's pages and every figure); the
-    # Snakefile's onsuccess prints its file on the console.
-    input:
-        diagnosis="results/diagnosis.json",
-        runs="results/tables/runs.parquet",
-        pages=report_outputs(),
-        figures=measured_outputs() + model_outputs() + discovery_outputs(),
-    output:
-        "results/summary.txt",
-    log:
-        "results/logs/run_summary.log",
-    benchmark:
-        "results/benchmarks/run_summary.tsv"
-    conda:
-        LAPJOINT_ENV
-    threads: 1
-    resources:
-        mem_mb=1000,
-        runtime=5,
-    script:
-        "../scripts/run_summary.py"

@@ -10,7 +10,7 @@ from workflow.io.interim import read_campaign, read_mode, write_run_statuses
 from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.io.tables import concatenate_columns, write_columns
 from workflow.measured.runs import analyse_run_file
-from workflow.runtime.logs import setup_script_logging
+from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "analyse_runs")
 campaign_dir = Path(snakemake.params.campaign)
@@ -34,7 +34,7 @@ for run_file in snakemake.input.runs:
     if result.status["status"] == "excluded":
         log.warning("excluded %s", result.status["reason"])
         if snakemake.params.strict:
-            raise SystemExit(f"strict mode: run excluded: {result.status['reason']}")
+            raise ScriptStop(f"strict mode: run excluded: {result.status['reason']}")
     else:
         kept = result.segments["kept"]
         log.info("%s: %d segments kept of %d", run_path, int(kept.sum()), len(kept))

@@ -2,6 +2,8 @@
 
 import textwrap
 
+import numpy as np
+
 from workflow.io.units import UNIT_SYSTEMS
 from workflow.models.friction import hysteresis_loop
 from workflow.models.paper import PAPER_DAHL, PAPER_LUGRE
@@ -16,10 +18,8 @@ for model, params, path, name in (
     ("lugre", PAPER_LUGRE, snakemake.output.lugre, "LuGre"),
 ):
     # the paper's loops are displacement-driven at 1 Hz (LuGre is rate dependent)
-    loops = [
-        (amplitude, *hysteresis_loop(model, params, amplitude, frequency_hz=1.0, cycles=2))
-        for amplitude in amplitudes_in
-    ]
+    x, force = hysteresis_loop(model, params, np.array(amplitudes_in), frequency_hz=1.0, cycles=2)
+    loops = [(amplitude, x[k], force[k]) for k, amplitude in enumerate(amplitudes_in)]
     values = textwrap.fill(f"({figures.parameter_text(params, units)})", 80)
     title = f"Friction force vs displacement: {name}\n{values}"
     figures.save(figures.friction_loops(loops, title=title, units=units), path)

@@ -1,26 +1,34 @@
-"""Rule figures_models: paper figures 14 (Dahl) and 15 (LuGre) of every configuration."""
+"""Rule figures_models: the fitted friction-model parameters of every configuration, one
+table and the same as the report's readable HTML page, then paper figures 14 (Dahl) and
+15 (LuGre) of every configuration."""
 
 import json
 from pathlib import Path
 
-from workflow.io.tables import read_table
+from workflow.io.tables import atomic_write_bytes, read_table, write_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.models.paper import model_curve_frames
+from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
+from workflow.outputs.report import model_fits_html
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_models")
 units = UNIT_SYSTEMS[snakemake.params.units]
+documents = {}
+for path in snakemake.input.fits:
+    document = json.loads(Path(path).read_text())
+    documents[document["configuration"]] = document
+fits = fit_table(documents)
+write_table(fits, snakemake.output.table, unit_system=units)
+atomic_write_bytes(snakemake.output.page, model_fits_html(fits).encode())
+log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
+
 segments = read_table(snakemake.input.segments)
-for configuration, fit_path, dahl_path, lugre_path in zip(
-    snakemake.params.configurations,
-    snakemake.input.fits,
-    snakemake.output.dahl,
-    snakemake.output.lugre,
-    strict=True,
+for configuration, dahl_path, lugre_path in zip(
+    snakemake.params.configurations, snakemake.output.dahl, snakemake.output.lugre, strict=True
 ):
     mine = segments[segments["configuration"] == configuration]
-    document = json.loads(Path(fit_path).read_text())
+    document = documents[configuration]
     # the simulated curves only where they are compared with data (their ends carry the
     # simulation's own start-up and noise-floor effects)
     low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()

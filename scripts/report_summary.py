@@ -1,4 +1,6 @@
-"""Rule report_summary: the report's first page (the verdict) and its tables as HTML."""
+"""Rule report_summary: the report's first page (the verdict) and its tables as HTML, then
+the run's summary: the verdict, the runs used and excluded, and where the report is
+(results/summary.txt, printed at the end of the run by the Snakefile's onsuccess)."""
 
 import json
 from pathlib import Path
@@ -6,6 +8,7 @@ from pathlib import Path
 from workflow.io.tables import atomic_write_bytes, read_table
 from workflow.io.units import UNIT_SYSTEMS
 from workflow.outputs import report
+from workflow.outputs.summary import run_summary
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "report_summary")
@@ -41,3 +44,6 @@ landing = report.landing_rst(
 )
 atomic_write_bytes(snakemake.output.landing, landing.encode())
 log.info("verdict %s; %d pages written", document.get("cause"), len(pages))
+text = run_summary(document, runs)
+atomic_write_bytes(snakemake.output.summary, text.encode())
+log.info("summary written: %d lines", text.count("\n"))

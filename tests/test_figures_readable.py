@@ -39,6 +39,25 @@ def test_checker_finds_overlapping_tick_labels():
     assert any("overlap" in problem and "another long label" in problem for problem in problems)
 
 
+def test_save_logs_the_problems_of_the_figure_as_saved(tmp_path, caplog):
+    # save checks the layout its own saving makes (no layout of its own): the same
+    # problem is found, logged once, and the PNG is written
+    figure, axis = plt.subplots(figsize=(2.0, 2.0))
+    axis.plot([1, 2], [1, 2])
+    axis.set_xticks([1.0, 1.05], ["a long label", "another long label"])
+    with caplog.at_level("WARNING"):
+        figures.save(figure, tmp_path / "crowded.png")
+    warnings = [record.getMessage() for record in caplog.records if "hard to read" in record.getMessage()]
+    assert len(warnings) == 1 and "texts overlap" in warnings[0] and "another long label" in warnings[0]
+    assert warnings[0].startswith("figure crowded.png is hard to read")
+    assert (tmp_path / "crowded.png").read_bytes().startswith(b"\x89PNG")
+    figure, axis = plt.subplots()
+    axis.plot([1, 2], [1, 2])
+    caplog.clear()
+    figures.save(figure, tmp_path / "plain.png")
+    assert not [record for record in caplog.records if "hard to read" in record.getMessage()]
+
+
 def test_checker_finds_an_empty_panel_and_accepts_a_note():
     figure, (left, right) = plt.subplots(1, 2)
     left.plot([1, 2], [1, 2])

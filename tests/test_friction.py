@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from workflow.models import paper
 from workflow.models.friction import (
     dahl_dissipation_per_cycle,
     dahl_z_rate,
@@ -94,6 +95,19 @@ def test_lugre_paper_loop_is_dissipative_and_batched():
     _, fb = hysteresis_loop("lugre", batch, 2.0, cycles=4, points_per_cycle=1000)
     assert fb.shape == (2, x.size)
     np.testing.assert_allclose(fb[1], f, rtol=1e-12, atol=1e-12)
+
+
+def test_a_batch_of_amplitudes_is_each_loop_alone_bit_for_bit():
+    # figures 7-8 integrate their five amplitudes as one batch: the same numbers as one
+    # call per amplitude where the step is the same (here one step per output sample)
+    amplitudes = (0.25, 0.5, 1.0, 2.0, 4.0)
+    for model, params in (("dahl", paper.PAPER_DAHL), ("lugre", paper.PAPER_LUGRE)):
+        x, f = hysteresis_loop(model, params, np.array(amplitudes), cycles=2, points_per_cycle=500)
+        assert x.shape == f.shape == (len(amplitudes), 1001)
+        for k, amplitude in enumerate(amplitudes):
+            x_alone, f_alone = hysteresis_loop(model, params, amplitude, cycles=2, points_per_cycle=500)
+            np.testing.assert_array_equal(x[k], x_alone)
+            np.testing.assert_array_equal(f[k], f_alone)
 
 
 @settings(max_examples=25, deadline=None)

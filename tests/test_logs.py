@@ -51,6 +51,42 @@ def test_uncaught_error_is_logged_before_the_cost(tmp_path):
     assert COST.search(text.splitlines()[-1])
 
 
+def test_a_deliberate_stop_is_logged_without_a_traceback_and_fails(tmp_path):
+    tail = (
+        "from workflow.runtime.logs import ScriptStop\nraise ScriptStop('strict mode: run excluded: run07')"
+    )
+    result, text = run_script(tmp_path, tail=tail)
+    assert result.returncode == 1
+    assert "ERROR stopped: strict mode: run excluded: run07" in text
+    assert "Traceback" not in text and "Traceback" not in result.stderr
+    assert COST.search(text.splitlines()[-1])
+
+
+def test_the_process_ends_after_the_cost_line_with_its_output_flushed(tmp_path):
+    # The script ends without the interpreter's teardown: what it printed (buffered, as
+    # stdout is in a pipe) and every log line must still be written, the status 0;
+    # exit handlers registered after logging was set up still run first.
+    tail = (
+        "import atexit\n"
+        "atexit.register(lambda: print('own exit handler'))\n"
+        "print('printed ' * 1000)\n"
+        "log.info('last message')"
+    )
+    result, text = run_script(tmp_path, tail=tail)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("printed") == 1000
+    assert result.stdout.rstrip().endswith("own exit handler")
+    lines = text.splitlines()
+    assert "demo INFO last message" in lines[-2] and COST.search(lines[-1])
+
+
+def test_no_script_raises_system_exit():
+    # the end of setup_script_logging cannot see SystemExit's status (it would exit 0)
+    for script in sorted((REPO / "scripts").glob("*.py")):
+        source = script.read_text()
+        assert "SystemExit" not in source and "sys.exit" not in source and "exit(" not in source, script.name
+
+
 def test_peak_memory_is_the_scripts_own_not_its_parents(tmp_path):
     # A parent holding 300 MiB starts the script (fork + exec, as Snakemake does):
     # the script's reported peak must not include the parent's memory.

@@ -154,8 +154,8 @@ def test_segment_length_change_reruns_only_what_depends_on_it(finished_run):
     counts = job_counts(result.stdout)
     assert counts["analyse_runs"] == 4  # 4 + 3 runs, two per job
     assert "collect_tables" in counts and "fit_curves" in counts
-    # figures 10-13 of every configuration in one job, the backbones in another
-    assert counts["figures_damping"] == 1 and counts["figures_backbone"] == 1
+    # figures 9-13 and the backbones of every configuration in one job
+    assert counts["figures_measured"] == 1
     assert "identify_mode" not in counts  # the mode search does not use segments
 
 
@@ -178,10 +178,10 @@ def test_demo_campaign_dry_run_plans_the_whole_study(tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
     counts = job_counts(result.stdout)
     assert counts["demo_campaign"] == 1
-    assert counts["analyse_runs"] == 6  # 3 configurations x 10 runs, 5 per job
+    assert counts["analyse_runs"] == 3  # 3 configurations x 10 runs, 10 per job
     assert counts["identify_mode"] == 3
-    assert counts["figures_damping"] == 1 and counts["figures_backbone"] == 1
-    assert counts["run_summary"] == 1  # the summary closes `all`
+    assert counts["figures_measured"] == 1
+    assert counts["report_summary"] == 1  # the report pages and the summary close `all`
 
 
 def test_runs_table_is_also_a_csv_file(finished_run):
@@ -251,8 +251,7 @@ def test_si_units_add_si_columns_and_si_figures_beside_an_unchanged_default(fini
     for name in ("fig10_damping_no_washer.png", "fig13_area_fits.png", "backbone_no_washer.png"):
         si_png = (tmp_path / "results/figures" / name).read_bytes()
         assert si_png != (default_workdir / "results/figures" / name).read_bytes(), name
-    for log in ("figures_damping.log", "figures_backbone.log"):
-        assert "hard to read" not in (tmp_path / "results/logs" / log).read_text()
+    assert "hard to read" not in (tmp_path / "results/logs/figures_measured.log").read_text()
 
     # the figure code path on the SI run's tables: SI on every axis, label and note
     segments = tables["segments"]

@@ -243,7 +243,7 @@ class WorkflowConfig:
     """True: a run that cannot be read or fails a quality check stops the workflow.
     False: it is excluded from fits and listed with its reason in runs.parquet."""
 
-    runs_per_job: Annotated[int, Ge(1), Le(1000)] = 5
+    runs_per_job: Annotated[int, Ge(1), Le(1000)] = 10
     """Run files analysed (read, checked, band-passed, segmented) by one job. Each
     job spends about 0.25 s starting (Python, Snakemake's script preamble, NumPy)
     and 0.06 s per run on signal work, and Snakemake's own bookkeeping grows with the

@@ -243,7 +243,7 @@ def _relaxation_per_length(model: str, params: Mapping[str, ArrayLike]) -> np.nd
 def hysteresis_loop(
     model: str,
     params: Mapping[str, ArrayLike],
-    amplitude_in: float,
+    amplitude_in: ArrayLike,
     *,
     frequency_hz: float = 1.0,
     cycles: int = 3,
@@ -271,8 +271,10 @@ def hysteresis_loop(
         Model parameters (Dahl: ``sigma`` lbf/in, ``fc`` lbf; LuGre: ``sigma0`` lbf/in,
         ``sigma1`` lbf*s/in, ``alpha0`` lbf, ``alpha1`` lbf, ``alpha2`` lbf*s/in,
         ``v0`` in/s, ``vd`` in/s), broadcast together into a batch.
-    amplitude_in : float
-        Displacement amplitude A, inch.
+    amplitude_in : array_like
+        Displacement amplitude A, inch, broadcast with the parameters: several
+        amplitudes are one batch, each loop integrated as alone (every operation is
+        elementwise) but with the step the largest amplitude needs.
     frequency_hz : float
         Drive frequency (only matters for the rate-dependent LuGre model), Hz.
     cycles : int
@@ -284,7 +286,7 @@ def hysteresis_loop(
 
     Returns
     -------
-    x_in : numpy.ndarray, shape (cycles * points_per_cycle + 1,)
+    x_in : numpy.ndarray, shape (*amplitude.shape, cycles * points_per_cycle + 1)
         Displacement, inch.
     force_lbf : numpy.ndarray, shape (*batch, cycles * points_per_cycle + 1)
         Friction force, lbf.
@@ -295,9 +297,9 @@ def hysteresis_loop(
     n_out = cycles * points_per_cycle
     dt_out = 1.0 / (frequency_hz * points_per_cycle)
     # |v| <= A omega, so rate * h <= lam A omega h; keep that <= 0.5.
-    sub = max(1, int(np.ceil(lam * amplitude_in * omega * dt_out / 0.5)))
+    sub = max(1, int(np.ceil(lam * np.max(amplitude_in) * omega * dt_out / 0.5)))
     h = dt_out / sub
-    batch = np.broadcast(*[np.asarray(v) for v in params.values()]).shape
+    batch = np.broadcast(*[np.asarray(v) for v in params.values()], np.asarray(amplitude_in)).shape
     z = np.zeros(batch)
     if steady_start:
         stiff = np.asarray(params["sigma"] if model == "dahl" else params["sigma0"], float)
@@ -306,7 +308,7 @@ def hysteresis_loop(
         z_peak = z_sat * np.tanh(stiff * amplitude_in / fc)
         z = z + z_sat - (z_peak + z_sat) * np.exp(-stiff * amplitude_in / fc)
     t_out = np.arange(n_out + 1) * dt_out
-    x = amplitude_in * np.sin(omega * t_out)
+    x = np.multiply.outer(amplitude_in, np.sin(omega * t_out))
     f_out = np.empty(batch + (n_out + 1,))
     vel = lambda t: amplitude_in * omega * np.cos(omega * t)  # noqa: E731
     f_out[..., 0] = force(z, vel(0.0))

@@ -11,6 +11,7 @@ import itertools
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axis import Axis
+from matplotlib.backend_bases import RendererBase
 from matplotlib.text import Text
 from matplotlib.transforms import Bbox
 
@@ -54,15 +55,16 @@ def drawn_texts(figure: plt.Figure) -> list[Text]:
     return tick_labels + others
 
 
-def overlapping_texts(figure: plt.Figure) -> list[tuple[str, str]]:
+def overlapping_texts(figure: plt.Figure, renderer: RendererBase | None = None) -> list[tuple[str, str]]:
     """Pairs of drawn texts whose extents overlap (text of each pair).
 
-    The figure is laid out without being rendered: text extents need the positions a
-    draw computes, not its pixels, and :func:`workflow.outputs.figures.save` renders the
-    figure once more anyway (the extents, and the PNG written after, are the same as
-    after a full draw; a full draw was a fifth of a figure job's work)."""
-    figure.draw_without_rendering()
-    renderer = figure.canvas.get_renderer()
+    Text extents need the positions a draw computes, not its pixels. Without
+    ``renderer`` the figure is laid out without being rendered; with it, the figure has
+    just been drawn by it (:func:`workflow.outputs.figures.save` checks the layout that
+    saving the figure makes anyway) and its extents are taken as they are."""
+    if renderer is None:
+        figure.draw_without_rendering()
+        renderer = figure.canvas.get_renderer()
     boxes = []
     for text in drawn_texts(figure):
         extent = text.get_window_extent(renderer)
@@ -105,8 +107,15 @@ def notation_problems(axes: plt.Axes) -> list[str]:
     return problems
 
 
-def readability_problems(figure: plt.Figure) -> list[str]:
+def readability_problems(figure: plt.Figure, renderer: RendererBase | None = None) -> list[str]:
     """Everything that keeps a reader from taking the figure in at a glance.
+
+    Parameters
+    ----------
+    figure : Figure
+    renderer : RendererBase, optional
+        The renderer of a draw of the figure just made (its layout is checked as it
+        is); without it the figure is laid out first (:func:`overlapping_texts`).
 
     Returns
     -------
@@ -115,7 +124,7 @@ def readability_problems(figure: plt.Figure) -> list[str]:
         notation, and panels that draw no data and carry no note. Empty for a readable
         figure.
     """
-    problems = [f"texts overlap: '{a}' and '{b}'" for a, b in overlapping_texts(figure)]
+    problems = [f"texts overlap: '{a}' and '{b}'" for a, b in overlapping_texts(figure, renderer)]
     for index, axes in enumerate(figure.axes):
         title = axes.get_title() or f"panel {index + 1}"
         problems.extend(f"{title}: {problem}" for problem in notation_problems(axes))

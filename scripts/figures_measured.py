@@ -1,4 +1,6 @@
-"""Rule figure_time_history: paper figure 9 for the first used run of the first configuration."""
+"""Rule figures_measured: paper figure 9 (the first used run of the first configuration),
+figures 10-12 (damping vs velocity amplitude, one per configuration), figure 13 (damping
+fits against bearing area) and the backbones (frequency vs velocity amplitude)."""
 
 from dataclasses import asdict
 from pathlib import Path
@@ -9,15 +11,19 @@ from workflow.io.campaign import read_run
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
+from workflow.io.units import UNIT_SYSTEMS
 from workflow.measured import decay
 from workflow.measured.runs import analysis_window
 from workflow.outputs import figures
-from workflow.runtime.logs import setup_script_logging
+from workflow.runtime.logs import ScriptStop, setup_script_logging
 
-log = setup_script_logging(snakemake.log[0], "figure_time_history")
+log = setup_script_logging(snakemake.log[0], "figures_measured")
+units = UNIT_SYSTEMS[snakemake.params.units]
 campaign_dir = Path(snakemake.params.campaign)
 campaign = read_campaign(snakemake.input.campaign_settings)
-configuration = snakemake.params.configuration
+
+# figure 9
+configuration = snakemake.params.configurations[0]
 runs = read_table(snakemake.input.runs_table)
 used = runs[(runs["configuration"] == configuration) & (runs["status"] == "used")]
 if used.empty:
@@ -25,7 +31,7 @@ if used.empty:
     # show the first used run of the next configuration (campaign.yaml order).
     all_used = runs[runs["status"] == "used"]
     if all_used.empty:
-        raise SystemExit("no usable run in the campaign to show (see runs.parquet)")
+        raise ScriptStop("no usable run in the campaign to show (see runs.parquet)")
     log.warning(
         "configuration %s has no usable run (see runs.parquet); figure 9 shows %s",
         configuration,
@@ -34,7 +40,6 @@ if used.empty:
     configuration = all_used.iloc[0]["configuration"]
     used = all_used[all_used["configuration"] == configuration]
 modes = read_table(snakemake.input.modes).set_index("configuration")
-figure_path = snakemake.output[0]
 row = used.iloc[0]
 record = read_run(campaign_dir, row["path"], campaign)
 band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))
@@ -59,5 +64,37 @@ figure = figures.time_history(
     band_hz=band_hz,
     decay_start_s=result.start_index / record.sample_rate_hz,
 )
-figures.save(figure, figure_path)
+figures.save(figure, snakemake.output.time_history)
 log.info("figure 9 from %s", row["path"])
+
+# figures 10-13
+segments = read_table(snakemake.input.segments)
+curves = read_table(snakemake.input.curves)
+for configuration, path in zip(snakemake.params.configurations, snakemake.output.damping, strict=True):
+    mine = segments[segments["configuration"] == configuration]
+    figure = figures.damping_vs_amplitude(
+        mine,
+        title=f"{configuration}: local equivalent damping vs velocity amplitude ({mine['run'].nunique()} runs)",
+        curve=curves[curves["configuration"] == configuration],
+        units=units,
+    )
+    figures.save(figure, path)
+    log.info("%s: %d segments plotted", configuration, len(mine))
+figure = figures.area_fits(
+    curves,
+    read_table(snakemake.input.area),
+    title=f"{campaign.name}: damping vs velocity amplitude and bearing area",
+    units=units,
+)
+figures.save(figure, snakemake.output.area)
+
+# the backbones
+for configuration, path in zip(snakemake.params.configurations, snakemake.output.backbones, strict=True):
+    mine = segments[segments["configuration"] == configuration]
+    figure = figures.frequency_vs_amplitude(
+        mine,
+        title=f"{configuration}: backbone (frequency vs velocity amplitude)",
+        units=units,
+    )
+    figures.save(figure, path)
+    log.info("%s: backbone of %d segments plotted", configuration, len(mine))
