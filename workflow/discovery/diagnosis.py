@@ -1117,12 +1117,12 @@ def run_order_trend(
         w = w * ~residuals["calibration"]
     shape = np.ones(data.n)
     if "ln_zeta_slope" in residuals and np.any(w > 0):
-        slope = residuals["ln_zeta_slope"]
+        curve_slope = residuals["ln_zeta_slope"]
         # a curve flatter than the models' accuracy over the scored amplitudes defines no
         # shape (its slope is rounding): a change of the damping is then read as a level
         span = float(np.ptp(np.log(data.velocity_in_s[w > 0])))
-        if float(np.max(np.abs(slope[w > 0]))) * span >= TOL_LN_ZETA:
-            shape = -slope
+        if float(np.max(np.abs(curve_slope[w > 0]))) * span >= TOL_LN_ZETA:
+            shape = -curve_slope
     counts = np.bincount(data.run_index, weights=w * shape * shape, minlength=data.n_runs)
     means = np.bincount(data.run_index, weights=w * shape * r, minlength=data.n_runs) / np.maximum(
         counts, 1e-300
