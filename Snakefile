@@ -7,6 +7,8 @@
 
 from snakemake.utils import min_version
 
+from workflow.runtime.scheduler import cancel_scheduler_timers
+
 min_version("9.0")
 
 
@@ -38,6 +40,11 @@ onsuccess:
     summary = Path("results/summary.txt")
     if summary.exists() and (not workflow.dag_settings.targets or "all" in workflow.dag_settings.targets):
         print(f"\n{summary.read_text()}", end="", file=sys.stderr)
+    cancel_scheduler_timers()
+
+
+onerror:
+    cancel_scheduler_timers()
 
 
 rule measured:
