@@ -75,7 +75,10 @@ rule figures_models:
         "results/logs/figures_models.log",
     benchmark:
         "results/benchmarks/figures_models.tsv"
-    priority: 1  # the end of the longest chain: not left to run alone at the end
+    # The longest job that waits for every configuration's fits: ahead of the diagnosis
+    # (which has the report after it, about as long together), so that the two chains end
+    # together rather than this job alone on one core.
+    priority: 2
     conda:
         LAPJOINT_ENV
     threads: 1

@@ -14,9 +14,9 @@ else:
 
 
 rule report_summary:
-    # The report's pages, then results/summary.txt (the Snakefile's onsuccess prints it):
-    # the last job of `all`, it waits for every figure and the model parameters' page.
-    # One job for both: the summary alone was a job of start-up.
+    # The report's pages, then results/summary.txt (the Snakefile's onsuccess prints it
+    # once every job of `all` has ended). One job for both: the summary alone was a job of
+    # start-up. It reads tables and the diagnosis only, so it runs beside the figures.
     input:
         diagnosis="results/diagnosis.json",
         runs="results/tables/runs.parquet",
@@ -26,8 +26,6 @@ rule report_summary:
         hypotheses="results/tables/hypotheses.parquet",
         damping_fits="results/tables/damping_fits.parquet",
         description=workflow.source_path("../report/workflow.rst"),
-        model_fits_page="results/report/model_fits.html",
-        figures=measured_outputs() + model_outputs() + discovery_outputs(),
     output:
         summary="results/summary.txt",
         landing=str(LANDING_PAGE),
