@@ -52,6 +52,7 @@ from workflow.models.averaged import (
     model_curves,
     threshold_cell_edges,
 )
+from workflow.models.sampling import scrambled_sobol_points
 
 __all__ = [
     "CAUSE_MODELS",
@@ -714,11 +715,8 @@ def fit_model(
         starts = []
         if nested_start is not None:
             starts.append(np.clip((to_coords(model, nested_start) - problem.lo) / span, 0.0, 1.0))
-        from scipy.stats import qmc  # here: scipy.stats is a second of start-up
-
-        sampler = qmc.Sobol(len(model.params), scramble=True, seed=settings.seed)
         n = 2 ** int(np.ceil(np.log2(max(settings.global_samples, 2))))
-        unit = sampler.random(n)
+        unit = scrambled_sobol_points(n, len(model.params), settings.seed)
         cost = np.mean(problem.residuals(unit) ** 2, axis=-1)
         order = np.argsort(cost)
         n_nested = len(starts)

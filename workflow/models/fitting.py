@@ -53,11 +53,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import qmc
 
 from workflow.io.settings import AnalysisSettings, DecaySettings, ModelSettings
 from workflow.measured import decay
 from workflow.models.ringdown import simulate_ringdown
+from workflow.models.sampling import scrambled_sobol_points
 
 __all__ = [
     "RingdownFitContext",
@@ -478,9 +478,7 @@ def fit_friction_model(
         return _residuals(curves, v, ln_z, f, s_z, s_f), curves
 
     # Global stage: one batched call over a scrambled Sobol sample of the box.
-    sobol = qmc.Sobol(d=span.size, scramble=True, seed=seed)
-    m = int(np.ceil(np.log2(max(global_samples, 2))))
-    theta0 = space.lower + sobol.random_base2(m)[:global_samples] * span
+    theta0 = space.lower + scrambled_sobol_points(global_samples, span.size, seed) * span
     if initial_points is not None:
         extra = np.clip(np.atleast_2d(np.asarray(initial_points, float)), space.lower, space.upper)
         theta0 = np.concatenate([extra, theta0])
