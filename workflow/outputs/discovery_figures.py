@@ -23,7 +23,7 @@ import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
-from workflow.outputs.figures import STYLE, add_note, plain_log_axis, velocity, velocity_label  # noqa: E402
+from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
 
 __all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
@@ -298,16 +298,13 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
             title += f"\nextended / baseline mean error = {ratio:.2f}"
         ax.set_title(title, loc="left")
         ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-        fig.tight_layout()
+        notes = []
         if finite.size and finite.min() > 10:
-            add_note(
-                fig,
-                [
-                    "Both predictions miss every left-out configuration by more than "
-                    f"{plain_number(finite.min())} "
-                    "times the measured scatter: neither model predicts a new bearing area, and the "
-                    "ratio of their errors says little."
-                ],
-                width=100,
+            notes.append(
+                "Both predictions miss every left-out configuration by more than "
+                f"{plain_number(finite.min())} "
+                "times the measured scatter: neither model predicts a new bearing area, and the "
+                "ratio of their errors says little."
             )
+        lay_out(fig, notes, width=100)
     return fig

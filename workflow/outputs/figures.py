@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import textwrap
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -134,11 +135,14 @@ def legend_beside(axis: plt.Axes, **options) -> None:
         axis.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, ncol=columns, **options)
 
 
-def add_note(figure: plt.Figure, sentences: list[str], width: int = 110) -> None:
-    """Sentences under the figure (below every panel, outside the data)."""
-    if not sentences:
+def lay_out(figure: plt.Figure, notes: Sequence[str] = (), width: int = 110) -> None:
+    """Lay the panels out tightly, with the sentences of ``notes`` under them (outside
+    the data) when there are any: one layout, each a large share of a figure's work."""
+    notes = [sentence for sentence in notes if sentence]
+    if not notes:
+        figure.tight_layout()
         return
-    text = "\n".join(textwrap.fill(sentence, width) for sentence in sentences)
+    text = "\n".join(textwrap.fill(sentence, width) for sentence in notes)
     lines = text.count("\n") + 1
     height_in = figure.get_size_inches()[1]
     bottom = min(0.4, (0.2 + 0.16 * lines) / height_in)
@@ -376,8 +380,7 @@ def _finish_amplitude_panel(
     axis.set_ylabel(ylabel)
     axis.set_title(title)
     legend_beside(axis)
-    figure.tight_layout()
-    add_note(figure, [note for note in notes if note])
+    lay_out(figure, notes)
 
 
 def damping_misfit(
@@ -604,6 +607,5 @@ def model_comparison(
         bottom.set_ylabel(FREQUENCY_LABEL)
         if models:
             legend_beside(bottom)
-        figure.tight_layout()
-        add_note(figure, [note for note in notes if note])
+        lay_out(figure, notes)
     return figure
