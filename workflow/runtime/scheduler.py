@@ -5,7 +5,9 @@ Snakemake's job scheduler rate-limits submissions (``--max-jobs-per-timespan``,
 ``threading.Timer`` that wakes the scheduler again one timespan later. The timer of
 the last round is still pending when the workflow has finished, and the interpreter
 waits for it before exiting: a second of idle wall time at the end of every run
-that executed jobs (a sixteenth of the demo's).
+that executed jobs. No setting avoids it: Snakemake 9 reads a timespan of ``100ms`` as
+100 minutes (its pattern tries ``m`` before ``ms``), and the limiter cannot be switched
+off from the command line.
 """
 
 from __future__ import annotations
