@@ -143,7 +143,7 @@ def residuals_figure(
         axes[-1].set_xlabel(velocity_label(units))
         ratio = f", gain ratio {gain:.2f}" if gain is not None else ""
         fig.suptitle(f"{configuration}: cause {cause}{ratio}")
-        fig.tight_layout()
+        lay_out(fig)
     return fig
 
 
@@ -224,7 +224,7 @@ def candidates_figure(document: Mapping) -> plt.Figure:
             ax.set_ylim(-0.6, len(causes) - 0.4)
             ax.set_title(f"{name}: verdict {entry.get('cause', '?')} (large outlined dot)", loc="left")
         axes[-1].set_xlabel(ERROR_LABEL + "; dashed: baseline")
-        fig.tight_layout()
+        lay_out(fig)
     return fig
 
 

@@ -311,7 +311,7 @@ def time_history(
         bottom.set_xlabel("time (s)")
         bottom.set_ylabel(response_label)
         bottom.legend(loc="upper right")
-        figure.tight_layout()
+        lay_out(figure)
     return figure
 
 
@@ -496,7 +496,7 @@ def area_fits(
             )
             right.set_axis_off()
         figure.suptitle(title)
-        figure.tight_layout()
+        lay_out(figure)
     return figure
 
 
@@ -554,7 +554,7 @@ def friction_loops(
         axis.set_ylabel(f"friction force ({units.force})")
         axis.set_title(title)
         axis.legend(loc="upper left")
-        figure.tight_layout()
+        lay_out(figure)
     return figure
 
 
