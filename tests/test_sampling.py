@@ -7,7 +7,13 @@ import pytest
 from scipy.stats import qmc
 
 from workflow.models.averaged import MODELS
-from workflow.models.sampling import BITS, MAX_DIMENSIONS, direction_numbers, scrambled_sobol_points
+from workflow.models.sampling import (
+    BITS,
+    MAX_DIMENSIONS,
+    direction_numbers,
+    scrambled_sobol_points,
+    sobol_integers,
+)
 
 
 def scipy_points(count: int, dimensions: int, seed: int) -> np.ndarray:
@@ -27,12 +33,7 @@ def test_the_points_are_scipys_scrambled_sobol_points_to_the_bit(dimensions, see
 
 
 def test_unscrambled_direction_numbers_give_scipys_unscrambled_sequence():
-    v = direction_numbers(MAX_DIMENSIONS)
-    index = np.arange(512, dtype=np.uint64)
-    gray = index ^ (index >> np.uint64(1))
-    integers = np.zeros((512, MAX_DIMENSIONS), dtype=np.uint64)
-    for k in range(BITS):
-        integers ^= ((gray >> np.uint64(k)) & np.uint64(1))[:, None] * v[:, k]
+    integers = sobol_integers(direction_numbers(MAX_DIMENSIONS), 512)
     reference = qmc.Sobol(MAX_DIMENSIONS, scramble=False).random(512)
     np.testing.assert_array_equal(integers.astype(float) * 2.0**-BITS, reference)
 

@@ -78,6 +78,29 @@ def _bit_columns(values: np.ndarray) -> np.ndarray:
     return (values[..., None] >> (BITS - 1 - np.arange(BITS, dtype=np.uint64))) & np.uint64(1)
 
 
+def sobol_integers(directions: np.ndarray, count: int) -> np.ndarray:
+    """The first ``count`` points of a Sobol sequence as integers in ``[0, 2^BITS)``: point
+    ``i`` is the exclusive or of the direction numbers whose bits are set in the Gray code
+    of ``i``.
+
+    Parameters
+    ----------
+    directions : ndarray of uint64, shape (dimensions, BITS)
+        Direction numbers, scrambled or not (:func:`direction_numbers`).
+    count : int
+
+    Returns
+    -------
+    ndarray of uint64, shape (count, dimensions)
+    """
+    index = np.arange(count, dtype=np.uint64)
+    gray = index ^ (index >> np.uint64(1))
+    integers = np.zeros((count, directions.shape[0]), dtype=np.uint64)
+    for k in range(BITS):
+        integers ^= ((gray >> np.uint64(k)) & np.uint64(1))[:, None] * directions[:, k]
+    return integers
+
+
 def scrambled_sobol_points(count: int, dimensions: int, seed: int) -> np.ndarray:
     """The first ``count`` points of the scrambled Sobol sequence in ``[0, 1)^dimensions``.
 
@@ -106,9 +129,4 @@ def scrambled_sobol_points(count: int, dimensions: int, seed: int) -> np.ndarray
     # output bit p of every direction number: row p of the scramble times its bits, mod 2
     scrambled_bits = np.einsum("dpk,djk->djp", scramble, _bit_columns(v)) & np.uint64(1)
     v = scrambled_bits @ (np.uint64(1) << (BITS - 1 - np.arange(BITS, dtype=np.uint64)))
-    index = np.arange(count, dtype=np.uint64)
-    gray = index ^ (index >> np.uint64(1))
-    integers = np.broadcast_to(shift, (count, dimensions)).copy()
-    for k in range(BITS):
-        integers ^= ((gray >> np.uint64(k)) & np.uint64(1))[:, None] * v[:, k]
-    return integers.astype(float) * 2.0**-BITS
+    return (sobol_integers(v, count) ^ shift).astype(float) * 2.0**-BITS
