@@ -241,17 +241,16 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
         for index, repo in enumerate(versions.values()):
             snakemake(root / f"template{index}", "demo_campaign", repo=repo)
         kinds = (f"cold {target}", "nothing to do")
-        times = {(version, kind, measure): [] for version in versions for kind in kinds for measure in (0, 1)}
+        times = {(version, kind): [] for version in versions for kind in kinds}
         for repeat in range(repeats + 1):
             for index, (version, repo) in enumerate(versions.items()):
                 workdir = root / f"run{index}"
                 shutil.rmtree(workdir, ignore_errors=True)
                 shutil.copytree(root / f"template{index}", workdir, symlinks=True)
                 for kind in kinds:
-                    wall_s, cpu_s = timed_run(workdir, target, repo=repo)
+                    wall_and_cpu_s = timed_run(workdir, target, repo=repo)
                     if repeat:  # the first pair is the warm-up
-                        times[version, kind, 0].append(wall_s)
-                        times[version, kind, 1].append(cpu_s)
+                        times[version, kind].append(wall_and_cpu_s)
     finally:
         subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(other)], check=True)
         shutil.rmtree(root, ignore_errors=True)
@@ -259,8 +258,9 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
     print(f"| {repeats} pairs, 2 cores | {this} | {base} | ratio of the pairs |")
     print("|---|---|---|---|")
     for kind in kinds:
-        for measure, name in enumerate(("wall", "CPU")):
-            mine, theirs = times[this, kind, measure], times[base, kind, measure]
+        for column, name in enumerate(("wall", "CPU")):
+            mine = [run[column] for run in times[this, kind]]
+            theirs = [run[column] for run in times[base, kind]]
             ratios = [a / b for a, b in zip(mine, theirs)]
             print(f"| {kind}, {name} s | {spread(mine, 2)} | {spread(theirs, 2)} | {spread(ratios, 3)} |")
 
