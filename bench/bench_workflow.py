@@ -231,11 +231,13 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
     """This checkout against ``revision`` in pairs (see the module's docstring)."""
     root = Path(tempfile.mkdtemp(prefix="lapjoint-versus-"))
     other = root / "checkout"
-    subprocess.run(
+    checkout = subprocess.run(
         ["git", "-C", str(REPO), "worktree", "add", "--detach", str(other), revision],
-        check=True,
-        capture_output=True,
+        stdout=subprocess.DEVNULL,
     )
+    if checkout.returncode:
+        shutil.rmtree(root, ignore_errors=True)
+        sys.exit(f"--versus: cannot check {revision!r} out (git says why above)")
     versions = {"this checkout": REPO, revision: other}
     try:
         for index, repo in enumerate(versions.values()):
