@@ -313,3 +313,21 @@ def test_stiffness_term_moves_frequency_not_damping():
     # energy: by no more than the (small) stiffness change itself below V_ref
     below = v <= 1.0
     assert np.max(np.abs(z1[below] / z0[below] - 1)) < 0.04
+
+
+@pytest.mark.parametrize("coordinate", [np.log(np.geomspace(0.01, 3.0, 48)), np.linspace(-1.0, 2.0, 7)])
+def test_gradient_along_grid_is_numpys_gradient_to_the_bit(coordinate):
+    # the fits' residuals rely on it: every fit is unchanged only if each value is
+    values = np.random.default_rng(0).standard_normal((5, 3, coordinate.size))
+    np.testing.assert_array_equal(
+        dsc.gradient_along_grid(values, coordinate), np.gradient(values, coordinate, axis=-1)
+    )
+
+
+def test_gradient_along_grid_of_a_quadratic_is_exact_inside():
+    # second-order central differences are exact for a quadratic on any spacing;
+    # the one-sided ends are off by the curvature times half the end step
+    x = np.log(np.geomspace(0.1, 10.0, 30))
+    got = dsc.gradient_along_grid(3.0 * x**2 - x, x)
+    np.testing.assert_allclose(got[1:-1], 6.0 * x[1:-1] - 1.0, rtol=0, atol=1e-12)
+    assert got[0] == pytest.approx(6.0 * x[0] - 1.0 + 3.0 * (x[1] - x[0]), abs=1e-12)

@@ -249,7 +249,9 @@ def test_run_order_trend_sees_a_joint_change_through_random_linear_damping():
         ln_zeta = linear_offset + drift + 0.005 * rng.standard_normal(v.size)
         plain = disc.run_order_trend(data, {"ln_zeta": ln_zeta}, n_tests=2)
         rel_f, s = np.zeros(v.size), np.full(v.size, 0.005)
-        offsets = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, run, n_runs, calibration)
+        offsets = disc.run_offsets(
+            rel_f, ln_zeta, zeta_model, s, s, disc.run_groups(run, n_runs, calibration)
+        )
         own = disc.apply_run_offsets(rel_f, ln_zeta, zeta_model, *offsets, run)[1]
         calibrated = disc.run_order_trend(
             data, {"ln_zeta": ln_zeta, "ln_zeta_calibrated": own, "calibration": calibration}, n_tests=2
@@ -293,7 +295,7 @@ def _runs_of_a_slipping_joint(drift: float, seed: int) -> tuple[disc.Configurati
     ln_zeta = np.log(measured) - np.log(model)
     calibration = disc.calibration_segments(v, run, np.arange(n_runs))
     rel_f, s = np.zeros(v.size), np.full(v.size, 0.01)
-    offsets = disc.run_offsets(rel_f, ln_zeta, model, s, s, run, n_runs, calibration)
+    offsets = disc.run_offsets(rel_f, ln_zeta, model, s, s, disc.run_groups(run, n_runs, calibration))
     own = disc.apply_run_offsets(rel_f, ln_zeta, model, *offsets, run)[1]
     plain = {"ln_zeta": ln_zeta, "ln_zeta_calibrated": own, "calibration": calibration}
     shaped = {**plain, "ln_zeta_slope": disc.damping_curve_slope(v, np.log(model), run)}
@@ -513,7 +515,7 @@ def test_run_offsets_recover_each_runs_frequency_and_linear_damping():
     rel_f = (1 + delta_f[run]) - 1
     ln_zeta = np.log(1 + delta_zeta0[run] / zeta_model)
     s = np.ones(run.size)
-    got_f, got_z = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, run, n_runs)
+    got_f, got_z = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, disc.run_groups(run, n_runs))
     np.testing.assert_allclose(got_f, delta_f, atol=1e-12)
     x = np.abs(delta_zeta0[run] / zeta_model)
     # ln(1 + x) ~ x: the linear solution is off by the order of x^2 / 2 relative
@@ -521,6 +523,27 @@ def test_run_offsets_recover_each_runs_frequency_and_linear_damping():
     rel, ln = disc.apply_run_offsets(rel_f, ln_zeta, zeta_model, got_f, got_z, run)
     assert np.max(np.abs(rel)) < 1e-12
     assert np.max(np.abs(ln)) < np.max(x) ** 2
+
+
+def test_centred_run_offsets_are_each_runs_offset_less_the_mean_of_the_runs_used():
+    rng = np.random.default_rng(5)
+    n_runs, per_run = 4, 20
+    run = np.repeat(np.arange(n_runs), per_run)
+    use = run != 2  # run 2 has no segment to estimate from
+    rel_f, ln_zeta = rng.normal(0, 1e-3, (2, 3, run.size))  # a batch of 3 parameter sets
+    zeta_model = np.full(run.size, 2e-3)
+    s = rng.uniform(0.5, 2.0, run.size)
+    groups = disc.run_groups(run, n_runs, use)
+    np.testing.assert_array_equal(groups.present, [True, True, False, True])
+    raw_f, raw_z = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, groups)
+    got_f, got_z = disc.centred_run_offsets(rel_f, ln_zeta, zeta_model, s, s, groups)
+    for raw, got in ((raw_f, got_f), (raw_z, got_z)):
+        expected = raw - np.mean(raw[:, groups.present], axis=-1, keepdims=True)
+        np.testing.assert_array_equal(got[:, groups.present], expected[:, groups.present])
+        np.testing.assert_array_equal(got[:, 2], 0.0)
+    # the frequency offset of a run is its segments' weighted mean residual
+    w = 1.0 / s[run == 1] ** 2
+    np.testing.assert_allclose(raw_f[:, 1], (rel_f[:, run == 1] @ w) / w.sum(), rtol=1e-12)
 
 
 def test_a_held_out_run_is_calibrated_only_on_its_unscored_lowest_segments():

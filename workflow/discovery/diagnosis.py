@@ -77,6 +77,8 @@ __all__ = [
     "residual_table",
     "amplitude_weights",
     "amplitude_bin",
+    "RunGroups",
+    "run_groups",
     "run_offsets",
     "calibration_segments",
     "heldout_standard_error",
@@ -481,15 +483,40 @@ RUN_OFFSET_FLOOR = 0.05
 applied (a run cannot have negative damping)."""
 
 
+@dataclass(frozen=True)
+class RunGroups:
+    """The segments of each run that its offsets are estimated from.
+
+    Built once per set of segments (:func:`run_groups`), so that a fit's residuals,
+    evaluated thousands of times, do not rebuild it.
+
+    Attributes
+    ----------
+    member : ndarray, shape (n, n_runs)
+        1.0 where segment ``i`` is of run ``r`` and used, else 0.0.
+    present : ndarray of bool, shape (n_runs,)
+        Runs with at least one used segment.
+    """
+
+    member: np.ndarray
+    present: np.ndarray
+
+
+def run_groups(run_index: np.ndarray, n_runs: int, use: np.ndarray | None = None) -> RunGroups:
+    """:class:`RunGroups` of segments of runs ``run_index`` (0-based, ``< n_runs``); only the
+    segments in ``use`` (default all) count."""
+    use = np.ones(run_index.size, dtype=bool) if use is None else use
+    member = (run_index[:, None] == np.arange(n_runs)[None, :]) & use[:, None]
+    return RunGroups(member.astype(float), member.any(axis=0))
+
+
 def run_offsets(
     rel_f: np.ndarray,
     ln_zeta: np.ndarray,
     zeta_model: np.ndarray,
     s_rel_f: np.ndarray,
     s_ln_zeta: np.ndarray,
-    run_index: np.ndarray,
-    n_runs: int,
-    use: np.ndarray | None = None,
+    groups: RunGroups,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Each run's own small-amplitude frequency and linear damping, given shared physics.
 
@@ -508,19 +535,17 @@ def run_offsets(
         The shared model's damping ratio at each segment.
     s_rel_f, s_ln_zeta : ndarray, shape (n,)
         Standard uncertainties (the fit weights are their inverse squares).
-    run_index : ndarray of int, shape (n,)
-    n_runs : int
-    use : ndarray of bool, shape (n,), optional
-        Segments the offsets are estimated from (default all).
+    groups : RunGroups
+        Each segment's run, and the segments the offsets are estimated from
+        (:func:`run_groups`).
 
     Returns
     -------
     delta_f, delta_zeta0 : ndarray, shape (..., n_runs)
         Relative frequency offset and linear-damping offset (damping ratio) of each run;
-        0 for a run with no segment in ``use``.
+        0 for a run with no segment used.
     """
-    use = np.ones(run_index.size, dtype=bool) if use is None else use
-    member = ((run_index[:, None] == np.arange(n_runs)[None, :]) & use[:, None]).astype(float)
+    member = groups.member
     w_f = 1.0 / s_rel_f**2
     count_f = w_f @ member
     delta_f = ((rel_f * w_f) @ member) / np.maximum(count_f, 1e-300)
@@ -547,17 +572,17 @@ def apply_run_offsets(
 
 
 def centred_run_offsets(
-    rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, run_index, n_runs, use=None
+    rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, groups: RunGroups
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`run_offsets` minus their mean over the runs present, so that the shared
     ``f_lin`` and ``zeta0`` are the runs' mean and stay identifiable."""
-    use = np.ones(run_index.size, dtype=bool) if use is None else use
-    present = np.zeros(n_runs, dtype=bool)
-    present[np.unique(run_index[use])] = True
-    delta_f, delta_z = run_offsets(rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, run_index, n_runs, use)
-    delta_f = np.where(present, delta_f - np.mean(delta_f[..., present], axis=-1, keepdims=True), 0.0)
-    delta_z = np.where(present, delta_z - np.mean(delta_z[..., present], axis=-1, keepdims=True), 0.0)
-    return delta_f, delta_z
+    present = groups.present
+    n_present = int(np.count_nonzero(present))
+    delta_f, delta_z = run_offsets(rel_f, ln_zeta, zeta_model, s_rel_f, s_ln_zeta, groups)
+    # the mean as np.mean computes it (sum, then division by the count), without its overhead
+    mean_f = np.add.reduce(delta_f[..., present], axis=-1, keepdims=True) / n_present
+    mean_z = np.add.reduce(delta_z[..., present], axis=-1, keepdims=True) / n_present
+    return np.where(present, delta_f - mean_f, 0.0), np.where(present, delta_z - mean_z, 0.0)
 
 
 CALIBRATION_FRACTION = 0.25
@@ -622,6 +647,7 @@ class _Problem:
         self.run_index = data.run_index[mask]
         self.n_runs = max(data.n_runs, 1)
         self.per_run = np.unique(self.run_index).size >= 2
+        self.groups = run_groups(self.run_index, self.n_runs)
         self.fixed = fixed_params(model, data, context)
         self.lo, self.hi = parameter_box(model, data)
 
@@ -638,9 +664,7 @@ class _Problem:
             ln_res = self.ln_zeta - np.log(np.maximum(zeta, 1e-12))
             f_res = self.freq / freq - 1.0
             if self.per_run:
-                offsets = centred_run_offsets(
-                    f_res, ln_res, zeta, self.s_f, self.s_z, self.run_index, self.n_runs
-                )
+                offsets = centred_run_offsets(f_res, ln_res, zeta, self.s_f, self.s_z, self.groups)
                 f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, *offsets, self.run_index)
             r = np.concatenate([ln_res / self.s_z, f_res / self.s_f], axis=-1)
         return np.where(np.isfinite(r), r, 1e6)
@@ -781,14 +805,12 @@ def model_residuals(
     ln_calibrated = ln_res
     if data.n_runs >= 2:
         calibration = calibration_segments(data.velocity_in_s, data.run_index, np.arange(n_runs))
-        own = run_offsets(
-            f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, data.run_index, n_runs, calibration
-        )
+        calibration_groups = run_groups(data.run_index, n_runs, calibration)
+        own = run_offsets(f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, calibration_groups)
         ln_calibrated = apply_run_offsets(f_res, ln_res, zeta, *own, data.run_index)[1]
         offsets = run_offsets if offsets_from is not None else centred_run_offsets
-        delta_f, delta_z = offsets(
-            f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, data.run_index, n_runs, offsets_from
-        )
+        fitted_groups = run_groups(data.run_index, n_runs, offsets_from)
+        delta_f, delta_z = offsets(f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, fitted_groups)
         f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, delta_f, delta_z, data.run_index)
         zeta = zeta * np.maximum(1.0 + delta_z[data.run_index] / np.maximum(zeta, 1e-12), RUN_OFFSET_FLOOR)
         freq = freq * (1.0 + delta_f[data.run_index])
