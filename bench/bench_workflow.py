@@ -27,6 +27,9 @@ version imports its own library (``PYTHONPATH``). A warm-up pair compiles Numba'
 kernels. It prints each version's median wall and CPU time (Snakemake and its jobs), then
 the median and range of the pairs' ratios, which stay meaningful when the machine's
 speed drifts; a run with nothing to do follows each cold run and is paired the same way.
+
+Every mode ends with the machine's speed before and after its runs: the CPU time of a
+fixed pure-Python loop, so that figures measured on different days can be compared.
 """
 
 import argparse
@@ -76,6 +79,23 @@ def children_cpu_s() -> float:
     """CPU seconds of every finished child process of this one, so far."""
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
+
+
+REFERENCE_ADDITIONS = 10_000_000
+
+
+def reference_loop_s(repeats: int = 3) -> float:
+    """Median CPU seconds of a fixed pure-Python loop (:data:`REFERENCE_ADDITIONS` integer
+    additions): the machine's speed at the time, so that figures measured on different
+    days can be compared (the workflow's jobs spend most of their CPU in the interpreter)."""
+    seconds = []
+    for _ in range(repeats):
+        start = time.process_time()
+        total = 0
+        for i in range(REFERENCE_ADDITIONS):
+            total += i
+        seconds.append(time.process_time() - start)
+    return statistics.median(seconds)
 
 
 def timed_run(workdir: Path, *args: str, repo: Path = REPO) -> tuple[float, float]:
@@ -267,20 +287,8 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
             print(f"| {kind}, {name} s | {spread(mine, 2)} | {spread(theirs, 2)} | {spread(ratios, 3)} |")
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--target", default="all")
-    parser.add_argument("--scale", action="store_true")
-    parser.add_argument("--only", nargs="+", choices=list(SCALE_CAMPAIGNS))
-    parser.add_argument("--versus", metavar="REVISION")
-    args = parser.parse_args()
-    if args.versus:
-        run_versus(args.versus, args.target, args.repeats)
-        return
-    if args.only:
-        run_scale(args.only, args.target, args.repeats, None)
-        return
+def run_demo(args: argparse.Namespace) -> None:
+    """The demo's generation, cold run, nothing to do and changed setting, then ``--scale``."""
     cold = f"cold {args.target}"
     timings: dict[str, list[float]] = {
         "demo generation": [],
@@ -307,6 +315,27 @@ def main() -> None:
     print_rule_table(last)
     if args.scale:
         run_scale(list(SCALE_CAMPAIGNS), args.target, args.repeats, statistics.median(timings[cold]))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--target", default="all")
+    parser.add_argument("--scale", action="store_true")
+    parser.add_argument("--only", nargs="+", choices=list(SCALE_CAMPAIGNS))
+    parser.add_argument("--versus", metavar="REVISION")
+    args = parser.parse_args()
+    before_s = reference_loop_s()
+    if args.versus:
+        run_versus(args.versus, args.target, args.repeats)
+    elif args.only:
+        run_scale(args.only, args.target, args.repeats, None)
+    else:
+        run_demo(args)
+    print(
+        f"\nThe machine: {REFERENCE_ADDITIONS:,} integer additions in a Python loop took "
+        f"{before_s:.2f} s of CPU before these runs and {reference_loop_s():.2f} s after (medians of 3)."
+    )
 
 
 if __name__ == "__main__":
