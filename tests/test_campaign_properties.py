@@ -126,9 +126,13 @@ def read_text(d: Dialect, header, rows):
 
 
 def tolerance(values, d: Dialect):
+    """Half a unit of the last written digit, plus the rounding of the parsed float (at most
+    half the spacing of doubles at the value; one spacing allowed): a value near 1e4
+    written with 9 decimals has 14 significant digits, near the 16 a double holds."""
+    spacing = np.spacing(np.abs(values))
     if d.scientific:
-        return 0.5 * 10.0 ** (-d.digits) * np.abs(values) * (1 + 1e-9) + 1e-300
-    return 0.5 * 10.0 ** (-d.digits) * (1 + 1e-9) + 1e-15
+        return 0.5 * 10.0 ** (-d.digits) * np.abs(values) * (1 + 1e-9) + spacing
+    return 0.5 * 10.0 ** (-d.digits) * (1 + 1e-9) + spacing
 
 
 @SETTINGS
