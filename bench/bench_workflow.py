@@ -28,8 +28,8 @@ kernels. It prints each version's median wall and CPU time (Snakemake and its jo
 the median and range of the pairs' ratios, which stay meaningful when the machine's
 speed drifts; a run with nothing to do follows each cold run and is paired the same way.
 
-Every mode ends with the machine's speed before and after its runs: the CPU time of a
-fixed pure-Python loop, so that figures measured on different days can be compared.
+Every mode ends with the CPU time of a fixed pure-Python loop before and after its runs:
+the interpreter's speed on the machine that day, printed beside the figures.
 """
 
 import argparse
@@ -86,8 +86,7 @@ REFERENCE_ADDITIONS = 10_000_000
 
 def reference_loop_s(repeats: int = 3) -> float:
     """Median CPU seconds of a fixed pure-Python loop (:data:`REFERENCE_ADDITIONS` integer
-    additions): the machine's speed at the time, so that figures measured on different
-    days can be compared (the workflow's jobs spend most of their CPU in the interpreter)."""
+    additions): the interpreter's speed on this machine at the time."""
     seconds = []
     for _ in range(repeats):
         start = time.process_time()
