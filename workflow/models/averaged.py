@@ -712,6 +712,11 @@ def gradient_along_grid(values: np.ndarray, coordinate: np.ndarray) -> np.ndarra
     values : ndarray, shape (..., G)
     coordinate : ndarray, shape (G,)
         Increasing, G >= 2.
+
+    Returns
+    -------
+    ndarray, shape (..., G)
+        ``d values / d coordinate``.
     """
     values = np.asarray(values, dtype=float)
     dx = np.diff(coordinate)
