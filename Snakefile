@@ -7,9 +7,12 @@
 
 from snakemake.utils import min_version
 
+from workflow.runtime.params_pandas import defer_pandas_import
 from workflow.runtime.scheduler import cancel_scheduler_timers
 
 min_version("9.0")
+# Snakemake would import pandas (0.3-0.7 s) to look for pandas params; ours are plain values
+defer_pandas_import()
 
 
 configfile: workflow.source_path("config.yaml")
