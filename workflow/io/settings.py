@@ -171,10 +171,14 @@ class ModelSettings:
 
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
 
-    global_samples: Annotated[int, Ge(4)] = 16
+    global_samples: Annotated[int, Ge(4)] = 4
     """Parameter sets tried in the global (quasi-random) stage of each time-domain
     fit, beside the optimum of the averaged model (which has its own global search
-    and is far cheaper); they guard against a poor averaged start."""
+    and is far cheaper); they guard against a poor averaged start. Each costs one
+    simulated and analysed ring-down. On 28 fits (the demo, two real campaigns,
+    hidden-effect campaigns generated with the averaged model and in the time domain)
+    the best of 16 had 3 to 870 times the averaged start's cost and was never chosen
+    (docs/performance.md)."""
 
     local_starts: Annotated[int, Ge(1)] = 1
     """Best candidates refined by the local optimiser."""
