@@ -45,6 +45,10 @@ STYLE = {
     "axes.spines.right": False,
     # plain tick labels: 123.30 rather than "+1.233e2" beside the axis
     "axes.formatter.useoffset": False,
+    # titles just above the panel, where matplotlib's automatic placement puts them when
+    # nothing is drawn above a panel (no top ticks, no offset text: readability.py);
+    # placing them costs a sixth of a figure's work
+    "axes.titley": 1.0,
 }
 
 DAMPING_LABEL = "equivalent damping ratio ζ (%)"
