@@ -177,7 +177,7 @@ class ModelSettings:
     and is far cheaper); they guard against a poor averaged start. Each costs one
     simulated and analysed ring-down. On 28 fits (the demo, two real campaigns,
     hidden-effect campaigns generated with the averaged model and in the time domain)
-    the best of 16 had 3 to 870 times the averaged start's cost and was never chosen
+    the best of 16 had 3 to 874 times the averaged start's cost and was never chosen
     (docs/performance.md)."""
 
     local_starts: Annotated[int, Ge(1)] = 1
