@@ -29,7 +29,9 @@ def store_params_without_importing_pandas(store):
     """Wrap Snakemake's ``_safely_store_params``: while pandas is not imported, its
     ``import pandas`` fails as if pandas were absent, which that function handles by
     skipping its pandas checks. A Snakemake that no longer handles it gets the plain
-    call."""
+    call. For the length of the call an import of pandas in another thread of
+    Snakemake's process would fail as well; nothing in this workflow's Snakemake process
+    imports pandas."""
 
     def wrapper(self, params):
         if sys.modules.get("pandas") is not None:
@@ -58,7 +60,11 @@ def defer_pandas_import() -> list[str]:
         internals moved), and the workflow runs as before.
     """
     from snakemake import persistence
-    from snakemake.iocontainers import Snakemake
+
+    try:
+        from snakemake.iocontainers import Snakemake
+    except ImportError:
+        Snakemake = None
 
     replaced = []
     for name in ("PersistenceBase", "Persistence"):
