@@ -819,3 +819,37 @@ def test_power_law_written_as_cells_keeps_the_stiffness_released_below_the_top_a
     expected = 0.02 / 1.1 * np.diff(np.sqrt(edges))
     expected[0] += 0.02 / 1.1 * np.sqrt(edges[0])
     np.testing.assert_allclose(shares, expected, rtol=1e-12)
+
+
+def test_a_local_fit_takes_residuals_and_jacobian_from_one_batch_and_lands_where_separate_calls_do():
+    from scipy import optimize
+
+    from workflow.models.averaged import RESPONSE_ORDER
+
+    segments = synthetic_segments("dahl", DAHL, seed=4)
+    data = disc.prepare_configuration(segments, "c", RESPONSE_ORDER["acceleration"])
+    context = disc.FitContext(float(np.quantile(data.velocity_in_s, 0.9)))
+    problem = disc._Problem(disc.MODELS["dahl"], data, disc.scatter_of(data), np.ones(data.n, bool), context)
+    start = np.full(len(disc.MODELS["dahl"].params), 0.4)
+    batches = []
+    evaluate = problem.residuals
+    problem.residuals = lambda unit: batches.append(np.atleast_2d(unit).shape[0]) or evaluate(unit)
+
+    unit, cost = disc._local_fit(problem, start, max_nfev=60)
+    together = list(batches)
+    batches.clear()
+    separate = optimize.least_squares(
+        lambda u: problem.residuals(u)[0],
+        start,
+        jac=problem.jacobian,
+        bounds=(0.0, 1.0),
+        method="trf",
+        max_nfev=60,
+        x_scale=1.0,
+    )
+    # every Jacobian came with the residuals it was asked at: one batch per evaluation
+    assert set(together) == {start.size + 1}
+    assert len(together) < len(batches) == separate.nfev + separate.njev
+    # the same minimum, to the optimiser's own tolerance (ftol 1e-8 on the cost)
+    assert cost == pytest.approx(float(np.mean(separate.fun**2)), rel=1e-6)
+    assert unit == pytest.approx(separate.x, abs=1e-4)

@@ -669,22 +669,49 @@ class _Problem:
             r = np.concatenate([ln_res / self.s_z, f_res / self.s_f], axis=-1)
         return np.where(np.isfinite(r), r, 1e6)
 
-    def jacobian(self, unit: np.ndarray, step: float = 1e-5) -> np.ndarray:
+    def residuals_and_jacobian(self, unit: np.ndarray, step: float = 1e-5) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals at ``unit`` and their forward-difference Jacobian, from one batch."""
         k = unit.size
         points = np.repeat(unit[None, :], k + 1, axis=0)
         steps = np.where(unit + step <= 1.0, step, -step)
         points[np.arange(1, k + 1), np.arange(k)] += steps
         r = self.residuals(points)
-        return ((r[1:] - r[0]) / steps[:, None]).T
+        return r[0], ((r[1:] - r[0]) / steps[:, None]).T
+
+    def jacobian(self, unit: np.ndarray, step: float = 1e-5) -> np.ndarray:
+        return self.residuals_and_jacobian(unit, step)[1]
+
+
+class _Evaluations:
+    """A problem's residuals and Jacobian for the optimiser, evaluated together: the
+    optimiser asks for the Jacobian at the point whose residuals it has just accepted,
+    and a batch of the point and its neighbours costs less than the point and then the
+    batch."""
+
+    def __init__(self, problem: _Problem):
+        self.problem = problem
+        self.unit: np.ndarray | None = None
+        self.jac: np.ndarray | None = None
+
+    def residuals(self, unit: np.ndarray) -> np.ndarray:
+        r, self.jac = self.problem.residuals_and_jacobian(unit)
+        self.unit = np.array(unit, copy=True)
+        return r
+
+    def jacobian(self, unit: np.ndarray, *_) -> np.ndarray:
+        if self.unit is not None and np.array_equal(unit, self.unit):
+            return self.jac
+        return self.problem.jacobian(unit)
 
 
 def _local_fit(problem: _Problem, start: np.ndarray, max_nfev: int) -> tuple[np.ndarray, float]:
     from scipy import optimize  # here: the campaign's diagnose job fits nothing
 
+    evaluations = _Evaluations(problem)
     res = optimize.least_squares(
-        lambda u: problem.residuals(u)[0],
+        evaluations.residuals,
         np.clip(start, 1e-6, 1 - 1e-6),
-        jac=problem.jacobian,
+        jac=evaluations.jacobian,
         bounds=(0.0, 1.0),
         method="trf",
         max_nfev=max_nfev,
