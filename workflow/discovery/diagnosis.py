@@ -646,8 +646,8 @@ class _Problem:
         self.s_f = scatter.rel_f[mask]
         self.run_index = data.run_index[mask]
         self.n_runs = max(data.n_runs, 1)
-        self.per_run = np.unique(self.run_index).size >= 2
         self.groups = run_groups(self.run_index, self.n_runs)
+        self.per_run = np.count_nonzero(self.groups.present) >= 2
         self.fixed = fixed_params(model, data, context)
         self.lo, self.hi = parameter_box(model, data)
 
