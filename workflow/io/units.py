@@ -26,14 +26,6 @@ NEWTON_LBF: float = 1.0 / (0.45359237 * 9.80665)
 RESPONSE_QUANTITIES: tuple[str, ...] = ("acceleration", "velocity", "displacement")
 """Response quantities a campaign may record."""
 
-INTERNAL_UNITS: dict[str, str] = {
-    "acceleration": "in/s^2",
-    "velocity": "in/s",
-    "displacement": "in",
-    "force": "lbf",
-}
-"""The internal unit of each quantity."""
-
 _FACTORS_TO_INTERNAL: dict[str, dict[str, float]] = {
     "acceleration": {"g": STANDARD_GRAVITY_IN_S2, "m/s^2": METRE_IN, "in/s^2": 1.0},
     "velocity": {"m/s": METRE_IN, "in/s": 1.0},

@@ -254,42 +254,6 @@ def nonlinear_mode_response(t_s, table: ModeTable, omega0_rad_s, zeta0, modal_pe
     return acc
 
 
-def integrate_patch_ringdown(
-    xi0, omega0_rad_s, zeta0, slip_per_xi, stiffness_lbf_in, slip_force_lbf, dt_s, n_steps
-):
-    """Direct time integration of mode 1 with the patch forces (for validation).
-
-    ``xi'' + 2 zeta0 w0 xi' + w0^2 xi + sum s (F - k s xi) = 0`` (the stuck
-    stiffness is already in ``w0``), central differences, Jenkins forces
-    updated from each step's slip increment.  Starts at rest at ``xi0``
-    with every patch unloaded-then-stuck at that displacement (virgin loading).
-
-    Returns
-    -------
-    xi : ndarray, shape (n_steps,)
-    """
-    s = np.asarray(slip_per_xi, dtype=float).ravel()
-    k = np.broadcast_to(stiffness_lbf_in, np.shape(slip_per_xi)).ravel()
-    fs = np.broadcast_to(slip_force_lbf, np.shape(slip_per_xi)).ravel()
-    force = contact.jenkins_force_update(np.zeros_like(s), s * xi0, k, fs)
-    xi = np.empty(n_steps)
-    x_prev, x = xi0, xi0
-    v = 0.0
-    # first step from rest (Taylor)
-    acc = -(omega0_rad_s**2) * x - np.dot(s, force - k * s * x)
-    x_next = x + 0.5 * dt_s**2 * acc
-    xi[0] = x
-    for n in range(1, n_steps):
-        x_prev, x = x, x_next
-        force = contact.jenkins_force_update(force, s * (x - x_prev), k, fs)
-        v = (x - x_prev) / dt_s
-        acc = -(omega0_rad_s**2) * x - 2 * zeta0 * omega0_rad_s * v - np.dot(s, force - k * s * x)
-        # v lags half a step; with >= 200 steps per cycle the damping error is < 1 %
-        x_next = 2 * x - x_prev + dt_s**2 * acc
-        xi[n] = x
-    return xi
-
-
 # --------------------------------------------------------- configurations
 
 

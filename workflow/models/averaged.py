@@ -68,7 +68,7 @@ Units: velocity amplitudes in in/s, frequencies in Hz, angular frequencies in ra
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -937,7 +937,3 @@ def model_curves(
         n_grid=64,
     )
     return grid(model, params)
-
-
-#: Callable type of a curve evaluator (for type hints elsewhere).
-CurveFunction = Callable[[AveragedModel, Mapping[str, ArrayLike]], tuple[np.ndarray, np.ndarray]]

@@ -116,17 +116,6 @@ def dahl_secant_stiffness(amplitude, sigma, coulomb_force):
     return np.where(s > 1e-8, k, sigma)
 
 
-def dahl_force_update(force, displacement_increment, sigma, coulomb_force):
-    """Advance the Dahl force over a monotone displacement increment (exact).
-
-    On a branch of constant velocity sign ``d``, ``dF/dx = sigma (1 - d F / Fc)``
-    integrates to ``F = d Fc + (F0 - d Fc) exp(-sigma |dx| / Fc)``.
-    """
-    direction = np.sign(displacement_increment)
-    target = direction * coulomb_force
-    return target + (force - target) * np.exp(-sigma * np.abs(displacement_increment) / coulomb_force)
-
-
 # -------------------------------------------------------- bolted interface
 
 
@@ -179,11 +168,6 @@ class ContactPatches:
     """Tangential stuck stiffness of each patch, lbf/in."""
     slip_force_lbf: np.ndarray
     """Coulomb limit mu p A of each patch, lbf."""
-
-    @property
-    def slip_onset_in(self) -> np.ndarray:
-        """Slip amplitude at which each patch starts to slide, in."""
-        return self.slip_force_lbf / self.stiffness_lbf_in
 
 
 def contact_patches(bearing_area_in2: float, params: JointParameters | None = None) -> ContactPatches:

@@ -44,7 +44,6 @@ MODELS = ("dahl", "lugre")
 """Names of the friction models implemented here."""
 
 LUGRE_PARAMS = ("sigma0", "sigma1", "alpha0", "alpha1", "alpha2", "v0", "vd")
-DAHL_PARAMS = ("sigma", "fc")
 
 
 # --------------------------------------------------------------------------- Dahl

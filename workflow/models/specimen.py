@@ -539,37 +539,3 @@ def first_mode(
         pitch_inertia_lbf_s2_in=inertia,
         centre_of_mass_in=x_cm,
     )
-
-
-def uniform_beam_first_frequency_hz(
-    length_in: float, ei_lbf_in2: float, mass_per_length_lbf_s2_in2: float
-) -> float:
-    """Closed-form first flexible frequency of a uniform free-free beam, Hz.
-
-    ``f1 = (4.73004)^2 / (2 pi) * sqrt(EI / (m L^4))`` (22.373 = 4.73004^2).
-    """
-    return 4.730040745**2 / (2 * np.pi) * np.sqrt(ei_lbf_in2 / (mass_per_length_lbf_s2_in2 * length_in**4))
-
-
-def uniform_beam_frequencies_hz(
-    length_in: float, n_elements: int, n_modes: int = 3, geometry: SpecimenGeometry | None = None
-) -> np.ndarray:
-    """First flexible frequencies of a uniform free-free steel beam by this FE
-    formulation (for checking the element matrices against closed forms), Hz."""
-    geometry = geometry or SpecimenGeometry()
-    x = np.linspace(0.0, length_in, n_elements + 1)
-    n = 2 * x.size
-    k = np.zeros((n, n))
-    m = np.zeros((n, n))
-    for el in range(n_elements):
-        kb, mb = _beam_element(
-            STEEL_E_PSI * geometry.inertia_in4,
-            STEEL_DENSITY_LBF_S2_IN4 * geometry.area_in2,
-            x[el + 1] - x[el],
-        )
-        idx = np.arange(2 * el, 2 * el + 4)
-        k[np.ix_(idx, idx)] += kb
-        m[np.ix_(idx, idx)] += mb
-    lam = scipy.linalg.eigh(k, m, eigvals_only=True)
-    freqs = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
-    return freqs[2 : 2 + n_modes]  # two rigid-body modes first
