@@ -55,8 +55,9 @@ class AnalysisSettings:
 
     noise_floor_factor: Annotated[float, Ge(1.0)] = 10.0
     """A segment is kept only while its smallest envelope value exceeds this
-    factor times the in-band noise floor (estimated from the record's quietest
-    stretch). 10 keeps segments 20 dB above the floor."""
+    factor times the in-band noise floor (the rms envelope of the in-band noise,
+    measured on the residual of a decaying phasor fitted window by window:
+    docs/decay_analysis.md). 10 keeps segments 20 dB above the floor."""
 
     edge_time_constants: Annotated[float, Ge(0.0)] = 3.0
     """Segments closer than this many filter time constants (the band-pass
