@@ -386,7 +386,8 @@ contact. The data cannot bound it where the joint stays in pre-sliding (common o
 clamped washers): Dahl's damping there grows as ``0.21 beta V / V_s`` and its softening as
 ``0.19 beta (V / V_s)^2``, so a damping that grows in proportion to amplitude with little
 softening (a velocity-squared loss) is fitted by a joint as stiff as the softening's
-smallness asks, ``beta = 4.3 zeta_joint^2 / softening``. The specimen's contact model
+smallness asks, ``beta = 4.2 zeta_joint^2 / softening`` (exact coefficients ``2/(3 pi)``
+and ``3/16``). The specimen's contact model
 (:mod:`workflow.models.contact`) puts the stuck washers' contact at 3-4 % of the modal
 stiffness, and the real campaigns the project was checked on fit 1-2 %; a tenth allows
 2.5 times the stiffest (a 5 % frequency drop at full slip). With half (a 29 % drop) a Dahl
