@@ -131,6 +131,18 @@ def test_figures_and_fit_tables_exist(finished_run):
     assert set(hypotheses["verdict"]) <= {"supported", "contradicted", "inconclusive", "not applicable"}
 
 
+def test_every_column_named_with_a_unit_carries_it(finished_run):
+    # docs/outputs.md: where a column has a unit, the schema carries it
+    _, workdir, _ = finished_run
+    tables = sorted((workdir / "results/tables").glob("*.parquet"))
+    assert len(tables) >= 8
+    for path in tables:
+        units = column_units(path)
+        for name in pd.read_parquet(path).columns:
+            if re.search(r"(_hz|_s|_in2|_std)$", name) or name.startswith("zeta"):
+                assert name in units, (path.name, name)
+
+
 def test_nothing_to_do_after_a_complete_run(finished_run):
     campaign, workdir, _ = finished_run
     result = snakemake(workdir, "-n", "-c2", "measured", "--config", f"campaign={campaign}", GROUPED)

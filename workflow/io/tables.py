@@ -39,6 +39,13 @@ COLUMN_UNITS: dict[str, str] = {
     "band_low_hz": "Hz",
     "band_high_hz": "Hz",
     "fit_rms": "1 (rms residual of ln envelope)",
+    "zeta_low": "1 (fraction of critical damping)",
+    "zeta_high": "1 (fraction of critical damping)",
+    "amplitude_low_in_s": "in/s",
+    "amplitude_high_in_s": "in/s",
+    "sample_rate_hz": "Hz",
+    "record_duration_s": "s",
+    "coherence_at_mode": "1 (0-1)",
 }
 
 
