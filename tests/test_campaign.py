@@ -16,6 +16,7 @@ from workflow.io.campaign import (
     load_campaign,
     read_run,
 )
+from workflow.io.recording_time import run_order
 
 FS_HZ = 2560.0
 N = 300
@@ -224,6 +225,33 @@ def test_list_runs_orders_and_paths(tmp_path):
         RunFile("alpha", "run02", "alpha/run02.txt"),
         RunFile("alpha", "run10", "alpha/run10.txt"),
     ]
+
+
+def test_runs_are_listed_in_the_run_order_the_diagnosis_uses(tmp_path):
+    # "run1-b.txt" sorts before "run1.txt" as a file name, after "run1" as a run name;
+    # the tables and the run-order test must agree on one order
+    campaign = write_campaign(
+        tmp_path, YAML_NO_FORCE, {"cfg/run1-b.txt": "", "cfg/run1.txt": "", "cfg/run0.txt": ""}
+    )
+    names = [run.run for run in list_runs(tmp_path, campaign)]
+    assert names == ["run0", "run1", "run1-b"]
+    assert run_order(names, {})[0] == names
+
+
+def test_folders_starting_with_a_dot_are_skipped_unless_the_glob_names_one(tmp_path):
+    files = {
+        "cfg/a/run01.txt": "",
+        "cfg/.ipynb_checkpoints/run01-checkpoint.txt": "",
+        "cfg/.kept/run02.txt": "",
+    }
+    everywhere = YAML_NO_FORCE.replace("cfg: {}", 'cfg: {files: "cfg/*/*.txt"}')
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+    campaign = write_campaign(tmp_path / "a", everywhere, files)
+    assert [run.path for run in list_runs(tmp_path / "a", campaign)] == ["cfg/a/run01.txt"]
+    named = YAML_NO_FORCE.replace("cfg: {}", 'cfg: {files: "cfg/.kept/*.txt"}')
+    campaign = write_campaign(tmp_path / "b", named, files)
+    assert [run.path for run in list_runs(tmp_path / "b", campaign)] == ["cfg/.kept/run02.txt"]
 
 
 def test_list_runs_rejects_two_runs_with_one_name(tmp_path):

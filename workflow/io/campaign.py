@@ -16,8 +16,10 @@ are run against them):
 - ``name`` may be omitted from campaign.yaml; the campaign folder's name is used.
 - A configuration given with no settings (``decay:`` or ``decay: {}``) takes the defaults.
 - Run files are matched by the configuration's glob; names starting with ``.`` (e.g.
-  macOS ``._run01.txt`` companions) are skipped, as a shell glob would. Runs are
-  sorted by plain (lexical) file name.
+  macOS ``._run01.txt`` companions), and files in folders whose names start with ``.``
+  (``.ipynb_checkpoints/``) unless the glob names such a folder, are skipped, as a shell
+  glob would. Runs are sorted by plain (lexical) run name, the file name without its
+  extension, which is the name every table and the run order use.
 - A response column whose unit (in parentheses) differs from campaign.yaml's response
   unit is an error naming both, not a silent conversion: the contract makes any
   file/campaign.yaml disagreement an error, and one of the two labels is then wrong.
@@ -583,7 +585,8 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
     the campaign folder are run files. Directories, links leading outside, other
     special files and unreadable files are excluded with their reason; a glob that
     matches nothing gives one excluded entry that names ``configurations.<name>.files``.
-    Names starting with ``.`` are skipped, as a shell glob would.
+    Names starting with ``.``, and folders starting with ``.`` that the glob does not
+    name, are skipped, as a shell glob would.
 
     Parameters
     ----------
@@ -595,7 +598,8 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
     Returns
     -------
     runs : list of RunFile
-        Configurations in campaign.yaml order, runs sorted by file name (run order).
+        Configurations in campaign.yaml order, runs sorted by run name (the file name
+        without its extension: the file-name run order).
     excluded : list of ExcludedPath
         Everything else the globs lead to, in the same order.
 
@@ -610,10 +614,20 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
     runs: list[RunFile] = []
     excluded: list[ExcludedPath] = []
     for configuration, spec in campaign.configurations.items():
+        # a shell's * leaves out dot-names; pathlib's does not
+        names_dot_folder = any(part.startswith(".") for part in Path(spec.files).parts[:-1])
         try:
             matches = sorted(
-                (p for p in root.glob(spec.files) if not p.name.startswith(".")),
-                key=lambda p: (p.name, p.as_posix()),
+                (
+                    p
+                    for p in root.glob(spec.files)
+                    if not p.name.startswith(".")
+                    and (
+                        names_dot_folder
+                        or not any(part.startswith(".") for part in p.relative_to(root).parts)
+                    )
+                ),
+                key=lambda p: (p.stem, p.as_posix()),
             )
         except (ValueError, NotImplementedError, IndexError) as error:
             raise CampaignFormatError(
@@ -656,7 +670,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
 
 def list_runs(campaign_dir: str | Path, campaign: Campaign) -> list[RunFile]:
     """The run files of :func:`scan_campaign` (regular, readable files inside the campaign
-    folder), configurations in campaign.yaml order, runs sorted by file name."""
+    folder), configurations in campaign.yaml order, runs sorted by run name."""
     return scan_campaign(campaign_dir, campaign)[0]
 
 
