@@ -6,7 +6,7 @@ prediction."""
 import json
 from pathlib import Path
 
-from workflow.discovery.diagnosis import FitContext, campaign_document, residual_table
+from workflow.discovery.diagnosis import FitContext, campaign_document, configuration_outcomes, residual_table
 from workflow.io.interim import read_campaign, read_configuration_diagnosis
 from workflow.io.tables import read_table, write_json, write_table
 from workflow.io.units import UNIT_SYSTEMS
@@ -15,13 +15,8 @@ from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
 campaign = read_campaign(snakemake.input.campaign_settings)
-# in the order of the segments table, as when one job diagnosed every configuration
-outcomes = sorted(
-    (read_configuration_diagnosis(path) for path in snakemake.input.configurations), key=lambda o: o.order
-)
-present = [outcome for outcome in outcomes if outcome.order >= 0]
-diagnoses = {o.configuration: o.diagnosis for o in present if o.diagnosis is not None}
-skipped = {o.configuration: o.skipped for o in present if o.diagnosis is None}
+outcomes = [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
+diagnoses, skipped = configuration_outcomes(outcomes)
 context = FitContext(outcomes[0].reference_velocity_in_s)
 document = campaign_document(campaign.name, context, diagnoses, skipped)
 units = UNIT_SYSTEMS[snakemake.params.units]

@@ -52,7 +52,8 @@ if rows.size:
             time.perf_counter() - started,
         )
 else:
-    log.info("%s: no segments: left out of the diagnosis", configuration)
+    skipped = "no kept segment: every run excluded (runs.parquet) or every segment rejected (segments_rejected.parquet)"
+    log.warning("%s: not diagnosed: %s", configuration, skipped)
 write_configuration_diagnosis(
     snakemake.output.diagnosis,
     DiagnosedConfiguration(

@@ -43,7 +43,9 @@ def test_configurations_diagnosed_apart_and_read_back_give_the_campaigns_documen
     for name in ["absent", "a2", "a1", "few", "a0"]:
         rows = np.flatnonzero(segments["configuration"] == name)
         result = (
-            disc.diagnose_configuration_segments(segments, name, context, settings=FAST) if rows.size else ""
+            disc.diagnose_configuration_segments(segments, name, context, settings=FAST)
+            if rows.size
+            else "no kept segment"
         )
         outcome = DiagnosedConfiguration(
             name,
@@ -54,14 +56,14 @@ def test_configurations_diagnosed_apart_and_read_back_give_the_campaigns_documen
         )
         write_configuration_diagnosis(tmp_path / f"{name}.npz", outcome)
         outcomes.append(read_configuration_diagnosis(tmp_path / f"{name}.npz"))
-    present = sorted((o for o in outcomes if o.order >= 0), key=lambda o: o.order)
-    diagnoses = {o.configuration: o.diagnosis for o in present if o.diagnosis is not None}
-    skipped = {o.configuration: o.skipped for o in present if o.diagnosis is None}
+    diagnoses, skipped = disc.configuration_outcomes(outcomes)
+    # a configuration with no segment (all its runs excluded) is listed, last, not dropped
+    assert list(skipped) == ["few", "absent"]
     document = disc.campaign_document(
         "fanout", disc.FitContext(outcomes[0].reference_velocity_in_s), diagnoses, skipped
     )
+    assert document["skipped_configurations"].pop("absent") == "no kept segment"
     assert json.dumps(document, sort_keys=False) == json.dumps(whole, sort_keys=False)
-    assert list(document["skipped_configurations"]) == ["few"]
     assert document["across_configurations"]["applicable"]
     pd.testing.assert_frame_equal(disc.residual_table(diagnoses), disc.residual_table(details))
 

@@ -13,6 +13,7 @@ short runs check ``strict: true`` and an unknown key in campaign.yaml.
 from __future__ import annotations
 
 import functools
+import json
 import os
 import re
 import stat
@@ -21,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from helpers import checksums, run_snakemake
+from helpers import CHEAP, checksums, run_snakemake, write_run_with_bad_cell
 
 from workflow.lab import virtual_lab
 from workflow.lab.virtual_lab import generate_campaign
@@ -535,3 +536,24 @@ def test_quality_rows_mark_checks_that_do_not_apply():
     assert snr["reason"].startswith("signal-to-noise 14 dB is below 20 dB")
     assert segments["value"] == 2 and not segments["passed"]
     assert segments["reason"] == "only 2 usable log-decrement segments (at least 3 needed)"
+
+
+def test_configuration_with_every_run_excluded_is_listed_in_the_diagnosis(tmp_path):
+    # the diagnosis job once failed on such a configuration, and `all` wrote no
+    # diagnosis.json for the configurations that were fine
+    campaign = tmp_path / "campaign"
+    generate_campaign(
+        campaign, seed=5, runs_per_configuration=3, configurations={"no_washer": 1.36, "small_washer": 0.17}
+    )
+    for run in sorted((campaign / "small_washer").glob("*.txt")):
+        write_run_with_bad_cell(run, run)
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    result = snakemake(workdir, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP)
+    assert result.returncode == 0, result.stderr[-6000:]
+    runs = pd.read_parquet(workdir / "results/tables/runs.parquet")
+    assert (runs.loc[runs["configuration"] == "small_washer", "status"] == "excluded").all()
+    document = json.loads((workdir / "results/diagnosis.json").read_text())
+    assert list(document["configurations"]) == ["no_washer"]
+    assert "every run excluded" in document["skipped_configurations"]["small_washer"]
+    assert (workdir / "results/figures/discovery_residuals_small_washer.png").stat().st_size > 5_000

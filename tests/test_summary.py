@@ -41,6 +41,12 @@ def test_summary_shows_the_first_reasons_and_counts_the_rest():
     assert "... and 4 more" in text
 
 
+def test_summary_names_a_configuration_that_was_not_diagnosed_and_why():
+    document = {**DOCUMENT, "skipped_configurations": {"large_washer": "no kept segment: every run excluded"}}
+    text = run_summary(document, runs_table(excluded=0))
+    assert "  large_washer: not diagnosed (no kept segment: every run excluded)" in text
+
+
 def test_summary_without_exclusions_does_not_point_to_reasons():
     text = run_summary(DOCUMENT, runs_table(excluded=0))
     assert "0 excluded" in text and "runs.csv" not in text

@@ -1467,7 +1467,7 @@ def decide(
     v = eligible[best]
     if v["residual_significant"] and v["heldout_error"] >= RESIDUAL_GAIN * baseline_error:
         return "unknown", (
-            f"the best candidate ({best}) leaves a significant misfit and cuts the "
+            f"the best eligible candidate ({best}) leaves a significant misfit and cuts the "
             f"held-out error only to {v['heldout_error'] / baseline_error:.2f} of "
             "the baseline's"
         )
@@ -2220,6 +2220,17 @@ def across_configurations(
 
 
 # ------------------------------------------------------------------- campaign
+def configuration_outcomes(outcomes: Sequence) -> tuple[dict[str, ConfigurationDiagnosis], dict[str, str]]:
+    """The diagnoses and the skipped configurations (name -> why) of the configurations'
+    outcomes (:class:`workflow.io.interim.DiagnosedConfiguration`), in the order of the
+    segments table; a configuration with no segment in it (``order`` -1: every run
+    excluded, or every segment rejected) comes last among the skipped, never dropped."""
+    ordered = sorted(outcomes, key=lambda o: (o.order < 0, o.order))
+    diagnoses = {o.configuration: o.diagnosis for o in ordered if o.diagnosis is not None}
+    skipped = {o.configuration: o.skipped for o in ordered if o.diagnosis is None}
+    return diagnoses, skipped
+
+
 def campaign_verdict(causes: Sequence[str], ratios: Sequence[float]) -> str:
     """Campaign cause: the most frequent configuration cause other than ``none``.
 

@@ -97,7 +97,26 @@ def residuals_figure(
         each segment divided by the measured scatter, the +-2 band (95 % of the
         segments of a model that fits) and each model's mean per quarter decade; the
         residual axis is linear within +-4 and logarithmic beyond (misfits span decades).
+        A configuration the document lists as not diagnosed (``skipped_configurations``)
+        gets one panel that says why.
     """
+    skipped = document.get("skipped_configurations") or {}
+    if "configurations" in document and configuration not in document["configurations"]:
+        reason = skipped.get(configuration, "not in the diagnosis document")
+        with plt.rc_context(STYLE):
+            fig, ax = plt.subplots(figsize=(9.0, 3.2))
+            ax.text(
+                0.5,
+                0.5,
+                f"{configuration}: not diagnosed\n({reason})",
+                ha="center",
+                va="center",
+                wrap=True,
+                transform=ax.transAxes,
+            )
+            ax.set_axis_off()
+            ax.set_title(f"{configuration}: residuals of the friction models")
+            return fig
     entry = _configuration_document(document, configuration)
     rows = residuals[residuals["configuration"] == configuration]
     cause = entry.get("cause", "?")

@@ -14,6 +14,11 @@ REASONS_SHOWN = 3
 """Excluded runs whose reason is printed; the rest are counted (runs.csv has them all)."""
 
 
+def _within(line: str, width: int) -> str:
+    """``line`` cut to ``width`` characters, an ellipsis marking the cut."""
+    return line if len(line) <= width else line[: width - 1] + "…"
+
+
 def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> str:
     """Plain-text summary of a finished analysis.
 
@@ -38,13 +43,14 @@ def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> s
         gain = (entry.get("gain") or {}).get("ratio")
         gain_text = f", held-out error ratio {gain:.2f}" if isinstance(gain, int | float) else ""
         lines.append(f"  {name}: {cause_name(entry.get('cause'))}{gain_text}")
+    for name, reason in (document.get("skipped_configurations") or {}).items():
+        lines.append(_within(f"  {name}: not diagnosed ({' '.join(str(reason).split())})", width))
     used = runs[runs["status"] == "used"]
     excluded = runs[runs["status"] != "used"]
     lines.append(f"Runs: {len(used)} used, {len(excluded)} excluded (of {len(runs)} files)")
     for row in excluded.head(REASONS_SHOWN).itertuples():
         reason = " ".join(str(row.reason).split())
-        line = f"  excluded {row.path}: {reason}"
-        lines.append(line if len(line) <= width else line[: width - 1] + "…")
+        lines.append(_within(f"  excluded {row.path}: {reason}", width))
     if len(excluded) > REASONS_SHOWN:
         lines.append(f"  ... and {len(excluded) - REASONS_SHOWN} more")
     if len(excluded):
