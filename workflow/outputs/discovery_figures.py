@@ -42,6 +42,13 @@ def _configuration_document(document: Mapping, configuration: str | None = None)
     return document
 
 
+def _message_panel(ax: plt.Axes, message: str, title: str) -> None:
+    """A panel that says why there is nothing to plot."""
+    ax.text(0.5, 0.5, message, ha="center", va="center", wrap=True, transform=ax.transAxes)
+    ax.set_axis_off()
+    ax.set_title(title)
+
+
 def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4) -> tuple[np.ndarray, np.ndarray]:
     """Mean residual in bins of ``1 / per_decade`` decade of amplitude (>= 3 segments)."""
     if v.size == 0:
@@ -105,17 +112,11 @@ def residuals_figure(
         reason = skipped.get(configuration, "not in the diagnosis document")
         with plt.rc_context(STYLE):
             fig, ax = plt.subplots(figsize=(9.0, 3.2))
-            ax.text(
-                0.5,
-                0.5,
+            _message_panel(
+                ax,
                 f"{configuration}: not diagnosed\n({reason})",
-                ha="center",
-                va="center",
-                wrap=True,
-                transform=ax.transAxes,
+                f"{configuration}: residuals of the friction models",
             )
-            ax.set_axis_off()
-            ax.set_title(f"{configuration}: residuals of the friction models")
             return fig
     entry = _configuration_document(document, configuration)
     rows = residuals[residuals["configuration"] == configuration]
@@ -269,17 +270,11 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
         fig, ax = plt.subplots(figsize=(9.0, 4.6))
         if not across.get("applicable"):
             reason = across.get("reason", "no across-configuration prediction in the document")
-            ax.text(
-                0.5,
-                0.5,
+            _message_panel(
+                ax,
                 f"Across-configuration prediction not applicable:\n{reason}",
-                ha="center",
-                va="center",
-                wrap=True,
-                transform=ax.transAxes,
+                "Prediction of a left-out bearing area",
             )
-            ax.set_axis_off()
-            ax.set_title("Prediction of a left-out bearing area")
             return fig
         models = across.get("models", {})
         configs = across.get("configurations", {})
