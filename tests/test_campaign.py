@@ -17,6 +17,7 @@ from workflow.io.campaign import (
     read_run,
 )
 from workflow.io.recording_time import run_order
+from workflow.io.units import NEWTON_LBF
 
 FS_HZ = 2560.0
 N = 300
@@ -631,3 +632,52 @@ def test_slow_path_gives_the_same_numbers(tmp_path):
     fast = read_one(tmp_path, table((t, force, response), ","), YAML_NO_FORCE)
     np.testing.assert_array_equal(record.response, fast.response)
     np.testing.assert_array_equal(record.time_s, fast.time_s)
+
+
+# ------------------------------------------------------------------ spreadsheet and lab exports
+
+
+def test_quoted_column_names_of_a_csv_writer_decide_roles_and_units(tmp_path):
+    t, force, response = signals()
+    text = '"Time (s)","Force (N)","Acceleration (g)"\n' + table((t, force, response), delimiter=",")
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+    record = read_one(tmp_path / "a", text, YAML_NO_FORCE)
+    np.testing.assert_allclose(record.force_lbf, force * NEWTON_LBF, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(record.response, response, atol=1e-6)
+    assert record.time_s is not None
+    # a quoted unit that contradicts campaign.yaml is the disagreement the contract names
+    error = format_error(tmp_path / "b", text, YAML_FORCE)
+    assert "force column unit 'N' disagrees with campaign.yaml force unit 'lbf'" in str(error)
+
+
+def test_header_lines_padded_with_empty_cells_are_read(tmp_path):
+    t, force, response = signals()
+    text = (
+        "Dactron RT Pro ASCII export,,\nSample rate: 2560 Hz,,\nPre-trigger: 25 samples,,\n"
+        "Time (s),Force (lbf),Acceleration (g)\n" + table((t, force, response), delimiter=",")
+    )
+    record = read_one(tmp_path, text, YAML_NO_FORCE)
+    assert record.sample_rate_hz == 2560.0 and record.pretrigger_samples == 25
+
+
+@pytest.mark.parametrize(
+    ("unit", "factor"), [("seconds", 1.0), ("sec", 1.0), ("msec", 1e-3), ("milliseconds", 1e-3)]
+)
+def test_time_column_unit_words(tmp_path, unit, factor):
+    t, force, response = signals()
+    text = f"Time ({unit})\tForce (lbf)\tAcceleration (g)\n" + table((t / factor, force, response))
+    record = read_one(tmp_path, text, YAML_NO_FORCE)
+    assert record.sample_rate_hz == pytest.approx(FS_HZ, rel=1e-4)
+
+
+def test_header_number_out_of_range_is_a_format_error_naming_the_line(tmp_path):
+    _, _, response = signals()
+    error = format_error(tmp_path, "Sample rate: 2560 Hz\nPre-trigger: 1e400 samples\n" + table((response,)))
+    assert error.line == 2 and "cannot read the pre-trigger" in str(error)
+
+
+@pytest.mark.parametrize("written", ["2004-05-12", "yes", "off"])
+def test_campaign_name_is_free_text_whatever_yaml_makes_of_it(tmp_path, written):
+    campaign = write_campaign(tmp_path, YAML_NO_FORCE.replace("name: test", f"name: {written}"), {})
+    assert campaign.name == written

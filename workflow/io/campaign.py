@@ -38,6 +38,7 @@ are run against them):
 
 from __future__ import annotations
 
+import datetime
 import io
 import math
 import os
@@ -458,6 +459,10 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
                 )
     if "name" not in raw:
         raw = {**raw, "name": Path(campaign_dir).resolve().name}
+    elif isinstance(raw["name"], bool | datetime.date):
+        # free text that YAML read as a date or a yes/no: keep the text as written
+        name_node = next(value for key, value in root.value if key.value == "name")
+        raw = {**raw, "name": str(name_node.value)}
     try:
         campaign = validate(Campaign, _with_default_globs(raw))
     except ValidationError as error:
@@ -919,9 +924,18 @@ def _split_names(line: str, delimiter: str, n_columns: int) -> list[str] | None:
     candidates.append(re.split(r"\s{2,}", stripped))
     candidates.append(_merge_unit_tokens(stripped.split()))
     for names in candidates:
+        names = [_unquoted(name) for name in names]
         if len(names) == n_columns and all(names):
             return names
     return None
+
+
+def _unquoted(cell: str) -> str:
+    """A cell without the quotes a CSV writer puts around text: ``"Force (N)"``."""
+    cell = cell.strip()
+    if len(cell) >= 2 and cell[0] == cell[-1] and cell[0] in "\"'":
+        return cell[1:-1].strip()
+    return cell
 
 
 def _names_of(line: str, delimiter: str, n_columns: int) -> list[str] | None:
@@ -991,13 +1005,14 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
         match = _KEY_VALUE.fullmatch(line)
         if not match:
             continue
-        key, value = match.group(1), match.group(2)
+        # a spreadsheet pads the line with empty cells: "Sample rate: 2560 Hz,,"
+        key, value = match.group(1), match.group(2).rstrip(",;\t ")
         entries.setdefault(key, value)
         name, key_unit = _canonical_header_key(key)
         if name in _SAMPLE_RATE_KEYS and rate is None:
             parsed = _VALUE_WITH_UNIT.fullmatch(value)
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
-            if not parsed or unit not in _RATE_FACTORS_HZ or float(parsed.group(1)) <= 0:
+            if not parsed or unit not in _RATE_FACTORS_HZ or not 0 < float(parsed.group(1)) < math.inf:
                 raise CampaignFormatError(
                     path, number, f"cannot read a positive sample rate in Hz from {line.strip()!r}"
                 )
@@ -1006,6 +1021,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
             parsed = _VALUE_WITH_UNIT.fullmatch(value)
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
             amount = float(parsed.group(1)) if parsed else -1.0
+            amount = amount if math.isfinite(amount) else -1.0
             if parsed and amount >= 0 and unit in _PRETRIGGER_SAMPLE_UNITS and amount == round(amount):
                 pre_samples, pre_line = int(round(amount)), number
             elif parsed and amount >= 0 and unit in _PRETRIGGER_TIME_UNITS_S:
@@ -1286,13 +1302,20 @@ def _find_columns(
     return _Columns(roles, column_units, tuple(names), names_line)
 
 
+_TIME_UNIT_FACTORS_S = {
+    **dict.fromkeys(("s", "sec", "secs", "second", "seconds"), 1.0),
+    **dict.fromkeys(("ms", "msec", "millisecond", "milliseconds"), 1e-3),
+}
+"""Spellings of a time column's unit, and the factor to seconds."""
+
+
 def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tuple[float, float]:
     """Factors taking the time column to s and the force column to lbf; checks units."""
     line = columns.line
     time_factor_s = 1.0
     time_unit = columns.units.get("time")
     if time_unit:
-        time_factor_s = {"s": 1.0, "sec": 1.0, "ms": 1e-3}.get(time_unit.strip().lower(), 0.0)
+        time_factor_s = _TIME_UNIT_FACTORS_S.get(time_unit.strip().lower(), 0.0)
         if time_factor_s == 0.0:
             raise CampaignFormatError(path, line, f"time column unit {time_unit!r}: expected s or ms")
     response_unit = columns.units.get("response")
