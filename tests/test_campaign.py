@@ -681,3 +681,24 @@ def test_header_number_out_of_range_is_a_format_error_naming_the_line(tmp_path):
 def test_campaign_name_is_free_text_whatever_yaml_makes_of_it(tmp_path, written):
     campaign = write_campaign(tmp_path, YAML_NO_FORCE.replace("name: test", f"name: {written}"), {})
     assert campaign.name == written
+
+
+def test_names_with_channel_prefixes_and_colons_are_names_not_header_values(tmp_path):
+    t, force, response = signals()
+    text = "Time (s)\tCh1: Acceleration (g)\tCh2: Force (lbf)\n" + table((t, response, force))
+    record = read_one(tmp_path, text, YAML_NO_FORCE)
+    np.testing.assert_allclose(record.response, response, atol=1e-6)
+    np.testing.assert_allclose(record.force_lbf, force, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("title", "yaml_text", "has_force"),
+    [("Ring-down acceleration record", YAML_FORCE, True), ("Response history", YAML_NO_FORCE, False)],
+)
+def test_a_title_with_as_many_words_as_columns_is_not_a_line_of_names(tmp_path, title, yaml_text, has_force):
+    t, force, response = signals()
+    columns = (t, force, response) if has_force else (t, response)
+    record = read_one(tmp_path, title + "\n" + table(columns), yaml_text)
+    # the positional rules of the contract: time, force, response / time, response
+    np.testing.assert_allclose(record.response, response, atol=1e-6)
+    assert record.time_s is not None and (record.force_lbf is not None) == has_force

@@ -940,9 +940,32 @@ def _unquoted(cell: str) -> str:
 
 def _names_of(line: str, delimiter: str, n_columns: int) -> list[str] | None:
     names = _split_names(line, delimiter, n_columns)
-    if names is not None and any(_column_role(name) for name in names):
-        return names
-    return None
+    if names is None:
+        return None
+    roles = {_column_role(name) for name in names} - {None}
+    if not roles:
+        return None
+    # Split otherwise than the numbers are, a title ("Ring-down acceleration record") can
+    # give as many words as there are columns: names must then name two roles at least.
+    if n_columns >= 2 and len(roles) < 2 and not _splits_as_data(line, delimiter, n_columns):
+        return None
+    return names
+
+
+def _splits_as_data(line: str, delimiter: str, n_columns: int) -> bool:
+    """Whether ``line`` splits at the numbers' own delimiter into ``n_columns`` cells."""
+    return delimiter != _SPACES and len(_split_row(line, delimiter)) == n_columns
+
+
+def _is_key_value(line: str, delimiter: str, n_columns: int) -> bool:
+    """A ``key: value`` header line, not a line of names that holds a colon
+    (``Time (s)<TAB>Ch1: Acceleration (g)<TAB>Ch2: Force (lbf)``)."""
+    if not _KEY_VALUE.fullmatch(line):
+        return False
+    if n_columns < 2 or not _splits_as_data(line, delimiter, n_columns):
+        return True
+    cells = [_unquoted(cell) for cell in _split_row(line, delimiter)]
+    return len({_column_role(cell) for cell in cells} - {None}) < 2
 
 
 _KNOWN_UNIT_WORDS = {"s", "ms", "sec", "lbf", "N", "g", "m/s^2", "in/s^2", "m/s", "in/s", "m", "in"}
@@ -1210,7 +1233,9 @@ def _find_columns(
 ) -> _Columns:
     """Column roles and units from the line of names, or the positional rules."""
     text_lines = [
-        (number, line) for number, line in header if line.strip() and not _KEY_VALUE.fullmatch(line)
+        (number, line)
+        for number, line in header
+        if line.strip() and not _is_key_value(line, delimiter, n_columns)
     ]
     # A first data row with a bad cell is not numeric and so lands in the header:
     # recognise it by its shape so that it is reported instead of silently dropped.
