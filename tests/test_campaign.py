@@ -702,3 +702,16 @@ def test_a_title_with_as_many_words_as_columns_is_not_a_line_of_names(tmp_path, 
     # the positional rules of the contract: time, force, response / time, response
     np.testing.assert_allclose(record.response, response, atol=1e-6)
     assert record.time_s is not None and (record.force_lbf is not None) == has_force
+
+
+def test_a_time_column_that_starts_before_zero_gives_the_pre_trigger(tmp_path):
+    t, force, response = signals()
+    columns = (t - 25 / FS_HZ, force, response)
+    text = "Time (s)\tForce (lbf)\tAcceleration (g)\n" + table(columns)
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+    record = read_one(tmp_path / "a", text, YAML_NO_FORCE)
+    assert (record.pretrigger_samples, record.pretrigger_source) == (25, "time column")
+    # campaign.yaml saying otherwise is the disagreement the contract names
+    error = format_error(tmp_path / "b", text, YAML_NO_FORCE + "pretrigger_samples: 50\n")
+    assert "pre-trigger of 25 samples" in str(error) and "pretrigger_samples says 50" in str(error)

@@ -1094,7 +1094,8 @@ class RunRecord:
     sample_rate_source : str
         Where the sample rate came from: ``campaign.yaml``, ``header`` or ``time column``.
     pretrigger_source : str
-        ``campaign.yaml``, ``header`` or ``default`` (contract default 0, not stated).
+        ``campaign.yaml``, ``header``, ``time column`` (a time column that starts before
+        0) or ``default`` (contract default 0, not stated).
     record_start : str
         Wall-clock time the recording started, ISO 8601, when the file states it
         (:mod:`workflow.io.recording_time`); empty otherwise (ASCII files).
@@ -1606,6 +1607,22 @@ def read_run(
                 f"campaign.yaml pretrigger_samples {campaign.pretrigger_samples}",
             )
         pretrigger_samples, pretrigger_source = header_pre, "header"
+    if time_s is not None and time_s[0] * sample_rate_hz <= -0.5:
+        # a time column that starts before 0 counts the samples before the trigger
+        time_pre = int(round(-time_s[0] * sample_rate_hz))
+        stated = {
+            "header": (header_values.pretrigger_line is not None, pretrigger_samples),
+            "campaign.yaml pretrigger_samples": (campaign.pretrigger_given, campaign.pretrigger_samples),
+        }
+        for where, (given, samples) in stated.items():
+            if given and samples != time_pre:
+                raise CampaignFormatError(
+                    shown,
+                    first_line,
+                    f"the time column starts at {time_s[0]:.9g} s, a pre-trigger of {time_pre} samples, "
+                    f"but the {where} says {samples} samples",
+                )
+        pretrigger_samples, pretrigger_source = time_pre, "time column"
     if campaign.pretrigger_given:
         pretrigger_source = "campaign.yaml"
     if pretrigger_samples >= n_rows:
