@@ -557,3 +557,16 @@ def test_configuration_with_every_run_excluded_is_listed_in_the_diagnosis(tmp_pa
     assert list(document["configurations"]) == ["no_washer"]
     assert "every run excluded" in document["skipped_configurations"]["small_washer"]
     assert (workdir / "results/figures/discovery_residuals_small_washer.png").stat().st_size > 5_000
+
+
+def test_a_reader_fault_on_one_file_excludes_that_run_and_names_it(tmp_path, monkeypatch):
+    from workflow.io import campaign as campaign_io
+    from workflow.measured.runs import read_with_quality
+
+    def faulty(campaign_dir, path, campaign):
+        raise OverflowError("cannot convert float infinity to integer")
+
+    monkeypatch.setattr(campaign_io, "read_run", faulty)
+    record, rows = read_with_quality(tmp_path, "cfg/run07.txt", None, None)
+    assert record is None and len(rows) == 1 and not rows[0]["passed"]
+    assert rows[0]["reason"].startswith(f"{tmp_path.as_posix()}/cfg/run07.txt: not read: OverflowError")

@@ -10,7 +10,9 @@ pandas.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -239,18 +241,26 @@ def read_with_quality(
     try:
         record = read_run(campaign_dir, path, campaign)
     except CampaignFormatError as error:
-        return None, [
-            {
-                "check": "read",
-                "applied": True,
-                "passed": False,
-                "value": float("nan"),
-                "threshold": float("nan"),
-                "unit": "",
-                "reason": str(error),
-            }
-        ]
-    return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
+        reason = str(error)
+    except Exception as error:  # a fault of the reader on one file must not stop the others
+        logging.getLogger(__name__).exception("%s: not read", path)
+        reason = (
+            f"{Path(campaign_dir).as_posix()}/{path}: not read: {type(error).__name__}: {error} "
+            "(an error of the reader, not a known fault of the file: the job's log has the trace)"
+        )
+    else:
+        return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
+    return None, [
+        {
+            "check": "read",
+            "applied": True,
+            "passed": False,
+            "value": float("nan"),
+            "threshold": float("nan"),
+            "unit": "",
+            "reason": reason,
+        }
+    ]
 
 
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
