@@ -502,6 +502,20 @@ def test_decimal_commas_read_like_points(tmp_path):
     assert_same_record(record, reference)
 
 
+def test_decimal_commas_leave_a_header_date_alone(tmp_path):
+    force, response = samples()
+    reference = ascii_record(tmp_path, force, response)
+    rows = "\n".join(f"{float(f)!r};{float(r)!r}".replace(".", ",") for f, r in zip(force, response))
+    text = (
+        "Messung vom 12.05.2004, 14:03\nSample rate: 2560,0 Hz\n"
+        f"Pre-trigger: {PRETRIGGER} samples\nForce (lbf);Acceleration (g)\n{rows}\n"
+    )
+    record = read(
+        tmp_path / "comma", "run.txt", lambda p: p.write_text(text), yaml_of(extra='decimal: ","\n')
+    )
+    assert_same_record(record, reference)
+
+
 def test_decimal_commas_with_comma_separated_columns_are_an_error(tmp_path):
     text = "Force (lbf),Acceleration (g)\n" + "\n".join("0.5,1.25" for _ in range(300)) + "\n"
     message = error(

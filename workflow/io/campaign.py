@@ -1183,21 +1183,30 @@ def _read_text(path: Path, shown: str) -> str:
 _COMMA_SEPARATED_CELL = re.compile(r"[^\t; \n]*,[^\t; \n]*[,.]|[^\t; \n]*\.[^\t; \n]*,")
 
 
+_NUMERIC_CHARACTERS = re.compile(r"[0-9eE+\-.,;\t ]+")
+
+
 def _decimal_commas_to_points(text: str, shown: str) -> str:
     """Text of a file written with decimal commas, with decimal points instead.
 
-    A cell holding two commas, or a comma and a point, means commas also separate the
-    columns (or mark thousands), which cannot be told apart from decimal commas.
+    In a row of numbers, a cell holding two commas, or a comma and a point, means commas
+    also separate the columns (or mark thousands), which cannot be told apart from
+    decimal commas. A header line of text with such a cell (a date: ``12.05.2004, 14:03``)
+    is left as it is.
     """
-    clash = _COMMA_SEPARATED_CELL.search(text)
-    if clash is not None:
-        raise CampaignFormatError(
-            shown,
-            text.count("\n", 0, clash.start()) + 1,
-            f"campaign.yaml says decimal: ',' but {clash.group(0)!r} holds more than one "
-            "separator; with decimal commas the columns must be separated by tabs, semicolons or spaces",
-        )
-    return text.replace(",", ".")
+    lines = text.split("\n")
+    for number, line in enumerate(lines, start=1):
+        clash = _COMMA_SEPARATED_CELL.search(line)
+        if clash is None:
+            lines[number - 1] = line.replace(",", ".")
+        elif _NUMERIC_CHARACTERS.fullmatch(line.strip()):
+            raise CampaignFormatError(
+                shown,
+                number,
+                f"campaign.yaml says decimal: ',' but {clash.group(0)!r} holds more than one separator; "
+                "with decimal commas the columns must be separated by tabs, semicolons or spaces",
+            )
+    return "\n".join(lines)
 
 
 def _locate_numbers(text: str) -> tuple[list[tuple[int, str]], int, int]:
