@@ -245,7 +245,7 @@ def read_with_quality(
     except Exception as error:  # a fault of the reader on one file must not stop the others
         logging.getLogger(__name__).exception("%s: not read", path)
         reason = (
-            f"{Path(campaign_dir).as_posix()}/{path}: not read: {type(error).__name__}: {error} "
+            f"{(Path(campaign_dir) / path).as_posix()}: not read: {type(error).__name__}: {error} "
             "(an error of the reader, not a known fault of the file: the job's log has the trace)"
         )
     else:
