@@ -7,6 +7,7 @@ from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
+from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
 # asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
