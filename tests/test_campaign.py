@@ -2,10 +2,10 @@
 and every malformed case of campaign-format.md."""
 
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import REALDATA, needs_realdata
 
 from workflow.io import interim
 from workflow.io.campaign import (
@@ -584,12 +584,8 @@ def test_missing_file(tmp_path):
 
 # ------------------------------------------------------------------ real campaigns
 
-REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
-if not REALDATA.is_dir():
-    REALDATA = Path("/work/shared/realdata")
 
-
-@pytest.mark.skipif(not (REALDATA / "pff-lms-sample").is_dir(), reason="real data not present")
+@needs_realdata("pff-lms-sample")
 def test_real_pff_record_reads():
     """The real PFF record (its read time is a benchmark: bench/bench_readers.py)."""
     folder = REALDATA / "pff-lms-sample"
@@ -603,7 +599,7 @@ def test_real_pff_record_reads():
     assert record.response[0] == pytest.approx(0.4154297)
 
 
-@pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason="real data not present")
+@needs_realdata("unesp-bolted-beam")
 def test_real_unesp_campaign_reads_every_run():
     folder = REALDATA / "unesp-bolted-beam"
     campaign = load_campaign(folder)

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
-from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
+from helpers import CHEAP, REALDATA, needs_realdata, run_snakemake  # noqa: E402
 
 from workflow.io.units import INCH_M, LBF_N, SI  # noqa: E402
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
@@ -26,8 +26,6 @@ from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 snakemake = functools.partial(run_snakemake, timeout=1800)
-
-REALDATA = REPO.parent / "shared" / "realdata"
 
 
 # ------------------------------------------------------------------ the checker itself
@@ -195,7 +193,7 @@ def test_si_run_writes_model_parameters_and_residuals_in_si(one_configuration):
     assert "area (m²)" in verdict and " m/s" in verdict
 
 
-@pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason=f"no real data at {REALDATA}")
+@needs_realdata("unesp-bolted-beam")
 def test_unesp_figures_are_readable(tmp_path):
     campaign = REALDATA / "unesp-bolted-beam"
     targets = [
