@@ -17,7 +17,6 @@ from workflow.io.campaign import (
     read_run,
 )
 from workflow.io.recording_time import run_order
-from workflow.io.units import NEWTON_LBF
 
 FS_HZ = 2560.0
 N = 300
@@ -639,7 +638,8 @@ def test_quoted_column_names_of_a_csv_writer_decide_roles_and_units(tmp_path):
     for folder in ("a", "b"):
         (tmp_path / folder).mkdir()
     record = read_one(tmp_path / "a", text, YAML_NO_FORCE)
-    np.testing.assert_allclose(record.force_lbf, force * NEWTON_LBF, rtol=1e-5, atol=1e-6)
+    # 1 lbf = 0.45359237 kg x 9.80665 m/s^2 (exact)
+    np.testing.assert_allclose(record.force_lbf, force / (0.45359237 * 9.80665), rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(record.response, response, atol=1e-6)
     assert record.time_s is not None
     # a quoted unit that contradicts campaign.yaml is the disagreement the contract names

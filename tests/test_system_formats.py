@@ -21,7 +21,6 @@ from system_format_files import (
     write_uff58,
 )
 
-from workflow.io import units
 from workflow.io.campaign import CampaignFormatError, load_campaign, read_run
 
 RAW = REALDATA / "raw"
@@ -259,7 +258,7 @@ def test_files_without_a_recording_start_have_none(tmp_path):
 def test_force_in_newtons_is_converted_to_lbf(tmp_path):
     force, response = samples()
     channels = {
-        "Force": (force / units.NEWTON_LBF, {"wf_increment": DT_S, "unit_string": "N"}),
+        "Force": (force * (0.45359237 * 9.80665), {"wf_increment": DT_S, "unit_string": "N"}),  # lbf -> N
         "Acceleration": (response, {"wf_increment": DT_S, "unit_string": "g"}),
     }
     record = read(tmp_path, "run.tdms", lambda p: write_tdms(p, "g", channels), yaml_of(force=None))
