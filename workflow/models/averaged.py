@@ -60,7 +60,7 @@ Joint laws (dimensionless, per :class:`JointAverages`)
   macro-slip.
 * Iwan with the threshold density set by the data: the stiffness share of each
   half-decade cell of slip thresholds, below the top of the measured amplitudes.
-* Extensions used by :mod:`workflow.discovery.diagnosis`: quadratic damping ``c2 xi'|xi'|``,
+* Extensions used by :mod:`workflow.discovery`: quadratic damping ``c2 xi'|xi'|``,
   a non-dissipative power-law stiffness, and a run-order drift of the slip scale.
 
 Units: velocity amplitudes in in/s, frequencies in Hz, angular frequencies in rad/s.

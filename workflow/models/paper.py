@@ -86,17 +86,16 @@ def averaged_fit_params(
 ) -> dict[str, float]:
     """The averaged model's fit to one configuration's segments, for a configuration the
     diagnosis did not fit (too few distinct amplitudes to validate models)."""
-    from workflow.discovery import diagnosis as discovery
     from workflow.models import averaged as describing
+    from workflow.models.averaged_fit import FitContext, FitSettings, fit_model
+    from workflow.models.configuration_data import prepare_configuration, scatter_of
 
-    data = discovery.prepare_configuration(
+    data = prepare_configuration(
         segments, str(segments["configuration"].iloc[0]), describing.RESPONSE_ORDER[response_quantity]
     )
     velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
-    context = discovery.FitContext(float(np.quantile(velocity, 0.9)))
-    fit = discovery.fit_model(
-        model, data, discovery.scatter_of(data), context, settings=discovery.FitSettings(seed=seed)
-    )
+    context = FitContext(float(np.quantile(velocity, 0.9)))
+    fit = fit_model(model, data, scatter_of(data), context, settings=FitSettings(seed=seed))
     return fit.params
 
 

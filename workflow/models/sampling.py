@@ -1,6 +1,6 @@
 """Scrambled Sobol points in the unit box, for the global stage of the fits.
 
-The fits (:func:`workflow.discovery.diagnosis.fit_model`,
+The fits (:func:`workflow.models.averaged_fit.fit_model`,
 :func:`workflow.models.fitting.fit_friction_model`) evaluate a model on a few hundred
 parameter sets spread over their box and refine the best ones locally. The points are
 the first points of a Sobol sequence (Joe and Kuo's direction numbers, Bratley and Fox's
