@@ -35,7 +35,7 @@ import numpy as np
 import scipy.optimize
 
 from workflow.lab.layout import PAPER_CONFIGURATIONS, run_name
-from workflow.models import contact, ringdown, specimen
+from workflow.models import contact, friction, ringdown, specimen
 
 SAMPLE_RATE_HZ = 2560.0
 N_SAMPLES = 8192
@@ -287,7 +287,7 @@ def _patch_curves(setup: JointSetup, a):
 
 
 def _dahl_curves(a, sigma, coulomb):
-    d = contact.dahl_dissipation_per_cycle(a, sigma, coulomb)
+    d = friction.dahl_dissipation_per_cycle(a, sigma, coulomb)
     loss = sigma - contact.dahl_secant_stiffness(a, sigma, coulomb)
     return d, loss
 
