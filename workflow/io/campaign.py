@@ -66,6 +66,38 @@ from workflow.io.validation import (
 if TYPE_CHECKING:
     import yaml
 
+__all__ = [
+    "MIN_SAMPLES",
+    "TIME_STEP_REL_TOLERANCE",
+    "HEAD_ROWS",
+    "CAMPAIGN_FILE",
+    "CONFIGURATION_NAME",
+    "MAX_CAMPAIGN_YAML_BYTES",
+    "MAX_YAML_VALUES",
+    "SYSTEM_FORMAT_EXTENSIONS",
+    "CampaignFormatError",
+    "ResponseSpec",
+    "ForceSpec",
+    "ConfigurationSpec",
+    "Campaign",
+    "campaign_to_dict",
+    "campaign_from_dict",
+    "load_campaign",
+    "frequency_problem",
+    "RunFile",
+    "ExcludedPath",
+    "scan_campaign",
+    "list_runs",
+    "DECIMAL_COMMA_HINT",
+    "CAREFUL_CHUNK_ROWS",
+    "FAST_CHUNK_CHARS",
+    "RunRecord",
+    "HEAD_BYTES",
+    "declared_sample_rate_hz",
+    "read_run",
+]
+
+
 MIN_SAMPLES: int = 256
 """Fewest samples a run file must hold. Below this a record cannot hold even a few
 cycles of the mode plus the filter's settling time, and such short files are in

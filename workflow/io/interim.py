@@ -20,6 +20,17 @@ from pathlib import Path
 from workflow.io.campaign import Campaign, campaign_from_dict, campaign_to_dict
 from workflow.io.tables import write_json
 
+__all__ = [
+    "ModeInfo",
+    "ConfigurationMode",
+    "write_campaign",
+    "read_campaign",
+    "write_mode",
+    "read_mode",
+    "write_run_statuses",
+    "read_run_statuses",
+]
+
 
 @dataclass(frozen=True)
 class ModeInfo:

@@ -15,6 +15,16 @@ from datetime import UTC, datetime
 
 import numpy as np
 
+__all__ = [
+    "FILE_NAME_ORDER",
+    "RECORD_START_ORDER",
+    "parse_clock_time",
+    "utc_from_datetime64",
+    "iso_text",
+    "run_order",
+]
+
+
 FILE_NAME_ORDER = "file-name order"
 """How the order of runs is named when it is the order of their file names."""
 

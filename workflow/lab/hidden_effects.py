@@ -20,6 +20,18 @@ from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.virtual_lab import LabSettings, generate_campaign
 from workflow.measured.runs import analyse_campaign
 
+__all__ = [
+    "CASES",
+    "AREA_RANGE_IN2",
+    "MICROSLIP_AREA_RANGE_IN2",
+    "QUADRATIC_AREA_RANGE_IN2",
+    "RUNS",
+    "campaign_segments",
+    "draw_case",
+    "generate_case",
+]
+
+
 CASES = {
     # cause: (joint, effect, effect-size range or None)
     # bench/hit_rate.py --seeds 40 --no-variability (2026-11-22, before run-to-run

@@ -28,6 +28,23 @@ from workflow.models import specimen
 # ----------------------------------------------------------------- Jenkins
 
 
+__all__ = [
+    "jenkins_dissipation_per_cycle",
+    "jenkins_secant_stiffness",
+    "jenkins_force_update",
+    "dahl_secant_stiffness",
+    "JointParameters",
+    "bolt_preload_lbf",
+    "ContactPatches",
+    "contact_patches",
+    "strip_springs",
+    "JointModes",
+    "joint_first_mode",
+    "patch_describing_function",
+    "equivalent_damping",
+]
+
+
 def jenkins_dissipation_per_cycle(slip_amplitude_in, stiffness_lbf_in, slip_force_lbf):
     """Energy dissipated per cycle by a Jenkins element under harmonic slip, in*lbf.
 

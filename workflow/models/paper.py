@@ -16,6 +16,23 @@ from workflow.io.settings import DecaySettings, ModelSettings
 if TYPE_CHECKING:  # pandas is imported where tables are built: figures 7-8 draw without it
     import pandas as pd
 
+__all__ = [
+    "PAPER_DAHL",
+    "PAPER_LUGRE",
+    "SPECIMEN_FREQUENCY_TOLERANCE",
+    "MIN_SEGMENTS_TO_FIT",
+    "ModalCoordinate",
+    "choose_modal_coordinate",
+    "run_start_velocities",
+    "averaged_fit_params",
+    "averaged_start",
+    "fit_configuration",
+    "configuration_models_document",
+    "fit_table",
+    "model_curve_frames",
+]
+
+
 #: Paper figure 7 (Dahl) and figure 8 (LuGre) parameter values, in the paper's units.
 PAPER_DAHL = {"sigma": (2 * np.pi) ** 2, "fc": 38.0}
 PAPER_LUGRE = {

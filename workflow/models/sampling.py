@@ -16,6 +16,16 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = [
+    "BITS",
+    "DIRECTION_POLYNOMIALS",
+    "MAX_DIMENSIONS",
+    "direction_numbers",
+    "sobol_integers",
+    "scrambled_sobol_points",
+]
+
+
 BITS = 30
 """Bits of every coordinate (SciPy's default): resolution ``2^-30``, up to ``2^30`` points."""
 

@@ -36,6 +36,16 @@ from workflow.io.campaign import (
 from workflow.io.record_rules import column_role, rates_agree
 from workflow.io.recording_time import iso_text
 
+__all__ = [
+    "Channel",
+    "FileChannels",
+    "unit_label",
+    "channel_role",
+    "describe_channels",
+    "assemble_record",
+]
+
+
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
 
