@@ -133,6 +133,13 @@ def campaign_verdict(causes: Sequence[str], ratios: Sequence[float]) -> str:
 
     Ties go to the cause with the lowest mean gain ratio; ``none`` only when every
     configuration is ``none`` (or there is none).
+
+    Examples
+    --------
+    >>> campaign_verdict(["none", "run_drift", "quadratic_damping", "run_drift"], [1.0, 0.5, 0.4, 0.6])
+    'run_drift'
+    >>> campaign_verdict(["none", "none"], [1.0, 1.0])
+    'none'
     """
     named = [(c, r) for c, r in zip(causes, ratios) if c != "none"]
     if not named:

@@ -123,6 +123,15 @@ def decide(
       candidate is eligible, or when the best
       leaves a significant misfit and does not cut the held-out error below
       ``RESIDUAL_GAIN`` x the baseline's.
+
+    Examples
+    --------
+    >>> candidate = {"heldout_error": 0.5, "bic": 5.0, "residual_significant": False}
+    >>> decide(1.0, 10.0, True, {"quadratic_damping": candidate})[0]
+    'quadratic_damping'
+    >>> weak = {"heldout_error": 0.9, "bic": 9.0, "residual_significant": False}
+    >>> decide(1.0, 10.0, False, {"quadratic_damping": weak})[0]
+    'none'
     """
     if envelope_structure:
         return "unknown", (
@@ -402,7 +411,13 @@ def _gain_ratio(result: Mapping) -> float:
 
 
 def cause_fractions(causes: Sequence[str]) -> dict[str, float]:
-    """Fraction of ``causes`` naming each cause, largest first (sums to 1)."""
+    """Fraction of ``causes`` naming each cause, largest first (sums to 1).
+
+    Examples
+    --------
+    >>> cause_fractions(["none", "run_drift", "none", "none"])
+    {'none': 0.75, 'run_drift': 0.25}
+    """
     if not causes:
         return {}
     names, counts = np.unique(np.asarray(causes, dtype=object), return_counts=True)

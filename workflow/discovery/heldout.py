@@ -84,7 +84,15 @@ def amplitude_bin(velocity_in_s: np.ndarray, anchor_velocity_in_s: float, per_de
     """Bin of each amplitude, ``per_decade`` bins a decade counted down from the anchor.
 
     Bins relative to the top of the measured range make every binned quantity the same
-    for two sensors that see one decay at different amplitudes (mode shape)."""
+    for two sensors that see one decay at different amplitudes (mode shape).
+
+    Examples
+    --------
+    Half decades counted down from 10 in/s:
+
+    >>> amplitude_bin(np.array([10.0, 5.0, 1.0, 0.9]), 10.0, 2).tolist()
+    [-1, -1, -3, -3]
+    """
     # bin -1 is (anchor / 10**(1/per_decade), anchor]: the anchor itself tops the first bin
     return np.ceil(per_decade * np.log10(velocity_in_s / anchor_velocity_in_s) - 1e-9).astype(int) - 1
 
@@ -208,6 +216,11 @@ def heldout_standard_error(unit_squares: np.ndarray, unit_weights: np.ndarray) -
     weighted squared held-out residuals and ``W_u`` its weight. The units are taken as
     independent draws, so ``E^2`` is a ratio estimator whose variance, to first order,
     is ``n / (n - 1) sum_u (S_u - E^2 W_u)^2 / W^2``; 0 with fewer than two units.
+
+    Examples
+    --------
+    >>> round(heldout_standard_error(np.array([1.0, 1.2, 0.8]), np.ones(3)), 6)
+    0.11547
     """
     present = unit_weights > 0
     squares, weights = unit_squares[present], unit_weights[present]

@@ -18,6 +18,11 @@ def format_percent(value_percent: float) -> str:
     """A signed percentage to two significant digits, never rounded to zero.
 
     ``-0.0042`` gives ``"-0.0042 %"``, ``31.4`` gives ``"+31 %"``; exactly zero gives ``"0 %"``.
+
+    Examples
+    --------
+    >>> format_percent(-0.0042), format_percent(31.4), format_percent(0.0)
+    ('-0.0042 %', '+31 %', '0 %')
     """
     if value_percent == 0 or not np.isfinite(value_percent):
         return f"{value_percent:g} %"
@@ -70,6 +75,11 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
     called significant only when it is both statistically clear (``p`` below the
     corrected limit) and larger than the models' accuracy (``tolerance``); when no bin
     is, the sentence says which of the two the largest one (by ``|t|``) fails.
+
+    Examples
+    --------
+    >>> discrepancy_sentence("dahl", [], None, 8)
+    "The dahl baseline fits damping and frequency at every amplitude to within the run-to-run scatter or the models' accuracy (8 runs)."
     """
     sig = [b for b in bins if b["significant"]]
     parts = []

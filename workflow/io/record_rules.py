@@ -29,7 +29,13 @@ def split_name_unit(name: str) -> tuple[str, str | None]:
 
 
 def column_role(name: str) -> str | None:
-    """time, force or response from a column name (campaign-format.md rules)."""
+    """time, force or response from a column name (campaign-format.md rules).
+
+    Examples
+    --------
+    >>> [column_role(name) for name in ("Time (s)", "Force (lbf)", "Accel [g]", "Temperature")]
+    ['time', 'force', 'response', None]
+    """
     base = split_name_unit(name)[0].lower()
     if base.startswith("time"):
         return "time"
@@ -42,5 +48,11 @@ def column_role(name: str) -> str | None:
 
 def rates_agree(a_hz: float, b_hz: float, extra_rel: float = 0.0) -> bool:
     """Whether two sample rates (Hz) agree within :data:`SAMPLE_RATE_REL_TOLERANCE` plus
-    ``extra_rel`` (a fraction) of the larger."""
+    ``extra_rel`` (a fraction) of the larger.
+
+    Examples
+    --------
+    >>> rates_agree(10000.0, 10005.0), rates_agree(10000.0, 10020.0)
+    (True, False)
+    """
     return abs(a_hz - b_hz) <= (SAMPLE_RATE_REL_TOLERANCE + extra_rel) * max(a_hz, b_hz)

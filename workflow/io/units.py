@@ -193,6 +193,13 @@ def velocity_amplitude_in_s(
     ------
     ValueError
         Unknown quantity/unit, or a frequency that is zero or negative.
+
+    Examples
+    --------
+    An acceleration amplitude of 1 g at 50 Hz:
+
+    >>> velocity_amplitude_in_s([1.0, 2.0], "acceleration", "g", 50.0).round(4).tolist()
+    [1.229, 2.4579]
     """
     if quantity not in RESPONSE_QUANTITIES:
         raise ValueError(

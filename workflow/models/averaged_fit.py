@@ -210,7 +210,14 @@ class RunGroups:
 
 def run_groups(run_index: np.ndarray, n_runs: int, use: np.ndarray | None = None) -> RunGroups:
     """:class:`RunGroups` of segments of runs ``run_index`` (0-based, ``< n_runs``); only the
-    segments in ``use`` (default all) count."""
+    segments in ``use`` (default all) count.
+
+    Examples
+    --------
+    >>> groups = run_groups(np.array([0, 0, 1, 1, 1]), 3)
+    >>> groups.member.sum(axis=0).tolist(), groups.present.tolist()
+    ([2.0, 3.0, 0.0], [True, True, False])
+    """
     use = np.ones(run_index.size, dtype=bool) if use is None else use
     member = (run_index[:, None] == np.arange(n_runs)[None, :]) & use[:, None]
     return RunGroups(member.astype(float), member.any(axis=0))
@@ -304,7 +311,15 @@ MIN_CALIBRATION_SEGMENTS = 3
 
 def calibration_segments(velocity_in_s: np.ndarray, run_index: np.ndarray, runs: np.ndarray) -> np.ndarray:
     """Mask of each listed run's lowest-amplitude segments (:data:`CALIBRATION_FRACTION`,
-    at least :data:`MIN_CALIBRATION_SEGMENTS`, never the whole run)."""
+    at least :data:`MIN_CALIBRATION_SEGMENTS`, never the whole run).
+
+    Examples
+    --------
+    A quarter of eight segments, raised to the minimum of three:
+
+    >>> calibration_segments(np.arange(1.0, 9.0), np.zeros(8, dtype=int), np.array([0])).tolist()
+    [True, True, True, False, False, False, False, False]
+    """
     mask = np.zeros(velocity_in_s.size, dtype=bool)
     for r in np.atleast_1d(runs):
         members = np.flatnonzero(run_index == r)
@@ -462,6 +477,21 @@ def fit_model(
     Returns
     -------
     FitResult
+
+    Examples
+    --------
+    Dahl curves fitted back to the parameters that made them:
+
+    >>> from workflow.models.averaged import model_curves
+    >>> from workflow.models.configuration_data import ConfigurationData, scatter_of
+    >>> truth = {"f_lin_hz": 100.0, "zeta0": 0.002, "joint_stiffness_fraction": 0.01, "slip_velocity_in_s": 1.0}
+    >>> v = np.geomspace(0.05, 5.0, 40)
+    >>> zeta, frequency_hz = model_curves("dahl", truth, v)
+    >>> data = ConfigurationData("c", v, zeta, frequency_hz, np.zeros(v.size, int), ["run01"], None)
+    >>> settings = FitSettings(global_samples=64, local_starts=2)
+    >>> fit = fit_model("dahl", data, scatter_of(data), FitContext(1.0), settings=settings)
+    >>> {name: float(f"{value:.3g}") for name, value in fit.params.items()}
+    {'f_lin_hz': 100.0, 'zeta0': 0.002, 'joint_stiffness_fraction': 0.01, 'slip_velocity_in_s': 1.0}
     """
     model = MODELS[model] if isinstance(model, str) else model
     mask = np.ones(data.n, dtype=bool) if mask is None else mask

@@ -111,6 +111,24 @@ def prepare_configuration(
     fit in ``ln zeta`` and are dropped (counted in ``n_dropped``). ``record_start``
     (run name -> ISO 8601 recording start, the runs table's ``record_start``) orders
     the runs when every run has one (:func:`workflow.io.recording_time.run_order`).
+
+    Examples
+    --------
+    A growing envelope (``zeta <= 0``) cannot enter a fit in ``ln zeta`` and is dropped:
+
+    >>> frame = pd.DataFrame(
+    ...     {
+    ...         "configuration": ["a", "a", "a", "a", "b"],
+    ...         "run": ["r1", "r1", "r2", "r2", "r1"],
+    ...         "velocity_amplitude_in_s": [1.0, 0.5, 1.2, 0.6, 1.0],
+    ...         "zeta": [0.003, 0.002, 0.003, -0.001, 0.002],
+    ...         "frequency_hz": [99.0, 99.5, 99.1, 99.6, 98.0],
+    ...         "bearing_area_in2": 0.5,
+    ...     }
+    ... )
+    >>> data = prepare_configuration(frame, "a")
+    >>> data.n, data.n_dropped, data.run_names, data.run_index.tolist(), data.anchor_velocity_in_s
+    (3, 1, ['r1', 'r2'], [0, 0, 1], 1.2)
     """
     rows = frame[frame["configuration"] == name]
     v = rows["velocity_amplitude_in_s"].to_numpy(float)
