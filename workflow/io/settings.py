@@ -21,6 +21,7 @@ if TYPE_CHECKING:
 
 
 __all__ = [
+    "Seed",
     "AnalysisSettings",
     "DecaySettings",
     "ModeSearchSettings",

@@ -12,6 +12,18 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 
+__all__ = [
+    "ASCII_SUFFIXES",
+    "BASE_MB",
+    "READ_BYTES_PER_SAMPLE",
+    "KEPT_BYTES_PER_SAMPLE",
+    "ANALYSE_BYTES_PER_SAMPLE",
+    "BINARY_BYTES_PER_SAMPLE",
+    "samples_at_most",
+    "analyse_runs_mem_mb",
+    "identify_mode_mem_mb",
+]
+
 ASCII_SUFFIXES = {".txt", ".csv", ".asc", ".dat"}
 
 BASE_MB = 300
@@ -58,7 +70,19 @@ def _mb(n_bytes: float) -> int:
 
 def analyse_runs_mem_mb(run_files: Iterable[str | os.PathLike]) -> int:
     """``mem_mb`` of an ``analyse_runs`` job: its runs are read and analysed one after the
-    other, so the longest run sets the peak."""
+    other, so the longest run sets the peak.
+
+    Examples
+    --------
+    A 1e7-sample ASCII run (362 MB) peaked at 2003 MB (bench/bench_long_record_memory.py):
+
+    >>> import tempfile
+    >>> with tempfile.NamedTemporaryFile(suffix=".txt") as run:
+    ...     _ = run.write(b"\\n" * 10_000_000)
+    ...     run.flush()
+    ...     analyse_runs_mem_mb([run.name])
+    2301
+    """
     return _mb(ANALYSE_BYTES_PER_SAMPLE * max((samples_at_most(path) for path in run_files), default=0))
 
 
