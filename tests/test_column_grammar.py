@@ -149,3 +149,14 @@ def test_any_names_and_units_of_the_grammar_give_the_roles_and_factors(case):
     if "time" in roles:
         np.testing.assert_allclose(record.time_s, t_s, rtol=1e-9, atol=1e-12)
         assert abs(record.sample_rate_hz - FS_HZ) < 1e-6 * FS_HZ
+
+
+def test_sample_rates_agree_within_a_thousandth_plus_the_time_columns_resolution():
+    from workflow.io.record_rules import rates_agree
+
+    assert rates_agree(10000.0, 10009.0) and not rates_agree(10000.0, 10011.0)  # 0.09 %, 0.11 %
+    # A time column printed to 1e-4 s over a 0.1 s record knows its rate to 0.1 %: that
+    # widens the agreement to 0.2 %. (The limit itself, <= against <, decides only at
+    # float equality of the difference and the tolerance: an equivalent mutant.)
+    assert rates_agree(10000.0, 10019.0, extra_rel=1e-3)
+    assert not rates_agree(10000.0, 10021.0, extra_rel=1e-3)
