@@ -10,7 +10,7 @@ suspicious), the score (killed over all) and each survivor's diff. A survivor is
 no test notices: kill it with a test, or argue in the test file why it is equivalent.
 
 Each mutant costs one run of the target's tests: ``units`` about 1.5 minutes on one core,
-``decay`` and ``decision`` far longer.
+``decide`` about as long, ``decay`` far longer.
 """
 
 from __future__ import annotations
@@ -28,21 +28,23 @@ TARGETS = {
     "units": (
         "workflow/io/units.py",
         ["tests/test_units.py", "tests/test_unit_spellings.py", "tests/test_column_grammar.py"],
+        "",
     ),
     "record_rules": (
         "workflow/io/record_rules.py",
         ["tests/test_column_grammar.py", "tests/test_campaign.py", "tests/test_system_formats.py"],
+        "",
     ),
-    "decay": ("workflow/measured/decay.py", ["tests/test_decay.py", "tests/test_analysis_truth.py"]),
-    "decision": (
-        "workflow/discovery/decision.py",
-        ["tests/test_decision_rules.py", "tests/test_discovery.py"],
-    ),
+    "decay": ("workflow/measured/decay.py", ["tests/test_decay.py", "tests/test_analysis_truth.py"], ""),
+    # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
+    # by the diagnosis tests, minutes per mutant.
+    "decide": ("workflow/discovery/decision.py:decide", ["tests/test_decision_rules.py"], "not named_none"),
 }
-"""Target -> (the module mutated, the tests run against each mutant)."""
+"""Target -> (the module mutated, ``:function`` to mutate one function of it only; the tests
+run against each mutant; a pytest ``-k`` expression selecting among them, or "")."""
 
 
-def mutmut_config(module: str, tests: list[str]) -> str:
+def mutmut_config(module: str, tests: list[str], selection: str) -> str:
     """setup.cfg of the copy: mutate ``module`` only, run ``tests`` only."""
     lines = [
         "[mutmut]",
@@ -51,8 +53,9 @@ def mutmut_config(module: str, tests: list[str]) -> str:
         "pytest_add_cli_args_test_selection =",
     ]
     lines += [f"    {test}" for test in tests]
-    lines += ["pytest_add_cli_args =", "    -p", "    no:cacheprovider", ""]
-    return "\n".join(lines)
+    lines += ["pytest_add_cli_args =", "    -p", "    no:cacheprovider"]
+    lines += ["    -k", f"    {selection}"] if selection else []
+    return "\n".join(lines + [""])
 
 
 def copy_project(destination: Path) -> None:
@@ -77,23 +80,26 @@ def mutmut(folder: Path, *args: str) -> str:
 
 
 def score(target: str, children: int) -> None:
-    module, tests = TARGETS[target]
+    where, tests, selection = TARGETS[target]
+    module, _, function = where.partition(":")
     with tempfile.TemporaryDirectory(prefix="mutation-") as tmp:
         folder = Path(tmp)
         copy_project(folder)
-        (folder / "setup.cfg").write_text(mutmut_config(module, tests))
-        mutmut(folder, "run", "--max-children", str(children))
+        (folder / "setup.cfg").write_text(mutmut_config(module, tests, selection))
+        # mutmut names a mutant module.x_function__mutmut_N
+        names = [f"{module[:-3].replace('/', '.')}.x_{function}__mutmut_*"] if function else []
+        mutmut(folder, "run", "--max-children", str(children), *names)
         outcomes: dict[str, list[str]] = {}
         for line in mutmut(folder, "results", "--all", "true").splitlines():
             name, _, outcome = line.strip().rpartition(": ")
-            if name:
+            if name and (not function or f".x_{function}__mutmut_" in name):
                 outcomes.setdefault(outcome, []).append(name)
         killed = len(outcomes.get("killed", []))
         total = sum(len(names) for names in outcomes.values())
         others = ", ".join(
             f"{len(names)} {outcome}" for outcome, names in outcomes.items() if outcome != "killed"
         )
-        print(f"{target} ({module}; tests: {' '.join(tests)})")
+        print(f"{target} ({where}; tests: {' '.join(tests)}{' -k ' + repr(selection) if selection else ''})")
         print(f"  mutants {total}: killed {killed}{', ' + others if others else ''}")
         print(f"  mutation score {killed / max(total, 1):.1%}")
         for name in outcomes.get("survived", []):
