@@ -149,6 +149,9 @@ def test_candidates_predicting_equally_well_go_to_the_fewest_parameters():
         decide(1.0, 10.0, True, candidates, unit_squares=spread, unit_weights=weights)[0]
         == "microslip_power_law"
     )
+    # the reach is measured from the best held-out error, whatever the candidates' names
+    ahead = {"quadratic_damping": {**rich}, "microslip_power_law": {**lean, "bic": 3.0}}
+    assert decide(1.0, 10.0, True, ahead, unit_squares=spread, unit_weights=weights)[0] == "quadratic_damping"
 
 
 def trend_data(slope_per_run: float) -> tuple[ConfigurationData, dict]:
