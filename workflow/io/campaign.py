@@ -39,6 +39,7 @@ are run against them):
 from __future__ import annotations
 
 import datetime
+import errno
 import io
 import math
 import os
@@ -54,6 +55,14 @@ from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
 
 from workflow.io import units
+from workflow.io.limits import (
+    MAX_QUOTED_PROBLEMS,
+    QUOTED_CHARACTERS,
+    magnitude_problem,
+    name_length_problem,
+    quoted,
+    shortened,
+)
 from workflow.io.validation import (
     FORBID_UNKNOWN_KEYS,
     MISSING_KEY_ERRORS,
@@ -170,6 +179,8 @@ def _channel_reference(channel: str | int | None) -> str | int | None:
         raise ValueError(f"channel index must be 0 or more, got {channel}")
     if isinstance(channel, str) and not channel.strip():
         raise ValueError("channel must be a non-empty name or a 0-based index")
+    if isinstance(channel, str) and (problem := name_length_problem("channel name", channel)):
+        raise ValueError(problem)
     return channel
 
 
@@ -409,6 +420,11 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
     from pydantic import ValidationError
 
     path = Path(campaign_dir) / CAMPAIGN_FILE
+    outside = _link_problem(path, Path(campaign_dir).resolve())
+    if outside is not None:
+        raise CampaignFormatError(
+            path, None, f"{outside}; campaign.yaml must be a file inside the campaign folder"
+        )
     if not path.is_file():
         raise CampaignFormatError(
             path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
@@ -467,20 +483,26 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         campaign = validate(Campaign, _with_default_globs(raw))
     except ValidationError as error:
         problems, first_line = [], None
-        for item in error.errors():
+        errors = error.errors()
+        for item in errors[:MAX_QUOTED_PROBLEMS]:
             loc = tuple(item["loc"])
-            key = ".".join(str(part) for part in loc) or "(top level)"
+            key = ".".join(shortened(str(part)) for part in loc) or "(top level)"
             if item["type"] in UNKNOWN_KEY_ERRORS:
                 message = f"unknown key (allowed here: {', '.join(_allowed_keys(loc))})"
             elif item["type"] in MISSING_KEY_ERRORS:
                 message = "required key is missing"
             else:
-                message = item["msg"]
+                message = shortened(item["msg"], 10 * QUOTED_CHARACTERS)
             problems.append(f"{key}: {message}")
             if first_line is None:
                 first_line = _node_line(root, loc)
+        if len(errors) > MAX_QUOTED_PROBLEMS:
+            problems.append(f"and {len(errors) - MAX_QUOTED_PROBLEMS} more problems")
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
     object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
+    long_name = name_length_problem("name", campaign.name)
+    if long_name is not None:
+        raise CampaignFormatError(path, _node_line(root, ("name",)), long_name)
     if campaign.sample_rate_hz is not None:
         problem = frequency_problem(campaign, campaign.sample_rate_hz)
     else:
@@ -569,11 +591,28 @@ class ExcludedPath:
         return {**asdict(self), "status": "excluded"}
 
 
-def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
-    """Why a path matched by a glob is not read as a run file, or None."""
-    resolved = path.resolve()
+def _link_problem(path: Path, root_resolved: Path) -> str | None:
+    """Why a path inside the campaign folder leads elsewhere (a symbolic link out of the
+    folder, or a loop of links), or None. The test is on the real path, all links resolved."""
+    try:
+        path.stat()
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            return "not read: a symbolic link loop (the link leads back to itself)"
+    try:
+        resolved = path.resolve()
+    except (OSError, RuntimeError):  # a loop further up the path
+        return "not read: a symbolic link loop (the link leads back to itself)"
     if not resolved.is_relative_to(root_resolved):
         return "not read: a symbolic link that leads outside the campaign folder (docs/input-safety.md)"
+    return None
+
+
+def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
+    """Why a path matched by a glob is not read as a run file, or None."""
+    link = _link_problem(path, root_resolved)
+    if link is not None:
+        return link
     if path.is_dir():
         return "not read: a directory, not a run file"
     if not path.is_file():
@@ -654,6 +693,16 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
         for match in matches:
             relative = match.relative_to(root).as_posix()
             reason = _unreadable_reason(match, root_resolved)
+            long_name = name_length_problem("run file name", match.name)
+            if long_name is not None:
+                # the name itself is not repeated in full anywhere
+                shown = shortened(relative)
+                excluded.append(
+                    ExcludedPath(
+                        configuration, shortened(match.stem), shown, f"{shown}: not read: {long_name}"
+                    )
+                )
+                continue
             if reason is not None:
                 excluded.append(
                     ExcludedPath(
@@ -1316,6 +1365,13 @@ def _find_columns(
             )
         roles[role] = index
         unit = _split_name_unit(name)[1]
+        if unit is None and any(bracket in name for bracket in "()[]"):
+            raise CampaignFormatError(
+                path,
+                names_line,
+                f"the unit of the {role} column {quoted(name)} cannot be read: write one unit in "
+                "parentheses or brackets after the name, e.g. 'Acceleration (m/s^2)' or 'Force [N]'",
+            )
         if units_cells is not None:
             unit = units_cells[index]
         column_units[role] = unit
@@ -1381,30 +1437,62 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     return time_factor_s, force_factor_lbf
 
 
+def first_bad_time_step(steps_s: NDArray[np.float64], resolution_s: float = 0.0) -> tuple[int, float] | None:
+    """The first step of a time column that goes backwards or differs from the record's
+    typical step, or None when the steps are uniform.
+
+    The typical step is the median, not the mean: one jump shifts the mean away from
+    every other step, and the first step of the record would be blamed for it.
+
+    Parameters
+    ----------
+    steps_s : ndarray
+        Differences of successive time stamps, s.
+    resolution_s : float, optional
+        Resolution with which the time stamps are printed, s (added to the tolerance of
+        :data:`TIME_STEP_REL_TOLERANCE` times the typical step).
+
+    Returns
+    -------
+    (index, typical_step_s) or None
+        0-based index of the bad step (from sample ``index`` to ``index + 1``) and the
+        typical step, s.
+    """
+    typical_s = float(np.median(steps_s))
+    tolerance_s = TIME_STEP_REL_TOLERANCE * abs(typical_s) + resolution_s
+    bad = np.flatnonzero((steps_s <= 0.0) | ~(np.abs(steps_s - typical_s) <= tolerance_s))
+    return None if bad.size == 0 else (int(bad[0]), typical_s)
+
+
+def _check_magnitude(
+    column: NDArray[np.float64], role: str, columns: _Columns, first_line: int, path: str
+) -> None:
+    """Refuse a force or response column the analysis cannot square (:mod:`workflow.io.limits`),
+    naming the line of the first such value."""
+    index = columns.roles[role]
+    name = f" {quoted(columns.names[index])}" if columns.names else ""
+    problem = magnitude_problem(column, f"{role} column {index + 1}{name}")
+    if problem is not None:
+        raise CampaignFormatError(path, first_line + problem[0], problem[1])
+
+
 def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str) -> float:
     """Sample rate (Hz) from a time column that must increase in uniform steps."""
     steps = np.diff(time_s)
-    backwards = np.flatnonzero(steps <= 0.0)
-    if backwards.size:
-        i = int(backwards[0])
-        raise CampaignFormatError(
-            path,
-            first_line + i + 1,
-            f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s",
-        )
-    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    tolerance_s = TIME_STEP_REL_TOLERANCE * mean_step_s + resolution_s
-    uneven = np.flatnonzero(np.abs(steps - mean_step_s) > tolerance_s)
-    if uneven.size:
-        i = int(uneven[0])
-        raise CampaignFormatError(
-            path,
-            first_line + i + 1,
-            f"time column not uniform: step {steps[i]:.6g} s differs from the mean step "
-            f"{mean_step_s:.6g} s by {100 * abs(steps[i] / mean_step_s - 1):.3g} % "
-            f"(tolerance {100 * tolerance_s / mean_step_s:.3g} %)",
-        )
-    return 1.0 / mean_step_s
+    bad = first_bad_time_step(steps, resolution_s)
+    if bad is not None:
+        i, typical_s = bad
+        if steps[i] <= 0.0:
+            problem = f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s"
+        else:
+            tolerance_s = TIME_STEP_REL_TOLERANCE * typical_s + resolution_s
+            problem = (
+                f"time column not uniform: step {steps[i]:.6g} s (from {time_s[i]:.9g} s on the line "
+                f"before) differs from the record's typical step {typical_s:.6g} s by "
+                f"{100 * abs(steps[i] / typical_s - 1):.3g} % (tolerance {100 * tolerance_s / typical_s:.3g} %)"
+            )
+        raise CampaignFormatError(path, first_line + i + 1, problem)
+    return (time_s.size - 1) / (time_s[-1] - time_s[0])
 
 
 def _rates_agree(a_hz: float, b_hz: float, extra_rel: float = 0.0) -> bool:
@@ -1641,6 +1729,9 @@ def read_run(
             f"pre-trigger of {pretrigger_samples} samples is not shorter than the record ({n_rows} samples)",
         )
 
+    for role in ("force", "response"):
+        if role in columns.roles:
+            _check_magnitude(values[:, columns.roles[role]], role, columns, first_line, shown)
     force_lbf = None
     if "force" in columns.roles:
         force_lbf = values[:, columns.roles["force"]] * force_factor_lbf

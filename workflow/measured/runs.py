@@ -20,6 +20,7 @@ import numpy as np
 from workflow.io import units
 from workflow.io.campaign import RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
+from workflow.io.limits import MAX_QUOTED_PROBLEMS
 from workflow.io.settings import (
     AnalysisSettings,
     DampingFitSettings,
@@ -47,6 +48,28 @@ def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> 
     start = min(max(start, 0), record.n_samples)
     stop = min(max(stop, start), record.n_samples)
     return start, stop
+
+
+def window_problem(record: RunRecord, window_s: tuple[float, float] | None, configuration: str) -> str | None:
+    """Why campaign.yaml's ``window_s`` leaves too little of a record to analyse, or None.
+
+    The window is the part of every run to analyse, in s from the start of the file
+    (campaign-format.md); the part of it inside the record must hold at least
+    :data:`~workflow.io.campaign.MIN_SAMPLES` samples, as a whole run file must.
+    """
+    from workflow.io.campaign import MIN_SAMPLES
+
+    if window_s is None:
+        return None
+    start, stop = analysis_window(record, window_s)
+    if stop - start >= MIN_SAMPLES:
+        return None
+    return (
+        f"campaign.yaml configurations.{configuration}.window_s [{window_s[0]:.6g}, {window_s[1]:.6g}] s "
+        f"holds {stop - start} samples of this record, which spans 0 to "
+        f"{record.n_samples / record.sample_rate_hz:.6g} s ({record.n_samples} samples at "
+        f"{record.sample_rate_hz:.6g} Hz); the part of the run to analyse needs at least {MIN_SAMPLES} samples"
+    )
 
 
 def mode_search_range(
@@ -107,6 +130,10 @@ def identify_mode(
     )
     if not_a_resonance:
         raise ValueError(not_a_resonance)
+    if not np.isfinite(mode_hz):
+        raise ValueError(f"the {method} spectrum of the runs gives no finite peak frequency")
+    if coherence_at_mode is not None and not np.isfinite(coherence_at_mode):
+        coherence_at_mode = None  # no force energy at the mode: no coherence estimate
     if campaign_band_hz is not None:
         band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
     else:
@@ -263,6 +290,14 @@ def read_with_quality(
     ]
 
 
+def _window_problems(
+    campaign_dir, run_path: str, record: RunRecord, campaign, configuration: str
+) -> list[str]:
+    """The window problem of one read run (:func:`window_problem`) as a message naming the file."""
+    problem = window_problem(record, campaign.configurations[configuration].window_s, configuration)
+    return [] if problem is None else [f"{(Path(campaign_dir) / run_path).as_posix()}: {problem}"]
+
+
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
     """Messages of the failed checks, each naming the file."""
     return [
@@ -332,6 +367,8 @@ def analyse_run_file(
     record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
     problems = failed_checks(run_path, rows)
     if record is not None and not problems:
+        problems = _window_problems(campaign_dir, run_path, record, campaign, configuration)
+    if record is not None and not problems:
         if mode.mode is None:
             problems = [mode.error]
         else:
@@ -394,11 +431,24 @@ def identify_configuration_mode(
     records, windows, skipped = [], [], {}
     for run_path in run_paths:
         record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
+        if not problems:
+            problems = _window_problems(campaign_dir, run_path, record, campaign, configuration)
         if problems:
             skipped[PurePosixPath(run_path).stem] = problems
             continue
         records.append(record)
         windows.append(analysis_window(record, window_s))
+    if not records:
+        reasons = [problem for problems in skipped.values() for problem in problems]
+        if len(reasons) > MAX_QUOTED_PROBLEMS:
+            hidden = len(reasons) - MAX_QUOTED_PROBLEMS
+            reasons = [*reasons[:MAX_QUOTED_PROBLEMS], f"and {hidden} more (runs.parquet lists every reason)"]
+        return ConfigurationMode(
+            None,
+            f"configuration {configuration}: first mode not found: every run of the configuration is "
+            f"excluded ({len(skipped)} of {len(run_paths)}): " + "; ".join(reasons),
+            skipped,
+        )
     try:
         mode = identify_mode(
             records,

@@ -28,13 +28,14 @@ from numpy.typing import NDArray
 from workflow.io import units
 from workflow.io.campaign import (
     MIN_SAMPLES,
-    TIME_STEP_REL_TOLERANCE,
     Campaign,
     CampaignFormatError,
     RunRecord,
     _column_role,
     _rates_agree,
+    first_bad_time_step,
 )
+from workflow.io.limits import magnitude_problem
 from workflow.io.recording_time import iso_text
 
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
@@ -222,6 +223,15 @@ def _checked_samples(channel: Channel, shown: str) -> NDArray[np.float64]:
     return values
 
 
+def _checked_magnitude(channel: Channel, values: NDArray[np.float64], shown: str) -> NDArray[np.float64]:
+    """The samples of a force or response channel, refused when the analysis cannot square
+    them (:mod:`workflow.io.limits`), naming the sample."""
+    problem = magnitude_problem(values, channel.record)
+    if problem is not None:
+        raise CampaignFormatError(shown, None, f"{problem[1]} (sample {problem[0]}, 0-based)")
+    return values
+
+
 def _response_unit_check(channel: Channel, campaign: Campaign, shown: str) -> None:
     unit = unit_label(channel.unit)
     if unit is not None and units.normalize_unit(unit) != campaign.response.unit:
@@ -268,19 +278,16 @@ def _rate_from_time(channel: Channel, shown: str) -> tuple[NDArray[np.float64], 
         )
     time_s = np.ascontiguousarray(np.asarray(channel.values, dtype=np.float64).ravel() * factor_s)
     steps = np.diff(time_s)
-    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    uneven = np.flatnonzero(
-        ~(np.abs(steps - mean_step_s) <= TIME_STEP_REL_TOLERANCE * abs(mean_step_s)) | (steps <= 0)
-    )
-    if uneven.size:
-        i = int(uneven[0])
+    bad = first_bad_time_step(steps)
+    if bad is not None:
+        i, typical_s = bad
         raise CampaignFormatError(
             shown,
             None,
             f"{channel.record}: time not increasing in uniform steps: step {steps[i]:.6g} s after "
-            f"sample {i} (0-based), mean step {mean_step_s:.6g} s",
+            f"sample {i} (0-based), typical step {typical_s:.6g} s",
         )
-    return time_s, 1.0 / mean_step_s
+    return time_s, (time_s.size - 1) / (time_s[-1] - time_s[0])
 
 
 def assemble_record(file_channels: FileChannels, relative: str, shown: str, campaign: Campaign) -> RunRecord:
@@ -310,12 +317,12 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         pre-trigger that contradicts campaign.yaml.
     """
     response, force = _select_channels(file_channels, campaign, shown)
-    response_values = _checked_samples(response, shown)
+    response_values = _checked_magnitude(response, _checked_samples(response, shown), shown)
     n_samples = response_values.size
     _response_unit_check(response, campaign, shown)
     force_lbf = None
     if force is not None:
-        force_values = _checked_samples(force, shown)
+        force_values = _checked_magnitude(force, _checked_samples(force, shown), shown)
         if force_values.size != n_samples:
             raise CampaignFormatError(
                 shown,

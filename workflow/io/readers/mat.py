@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
+from workflow.io.limits import quoted
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import parse_clock_time
 
@@ -113,6 +114,19 @@ def _number(value: Any) -> float | None:
     return None
 
 
+def _stated_number(group: dict[str, Any], where: str, shown: str, *keys: str) -> float | None:
+    """The finite number at ``keys`` of a Test.Lab struct, None when the field is absent;
+    a field that holds anything else is an error (never silently replaced)."""
+    value = _field(group, *keys)
+    if value is None:
+        return None
+    number = _number(value)
+    if number is None or not np.isfinite(number):
+        text = quoted(value) if isinstance(value, str) else f"of type {type(value).__name__}"
+        raise CampaignFormatError(shown, None, f"{where}: {'.'.join(keys)} is {text}, not a finite number")
+    return number
+
+
 def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[Channel]:
     """The channels of one Test.Lab export struct."""
     where = f"variable {variable!r}"
@@ -129,7 +143,7 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
             f"{where}: function_record.name gives {len(names)} channel name(s) but y_values.values "
             f"has {len(columns)} column(s) of {values.shape[0]} samples",
         )
-    declared = _number(_field(group, "x_values", "number_of_values"))
+    declared = _stated_number(group, where, shown, "x_values", "number_of_values")
     if declared is not None and declared != columns[0].size:
         raise CampaignFormatError(
             shown,
@@ -137,11 +151,11 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
             f"{where}: x_values.number_of_values says {declared:.0f} samples but y_values.values "
             f"holds {columns[0].size} (truncated or mislabelled export)",
         )
-    interval_s = _number(_field(group, "x_values", "increment"))
-    start_s = _number(_field(group, "x_values", "start_value"))
+    interval_s = _stated_number(group, where, shown, "x_values", "increment")
+    start_s = _stated_number(group, where, shown, "x_values", "start_value")
     label = _field(group, "y_values", "quantity", "label")
-    factor = _number(_field(group, "y_values", "quantity", "unit_transformation", "factor"))
-    offset = _number(_field(group, "y_values", "quantity", "unit_transformation", "offset"))
+    factor = _stated_number(group, where, shown, "y_values", "quantity", "unit_transformation", "factor")
+    offset = _stated_number(group, where, shown, "y_values", "quantity", "unit_transformation", "offset")
     factor = 1.0 if factor is None else factor
     offset = 0.0 if offset is None else offset
     created = _field(group, "function_record", "creation_time")
@@ -192,12 +206,17 @@ def channels_from_variables(variables: dict[str, Any], format_name: str, shown: 
             channels += _testlab_channels(name, value, shown)
             testlab = True
             continue
-        scalar = _number(value) if not isinstance(value, (str, dict)) else None
-        if scalar is not None:
-            if name.lower() in _RATE_NAMES_HZ and scalar > 0:
-                rates.append((name, scalar))
-            elif name.lower() in _INTERVAL_NAMES_S and scalar > 0:
-                rates.append((name, 1.0 / scalar))
+        if name.lower() in _RATE_NAMES_HZ | _INTERVAL_NAMES_S:
+            scalar = _number(value) if not isinstance(value, (str, dict)) else None
+            if scalar is None or not 0 < scalar < np.inf:
+                text = quoted(value) if isinstance(value, str) else f"{value!r:.60}"
+                unit = "Hz" if name.lower() in _RATE_NAMES_HZ else "s"
+                raise CampaignFormatError(
+                    shown, None, f"variable {name!r} is {text}, not a positive number (in {unit})"
+                )
+            rates.append((name, scalar if name.lower() in _RATE_NAMES_HZ else 1.0 / scalar))
+            continue
+        if not isinstance(value, (str, dict)) and _number(value) is not None:
             continue
         array = value if isinstance(value, np.ndarray) else None
         if array is not None and array.ndim == 1 and array.size > 1 and np.issubdtype(array.dtype, np.number):
