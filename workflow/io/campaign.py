@@ -715,7 +715,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                     root / CAMPAIGN_FILE,
                     None,
                     f"configurations.{configuration}.files matches two runs named "
-                    f"{match.stem!r}: {seen[match.stem]} and {relative}",
+                    f"{quoted(match.stem)}: {seen[match.stem]} and {relative}",
                 )
             seen[match.stem] = relative
             runs.append(RunFile(configuration, match.stem, relative))
@@ -820,11 +820,11 @@ def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) ->
         if cell == "":
             return f"empty cell in column {column}"
         if _NON_FINITE.fullmatch(cell):
-            return f"NaN/inf value {cell!r} in column {column}"
+            return f"NaN/inf value {quoted(cell)} in column {column}"
         if not _NUMBER.fullmatch(cell):
-            return f"non-numeric cell {cell!r} in column {column}"
+            return f"non-numeric cell {quoted(cell)} in column {column}"
         if not math.isfinite(float(cell)):
-            return f"value {cell!r} in column {column} overflows a float"
+            return f"value {quoted(cell)} in column {column} overflows a float"
     return None
 
 
@@ -1086,7 +1086,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
             if not parsed or unit not in _RATE_FACTORS_HZ or not 0 < float(parsed.group(1)) < math.inf:
                 raise CampaignFormatError(
-                    path, number, f"cannot read a positive sample rate in Hz from {line.strip()!r}"
+                    path, number, f"cannot read a positive sample rate in Hz from {quoted(line.strip())}"
                 )
             rate, rate_line = float(parsed.group(1)) * _RATE_FACTORS_HZ[unit], number
         elif name in _PRETRIGGER_KEYS and pre_line is None:
@@ -1102,7 +1102,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
                 raise CampaignFormatError(
                     path,
                     number,
-                    f"cannot read the pre-trigger from {line.strip()!r} "
+                    f"cannot read the pre-trigger from {quoted(line.strip())} "
                     "(expected a whole number of samples, e.g. 'Pre-trigger: 25 samples')",
                 )
     return _HeaderValues(rate, rate_line, pre_samples, pre_s, pre_line, entries)
@@ -1216,9 +1216,9 @@ def _read_text(path: Path, shown: str) -> str:
         )
     nul = raw.find(b"\x00")
     if nul >= 0:
-        raise CampaignFormatError(
-            shown, raw.count(b"\n", 0, nul) + 1, "binary data (NUL byte): not a text export"
-        )
+        # lines end in LF, CRLF or a lone CR, as the text is read below
+        line_ends = raw.count(b"\n", 0, nul) + raw.count(b"\r", 0, nul) - raw.count(b"\r\n", 0, nul)
+        raise CampaignFormatError(shown, line_ends + 1, "binary data (NUL byte): not a text export")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -1252,7 +1252,7 @@ def _decimal_commas_to_points(text: str, shown: str) -> str:
             raise CampaignFormatError(
                 shown,
                 number,
-                f"campaign.yaml says decimal: ',' but {clash.group(0)!r} holds more than one separator; "
+                f"campaign.yaml says decimal: ',' but {quoted(clash.group(0))} holds more than one separator; "
                 "with decimal commas the columns must be separated by tabs, semicolons or spaces",
             )
     return "\n".join(lines)
@@ -1322,7 +1322,7 @@ def _find_columns(
                     raise CampaignFormatError(
                         path,
                         last_number,
-                        f"unexpected text {last_line.strip()!r} between the column names "
+                        f"unexpected text {quoted(last_line.strip())} between the column names "
                         f"(line {above_number}) and the numbers",
                     )
                 names, names_line = above, above_number
@@ -1351,6 +1351,10 @@ def _find_columns(
             )
         return _Columns({role: i for i, role in enumerate(order)}, {}, (), None)
 
+    for name in names:
+        long_name = name_length_problem("column name", name)
+        if long_name is not None:
+            raise CampaignFormatError(path, names_line, long_name)
     roles: dict[str, int] = {}
     column_units: dict[str, str | None] = {}
     for index, name in enumerate(names):
@@ -1361,7 +1365,7 @@ def _find_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"two {role} columns: {names[roles[role]]!r} and {name!r}",
+                f"two {role} columns: {quoted(names[roles[role]])} and {quoted(name)}",
             )
         roles[role] = index
         unit = _split_name_unit(name)[1]
@@ -1379,7 +1383,7 @@ def _find_columns(
         raise CampaignFormatError(
             path,
             names_line,
-            f"no response column among {names} (a response column's name contains acc, vel, resp or disp)",
+            f"no response column among {[shortened(name) for name in names][:MAX_QUOTED_PROBLEMS]} (a response column's name contains acc, vel, resp or disp)",
         )
     response_name = _split_name_unit(names[roles["response"]])[0].lower()
     for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
@@ -1387,7 +1391,7 @@ def _find_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"response column {names[roles['response']]!r} is {quantity} but "
+                f"response column {quoted(names[roles['response']])} is {quantity} but "
                 f"campaign.yaml says response quantity {campaign.response.quantity}",
             )
     return _Columns(roles, column_units, tuple(names), names_line)
@@ -1408,13 +1412,13 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     if time_unit:
         time_factor_s = _TIME_UNIT_FACTORS_S.get(time_unit.strip().lower(), 0.0)
         if time_factor_s == 0.0:
-            raise CampaignFormatError(path, line, f"time column unit {time_unit!r}: expected s or ms")
+            raise CampaignFormatError(path, line, f"time column unit {quoted(time_unit)}: expected s or ms")
     response_unit = columns.units.get("response")
     if response_unit and units.normalize_unit(response_unit) != campaign.response.unit:
         raise CampaignFormatError(
             path,
             line,
-            f"response column unit {response_unit!r} disagrees with campaign.yaml "
+            f"response column unit {quoted(response_unit)} disagrees with campaign.yaml "
             f"response unit {campaign.response.unit!r}",
         )
     force_factor_lbf = 1.0
@@ -1424,12 +1428,14 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
         if file_unit:
             canonical = units.normalize_unit(file_unit)
             if canonical not in units.known_units("force"):
-                raise CampaignFormatError(path, line, f"force column unit {file_unit!r}: expected lbf or N")
+                raise CampaignFormatError(
+                    path, line, f"force column unit {quoted(file_unit)}: expected lbf or N"
+                )
             if yaml_unit is not None and canonical != yaml_unit:
                 raise CampaignFormatError(
                     path,
                     line,
-                    f"force column unit {file_unit!r} disagrees with campaign.yaml force unit {yaml_unit!r}",
+                    f"force column unit {quoted(file_unit)} disagrees with campaign.yaml force unit {yaml_unit!r}",
                 )
         # The column's own unit first; else campaign.yaml's; else the original lab's lbf.
         unit = units.normalize_unit(file_unit) if file_unit else (yaml_unit or "lbf")

@@ -35,8 +35,11 @@ from workflow.io.campaign import (
     _rates_agree,
     first_bad_time_step,
 )
-from workflow.io.limits import magnitude_problem
+from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.recording_time import iso_text
+
+LISTED_CHANNELS: int = 32
+"""Most channels an error message lists (a file may hold thousands)."""
 
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
@@ -125,9 +128,11 @@ def channel_role(channel: Channel) -> str | None:
 def describe_channels(channels: list[Channel]) -> str:
     """``[0] 't' (s), [1] 'x', ...``: the listing error messages give."""
     parts = []
-    for index, channel in enumerate(channels):
+    for index, channel in enumerate(channels[:LISTED_CHANNELS]):
         unit = unit_label(channel.unit)
-        parts.append(f"[{index}] {channel.name!r}" + (f" ({unit})" if unit else ""))
+        parts.append(f"[{index}] {quoted(channel.name)}" + (f" ({shortened(unit)})" if unit else ""))
+    if len(channels) > LISTED_CHANNELS:
+        parts.append(f"and {len(channels) - LISTED_CHANNELS} more")
     return ", ".join(parts)
 
 
@@ -165,6 +170,10 @@ def _select_channels(
     channels, name = file_channels.channels, file_channels.format_name
     if not channels:
         raise CampaignFormatError(shown, None, f"no channels of samples in the {name} file")
+    for index, channel in enumerate(channels):
+        long_name = name_length_problem(f"channel [{index}]: name", channel.name)
+        if long_name is not None:
+            raise CampaignFormatError(shown, None, long_name)
     roles = {id(c): channel_role(c) for c in channels}
     force = None
     if campaign.force is not None and campaign.force.channel is not None:

@@ -71,11 +71,46 @@ def _read_mat73(path: Path, shown: str) -> dict[str, Any]:
 
     try:
         with h5py.File(path, "r") as handle:
-            return {name: _hdf5_value(handle, handle[name]) for name in handle if not name.startswith("#")}
+            outside = _outside_reference(handle)
+            if outside is None:
+                return {
+                    name: _hdf5_value(handle, handle[name]) for name in handle if not name.startswith("#")
+                }
     except Exception as error:  # h5py raises OSError, KeyError, ... for damaged files
         raise CampaignFormatError(
             shown, None, f"cannot read as a MATLAB 7.3 (HDF5) file ({type(error).__name__}: {error})"
         ) from None
+    raise CampaignFormatError(
+        shown,
+        None,
+        f"{outside}: refused, it would read another file (every file read lies in the campaign folder)",
+    )
+
+
+def _outside_reference(handle: Any) -> str | None:
+    """The first object of an HDF5 file whose data lie in another file (an external link,
+    a dataset stored in external files, a virtual dataset), or None. MATLAB never writes
+    them; h5py would follow them out of the campaign folder."""
+    import h5py
+
+    found: list[str] = []
+
+    def link(name: str, info: Any) -> bool | None:
+        if isinstance(info, h5py.ExternalLink):
+            found.append(f"{quoted(name)} is a link to another file")
+            return True
+        return None
+
+    def dataset(name: str, node: Any) -> bool | None:
+        if isinstance(node, h5py.Dataset) and (node.external or node.is_virtual):
+            found.append(f"{quoted(name)} holds data stored in other files")
+            return True
+        return None
+
+    handle.visititems_links(link)
+    if not found:
+        handle.visititems(dataset)
+    return found[0] if found else None
 
 
 def _hdf5_value(handle: Any, node: Any) -> Any:
