@@ -346,7 +346,8 @@ def time_fault(n: int, line: int, kind: str, newline: str) -> str:
 def test_a_time_fault_is_reported_at_its_own_line(tmp_path, kind, newline):
     error = read_error(tmp_path, time_fault(3000, 1505, kind, newline))
     assert error.line == 1505, str(error)
-    assert ("not increasing" if kind == "back" else "not uniform") in error.problem
+    words = {"jump": "not uniform", "spike": "out of order", "back": "not increasing"}[kind]
+    assert error.problem.startswith(f"time column {words}")
 
 
 def test_a_time_vector_jump_in_a_system_format_names_its_sample(tmp_path):
@@ -540,3 +541,75 @@ def test_bad_runs_are_excluded_by_name_and_the_good_ones_analysed(lab, tmp_path)
     mode = json.loads((workdir / "results/interim/mode/large_washer.json").read_text())
     assert "every run of the configuration is excluded (2 of 2)" in mode["error"]
     assert "Traceback" not in result.stderr
+
+
+# ------------------------------------------------------------------ one bad run never takes the others down
+
+
+def test_a_run_at_another_sample_rate_is_left_out_of_the_mode_search_only(lab, tmp_path):
+    root = tmp_path / "campaign"
+    shutil.copytree(lab, root)
+    text = (root / "campaign.yaml").read_text()
+    (root / "campaign.yaml").write_text(text.replace("sample_rate_hz: 2560\n", ""))
+    lines = (root / "no_washer/run01.txt").read_text().splitlines()
+    assert lines[1] == "Sample rate: 2560 Hz"
+    lines[1] = "Sample rate: 5120 Hz"
+    rows = [line.split("\t") for line in lines[NAMES_LINE:]]
+    faster = ["\t".join([f"{float(cells[0]) / 2:.7f}", *cells[1:]]) for cells in rows]
+    # named to come first: the mode search must not take its rate for every run's
+    (root / "no_washer/run00.txt").write_text("\n".join(lines[:NAMES_LINE] + faster) + "\n")
+    found = mode_of(root, ["no_washer/run00.txt", "no_washer/run01.txt", "no_washer/run02.txt"], "no_washer")
+    assert found.mode is not None and found.mode.n_runs == 2 and found.mode.sample_rate_hz == 2560.0
+    assert found.mode.mode_hz == pytest.approx(126.0, rel=0.05)
+    assert found.skipped_runs == {
+        "run00": [
+            "no_washer/run00.txt: left out of the mode search only: sample rate 5120 Hz differs from the "
+            "2560 Hz of most runs of the configuration"
+        ]
+    }
+
+
+def test_a_fault_of_the_analysis_on_one_run_excludes_it_and_the_others_go_on(lab, monkeypatch):
+    from workflow.measured import runs as measured_runs
+
+    found = mode_of(lab, ["no_washer/run01.txt", "no_washer/run02.txt"], "no_washer")
+    analyse = measured_runs.analyse_run_with_quality
+
+    def fails_on_run02(record, **options):
+        if options["run"] == "run02":
+            raise IndexError("index 9 is out of bounds")
+        return analyse(record, **options)
+
+    monkeypatch.setattr(measured_runs, "analyse_run_with_quality", fails_on_run02)
+    settings = AnalysisSettings()
+    statuses = [
+        analyse_run_file(
+            lab,
+            f"no_washer/{run}.txt",
+            configuration="no_washer",
+            campaign=load_campaign(lab),
+            mode=found,
+            quality_settings=QualitySettings(),
+            decay_settings=settings.decay(),
+        ).status
+        for run in ("run01", "run02")
+    ]
+    assert [status["status"] for status in statuses] == ["used", "excluded"]
+    assert statuses[1]["reason"] == (
+        f"{lab.as_posix()}/no_washer/run02.txt: not analysed: IndexError: index 9 is out of bounds (an error "
+        "of the analysis, not a known fault of the file: the job's log has the trace)"
+    )
+
+
+def test_a_fault_of_the_mode_search_is_the_configurations_reason_not_a_crash(lab, monkeypatch):
+    from workflow.measured import runs as measured_runs
+
+    def fails(*args, **kwargs):
+        raise FloatingPointError("overflow in multiply")
+
+    monkeypatch.setattr(measured_runs, "identify_mode", fails)
+    found = mode_of(lab, ["no_washer/run01.txt"], "no_washer")
+    assert found.mode is None
+    assert found.error.startswith(
+        "configuration no_washer: first mode not found: FloatingPointError: overflow in multiply (an error of"
+    )

@@ -1490,6 +1490,12 @@ def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: in
         i, typical_s = bad
         if steps[i] <= 0.0:
             problem = f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s"
+        elif i + 1 < steps.size and steps[i + 1] <= 0.0:
+            # a stamp ahead of its neighbours (a spike, two rows swapped): this line is the wrong one
+            problem = (
+                f"time column out of order: {time_s[i + 1]:.9g} s is followed by {time_s[i + 2]:.9g} s "
+                "on the next line"
+            )
         else:
             tolerance_s = TIME_STEP_REL_TOLERANCE * typical_s + resolution_s
             problem = (

@@ -11,6 +11,7 @@ pandas.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -18,9 +19,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from workflow.io import units
-from workflow.io.campaign import RunRecord
+from workflow.io.campaign import SAMPLE_RATE_REL_TOLERANCE, RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
-from workflow.io.limits import MAX_QUOTED_PROBLEMS
+from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
 from workflow.io.settings import (
     AnalysisSettings,
     DampingFitSettings,
@@ -271,10 +272,7 @@ def read_with_quality(
         reason = str(error)
     except Exception as error:  # a fault of the reader on one file must not stop the others
         logging.getLogger(__name__).exception("%s: not read", path)
-        reason = (
-            f"{(Path(campaign_dir) / path).as_posix()}: not read: {type(error).__name__}: {error} "
-            "(an error of the reader, not a known fault of the file: the job's log has the trace)"
-        )
+        reason = _fault_reason(campaign_dir, path, "read", error)
     else:
         return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
     return None, [
@@ -296,6 +294,16 @@ def _window_problems(
     """The window problem of one read run (:func:`window_problem`) as a message naming the file."""
     problem = window_problem(record, campaign.configurations[configuration].window_s, configuration)
     return [] if problem is None else [f"{(Path(campaign_dir) / run_path).as_posix()}: {problem}"]
+
+
+def _fault_reason(campaign_dir, path: str, step: str, error: Exception) -> str:
+    """The exclusion reason of a run whose reading or analysis raised an unexpected error."""
+    stage = "reader" if step == "read" else "analysis"
+    return (
+        f"{(Path(campaign_dir) / path).as_posix()}: not {step}: {type(error).__name__}: "
+        f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the {stage}, not a known fault "
+        "of the file: the job's log has the trace)"
+    )
 
 
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
@@ -372,17 +380,23 @@ def analyse_run_file(
         if mode.mode is None:
             problems = [mode.error]
         else:
-            segments, decay_rows = analyse_run_with_quality(
-                record,
-                configuration=configuration,
-                run=run,
-                mode=mode.mode,
-                window=analysis_window(record, campaign.configurations[configuration].window_s),
-                decay_settings=decay_settings,
-                quality_settings=quality_settings,
-            )
-            rows += decay_rows
-            problems = failed_checks(run_path, decay_rows)
+            try:
+                segments, decay_rows = analyse_run_with_quality(
+                    record,
+                    configuration=configuration,
+                    run=run,
+                    mode=mode.mode,
+                    window=analysis_window(record, campaign.configurations[configuration].window_s),
+                    decay_settings=decay_settings,
+                    quality_settings=quality_settings,
+                )
+            except Exception as error:  # a fault on one run must not stop the others
+                logging.getLogger(__name__).exception("%s: not analysed", run_path)
+                segments, decay_rows = empty_segments(), []
+                problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
+            else:
+                rows += decay_rows
+                problems = failed_checks(run_path, decay_rows)
     status = {
         "configuration": configuration,
         "run": run,
@@ -428,7 +442,7 @@ def identify_configuration_mode(
     from pathlib import PurePosixPath
 
     window_s = campaign.configurations[configuration].window_s
-    records, windows, skipped = [], [], {}
+    records, windows, run_paths_used, skipped = [], [], [], {}
     for run_path in run_paths:
         record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
         if not problems:
@@ -438,6 +452,7 @@ def identify_configuration_mode(
             continue
         records.append(record)
         windows.append(analysis_window(record, window_s))
+        run_paths_used.append(run_path)
     if not records:
         reasons = [problem for problems in skipped.values() for problem in problems]
         if len(reasons) > MAX_QUOTED_PROBLEMS:
@@ -449,6 +464,16 @@ def identify_configuration_mode(
             f"excluded ({len(skipped)} of {len(run_paths)}): " + "; ".join(reasons),
             skipped,
         )
+    common_hz = _common_sample_rate_hz([record.sample_rate_hz for record in records])
+    for index in reversed(range(len(records))):
+        rate_hz = records[index].sample_rate_hz
+        if not math.isclose(rate_hz, common_hz, rel_tol=SAMPLE_RATE_REL_TOLERANCE):
+            # one spectrum grid for all: a run at another rate would be read at the wrong frequencies
+            skipped[PurePosixPath(run_paths_used[index]).stem] = [
+                f"{run_paths_used[index]}: left out of the mode search only: sample rate {rate_hz:.9g} Hz "
+                f"differs from the {common_hz:.9g} Hz of most runs of the configuration"
+            ]
+            del records[index], windows[index]
     try:
         mode = identify_mode(
             records,
@@ -464,7 +489,25 @@ def identify_configuration_mode(
         return ConfigurationMode(
             None, f"configuration {configuration}: first mode not found: {error}", skipped
         )
+    except Exception as error:  # a fault of the search must not stop the other configurations
+        logging.getLogger(__name__).exception("configuration %s: mode search failed", configuration)
+        return ConfigurationMode(
+            None,
+            f"configuration {configuration}: first mode not found: {type(error).__name__}: "
+            f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the mode search, not a known "
+            "fault of the files: the job's log has the trace)",
+            skipped,
+        )
     return ConfigurationMode(mode, "", skipped)
+
+
+def _common_sample_rate_hz(rates_hz: list[float]) -> float:
+    """The sample rate that most of the rates agree with (the first of equals)."""
+    agreeing = [
+        sum(math.isclose(rate, other, rel_tol=SAMPLE_RATE_REL_TOLERANCE) for other in rates_hz)
+        for rate in rates_hz
+    ]
+    return rates_hz[int(np.argmax(agreeing))]
 
 
 def analyse_campaign(
