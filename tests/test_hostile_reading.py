@@ -274,6 +274,19 @@ def write_scaled(source: Path, target: Path, factor: float) -> None:
     target.write_text("\n".join(lines[:NAMES_LINE] + rows) + "\n")
 
 
+def analysis_status(root: Path, path: str, configuration: str, found) -> dict[str, str]:
+    """The runs-table row of one run analysed with its configuration's mode ``found``."""
+    return analyse_run_file(
+        root,
+        path,
+        configuration=configuration,
+        campaign=load_campaign(root),
+        mode=found,
+        quality_settings=QualitySettings(),
+        decay_settings=AnalysisSettings().decay(),
+    ).status
+
+
 def test_a_run_scaled_by_1e160_is_excluded_naming_the_file_and_the_others_give_the_mode(lab, tmp_path):
     root = tmp_path / "campaign"
     shutil.copytree(lab, root)
@@ -393,16 +406,7 @@ def test_a_window_beyond_the_record_is_said_in_the_words_of_the_contract(lab, tm
     assert found.mode is None and expected in found.error
     assert "every run of the configuration is excluded (2 of 2)" in found.error
     assert "fewer than 2 samples" not in found.error
-    settings = AnalysisSettings()
-    status = analyse_run_file(
-        root,
-        "large_washer/run01.txt",
-        configuration="large_washer",
-        campaign=load_campaign(root),
-        mode=found,
-        quality_settings=QualitySettings(),
-        decay_settings=settings.decay(),
-    ).status
+    status = analysis_status(root, "large_washer/run01.txt", "large_washer", found)
     assert status["status"] == "excluded" and status["reason"].startswith(expected)
     # the other configuration goes on
     assert mode_of(root, ["no_washer/run01.txt", "no_washer/run02.txt"], "no_washer").mode is not None
@@ -581,18 +585,8 @@ def test_a_fault_of_the_analysis_on_one_run_excludes_it_and_the_others_go_on(lab
         return analyse(record, **options)
 
     monkeypatch.setattr(measured_runs, "analyse_run_with_quality", fails_on_run02)
-    settings = AnalysisSettings()
     statuses = [
-        analyse_run_file(
-            lab,
-            f"no_washer/{run}.txt",
-            configuration="no_washer",
-            campaign=load_campaign(lab),
-            mode=found,
-            quality_settings=QualitySettings(),
-            decay_settings=settings.decay(),
-        ).status
-        for run in ("run01", "run02")
+        analysis_status(lab, f"no_washer/{run}.txt", "no_washer", found) for run in ("run01", "run02")
     ]
     assert [status["status"] for status in statuses] == ["used", "excluded"]
     assert statuses[1]["reason"] == (
