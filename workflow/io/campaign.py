@@ -160,11 +160,11 @@ def _relative_glob(files: str) -> str:
     if not files.strip():
         raise ValueError("files must be a non-empty glob")
     if Path(files).is_absolute() or files.startswith(("/", "\\", "~")) or re.match(r"[A-Za-z]:", files):
-        raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
+        raise ValueError(f"files glob {quoted(files)} must be relative to the campaign folder")
     if ".." in re.split(r"[/\\]", files):
-        raise ValueError(f"files glob {files!r} leaves the campaign folder ('..' is not allowed)")
+        raise ValueError(f"files glob {quoted(files)} leaves the campaign folder ('..' is not allowed)")
     if not Path(files).parts:
-        raise ValueError(f"files glob {files!r} names no file")
+        raise ValueError(f"files glob {quoted(files)} names no file")
     return files
 
 
@@ -677,7 +677,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
             raise CampaignFormatError(
                 root / CAMPAIGN_FILE,
                 None,
-                f"configurations.{configuration}.files: {spec.files!r} is not a usable glob ({error})",
+                f"configurations.{configuration}.files: {quoted(spec.files)} is not a usable glob ({error})",
             ) from None
         if not matches:
             excluded.append(
@@ -685,7 +685,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                     configuration,
                     "",
                     spec.files,
-                    f"configurations.{configuration}.files: the glob {spec.files!r} matches no "
+                    f"configurations.{configuration}.files: the glob {quoted(spec.files)} matches no "
                     f"file in the campaign folder {root.as_posix()}",
                 )
             )
