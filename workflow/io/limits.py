@@ -10,6 +10,18 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+__all__ = [
+    "MAX_NAME_CHARACTERS",
+    "QUOTED_CHARACTERS",
+    "MAX_QUOTED_PROBLEMS",
+    "MAX_SAMPLE_MAGNITUDE",
+    "MIN_PEAK_MAGNITUDE",
+    "shortened",
+    "quoted",
+    "name_length_problem",
+    "magnitude_problem",
+]
+
 MAX_NAME_CHARACTERS: int = 255
 """Longest campaign name, run name or channel name. 255 is NAME_MAX, the longest file or
 folder name POSIX file systems (255 bytes) and NTFS (255 UTF-16 units) allow: a campaign's
@@ -58,6 +70,13 @@ def quoted(text: str, limit: int = QUOTED_CHARACTERS) -> str:
     -------
     str
         ``'abc'`` for a short text, ``'abc…' (100000 characters)`` for a long one.
+
+    Examples
+    --------
+    >>> quoted("Force (lbf)")
+    "'Force (lbf)'"
+    >>> quoted("x" * 100, limit=5)
+    "'xxxxx…' (100 characters)"
     """
     if len(text) <= limit:
         return repr(text)
@@ -98,6 +117,14 @@ def magnitude_problem(values: NDArray[np.float64], what: str) -> tuple[int, str]
         0-based index of the first sample beyond :data:`MAX_SAMPLE_MAGNITUDE` (or, for a
         channel whose peak is below :data:`MIN_PEAK_MAGNITUDE` but not zero, of its
         peak) and the problem in words.
+
+    Examples
+    --------
+    >>> index, problem = magnitude_problem(np.array([0.0, 1.5, -3e160]), "response")
+    >>> index, problem[:50]
+    (2, 'response: value -3e+160 is beyond ±1e+100: its squ')
+    >>> magnitude_problem(np.array([0.0, 1.5, -3.0]), "response") is None
+    True
     """
     if values.size == 0:
         return None

@@ -11,7 +11,6 @@ pandas.
 from __future__ import annotations
 
 import logging
-import math
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,9 +18,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from workflow.io import units
-from workflow.io.campaign import SAMPLE_RATE_REL_TOLERANCE, RunRecord
+from workflow.io.campaign import RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
+from workflow.io.record_rules import rates_agree
 from workflow.io.settings import (
     AnalysisSettings,
     DampingFitSettings,
@@ -34,6 +34,27 @@ from workflow.measured import mode as modal_id
 
 if TYPE_CHECKING:
     import pandas as pd
+
+
+__all__ = [
+    "analysis_window",
+    "window_problem",
+    "mode_search_range",
+    "identify_mode",
+    "RUN_COLUMNS",
+    "SEGMENT_COLUMNS",
+    "empty_segments",
+    "analyse_run_with_quality",
+    "read_with_quality",
+    "failed_checks",
+    "read_and_check",
+    "RunAnalysis",
+    "analyse_run_file",
+    "identify_configuration_mode",
+    "analyse_campaign",
+    "collect_tables",
+    "fit_damping_curves",
+]
 
 
 def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> tuple[int, int]:
@@ -467,7 +488,7 @@ def identify_configuration_mode(
     common_hz = _common_sample_rate_hz([record.sample_rate_hz for record in records])
     for index in reversed(range(len(records))):
         rate_hz = records[index].sample_rate_hz
-        if not math.isclose(rate_hz, common_hz, rel_tol=SAMPLE_RATE_REL_TOLERANCE):
+        if not rates_agree(rate_hz, common_hz):
             # one spectrum grid for all: a run at another rate would be read at the wrong frequencies
             skipped[PurePosixPath(run_paths_used[index]).stem] = [
                 f"{run_paths_used[index]}: left out of the mode search only: sample rate {rate_hz:.9g} Hz "
@@ -503,10 +524,7 @@ def identify_configuration_mode(
 
 def _common_sample_rate_hz(rates_hz: list[float]) -> float:
     """The sample rate that most of the rates agree with (the first of equals)."""
-    agreeing = [
-        sum(math.isclose(rate, other, rel_tol=SAMPLE_RATE_REL_TOLERANCE) for other in rates_hz)
-        for rate in rates_hz
-    ]
+    agreeing = [sum(rates_agree(rate, other) for other in rates_hz) for rate in rates_hz]
     return rates_hz[int(np.argmax(agreeing))]
 
 

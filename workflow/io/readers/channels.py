@@ -31,12 +31,20 @@ from workflow.io.campaign import (
     Campaign,
     CampaignFormatError,
     RunRecord,
-    _column_role,
-    _rates_agree,
-    first_bad_time_step,
 )
 from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
+from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
+
+__all__ = [
+    "Channel",
+    "FileChannels",
+    "unit_label",
+    "channel_role",
+    "describe_channels",
+    "assemble_record",
+    "LISTED_CHANNELS",
+]
 
 LISTED_CHANNELS: int = 32
 """Most channels an error message lists (a file may hold thousands)."""
@@ -122,7 +130,7 @@ def channel_role(channel: Channel) -> str | None:
     name = channel.name if channel.role_name is None else channel.role_name
     if name.strip().lower() == "t":
         return "time"
-    return _column_role(name)
+    return column_role(name)
 
 
 def describe_channels(channels: list[Channel]) -> str:
@@ -374,7 +382,7 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         )
     for i, (name_a, rate_a) in enumerate(sources):
         for name_b, rate_b in sources[i + 1 :]:
-            if not _rates_agree(rate_a, rate_b):
+            if not rates_agree(rate_a, rate_b):
                 raise CampaignFormatError(
                     shown,
                     None,
