@@ -53,6 +53,9 @@ __all__ = [
     "identify_configuration_mode",
     "analyse_campaign",
     "collect_tables",
+    "NOTHING_ANALYSED",
+    "nothing_analysed_message",
+    "nothing_analysed_in_tables",
     "fit_damping_curves",
 ]
 
@@ -639,6 +642,64 @@ def collect_tables(
         "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True),
         "modes": pd.DataFrame(mode_rows),
     }
+
+
+NOTHING_ANALYSED = "nothing could be analysed"
+"""How :func:`nothing_analysed_message` begins."""
+
+
+def nothing_analysed_message(runs: pd.DataFrame, n_kept_segments: int, rejected: pd.DataFrame) -> str | None:
+    """Why nothing of a campaign could be analysed (no kept segment at all), or None.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        The runs table (:data:`RUN_COLUMNS`): every run file, used or excluded with its reason.
+    n_kept_segments : int
+        Rows of the segments table (kept segments of used runs).
+    rejected : DataFrame
+        The rejected segments, with ``configuration``, ``run`` and ``reject_reason``.
+
+    Returns
+    -------
+    str or None
+        Which runs, why (the first reasons, each naming its file or campaign.yaml key) and
+        what to change, for the last lines a user reads; None when some segment was kept.
+    """
+    if n_kept_segments > 0:
+        return None
+    used = runs[runs["status"] == "used"]
+    excluded = runs[runs["status"] != "used"]
+    lines = [f"{NOTHING_ANALYSED}: no run of the campaign gives a usable segment."]
+    if len(excluded):
+        lines.append(f"{len(excluded)} of {len(runs)} run files (or globs) are excluded:")
+        for row in excluded.head(MAX_QUOTED_PROBLEMS).itertuples():
+            name = f"{row.configuration}/{row.run}" if row.run else row.path
+            lines.append(f"  {name}: {shortened(str(row.reason), 10 * QUOTED_CHARACTERS)}")
+        if len(excluded) > MAX_QUOTED_PROBLEMS:
+            lines.append(f"  and {len(excluded) - MAX_QUOTED_PROBLEMS} more")
+    if len(used):
+        counts = rejected["reject_reason"].value_counts().head(3)
+        reasons = "; ".join(f"{count} x {shortened(str(reason))}" for reason, count in counts.items())
+        lines.append(
+            f"{len(used)} run(s) were read but every segment of them was rejected"
+            + (f" ({reasons})" if reasons else " (none was long enough to measure)")
+        )
+    lines.append(
+        "What to change: each reason names the file (and line) or the campaign.yaml key at fault; "
+        "correct those, or choose the channel, window_s, band_hz or mode_hz that fit the records "
+        "(docs/input-format.md). Every run and its reason: results/tables/runs.csv"
+    )
+    return "\n".join(lines)
+
+
+def nothing_analysed_in_tables(runs_path, segments_path, rejected_path) -> str | None:
+    """:func:`nothing_analysed_message` of the tables rule ``collect_tables`` wrote."""
+    from workflow.io.tables import read_table
+
+    return nothing_analysed_message(
+        read_table(runs_path), len(read_table(segments_path)), read_table(rejected_path)
+    )
 
 
 def fit_damping_curves(
