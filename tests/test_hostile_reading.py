@@ -8,6 +8,7 @@ snakemake on a campaign where bad runs sit beside good ones.
 
 import functools
 import json
+import os
 import shutil
 from pathlib import Path
 
@@ -83,6 +84,13 @@ def test_campaign_yaml_link_loop_is_a_message(tmp_path):
         load_campaign(root)
 
 
+def test_campaign_yaml_that_is_a_pipe_is_refused_without_waiting(tmp_path):
+    root, _ = outside_campaign(tmp_path)
+    os.mkfifo(root / "campaign.yaml")  # opening it would wait for a writer forever
+    with pytest.raises(CampaignFormatError, match="campaign.yaml: not read: not a regular file"):
+        load_campaign(root)
+
+
 def test_campaign_yaml_of_many_unknown_keys_is_quoted_in_part(tmp_path):
     keys = "".join(f"{'k' * 500}{i}: 1\n" for i in range(200))
     make_campaign(tmp_path, ONE_CONFIGURATION + keys, {})
@@ -127,6 +135,20 @@ def test_link_loops_are_excluded_as_broken_links_are(tmp_path):
             reason
             == f"{root.as_posix()}/{path}: not read: a symbolic link loop (the link leads back to itself)"
         )
+
+
+def test_a_run_file_larger_than_the_bound_is_excluded_unread(tmp_path):
+    root = make_campaign(tmp_path, ONE_CONFIGURATION, {"cfg/run01.txt": run_text()})
+    with open(root / "cfg" / "huge.txt", "wb") as handle:  # sparse: no disk space used
+        handle.truncate(limits.MAX_RUN_FILE_BYTES + 1)
+    runs, excluded = scan_campaign(root, load_campaign(root))
+    assert [run.run for run in runs] == ["run01"]
+    assert [entry.path for entry in excluded] == ["cfg/huge.txt"]
+    assert excluded[0].reason.endswith(
+        "cfg/huge.txt: not read: 1000000001 bytes, larger than a run file may be (1000000000 bytes; "
+        "docs/input-safety.md): "
+        "cut the record to the ring-down or export fewer channels"
+    )
 
 
 # ------------------------------------------------------------------ 3. names bounded

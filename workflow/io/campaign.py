@@ -54,7 +54,7 @@ import numpy as np
 from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
 
-from workflow.io import units
+from workflow.io import limits, units
 from workflow.io.limits import (
     MAX_QUOTED_PROBLEMS,
     QUOTED_CHARACTERS,
@@ -454,6 +454,10 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         raise CampaignFormatError(
             path, None, f"{outside}; campaign.yaml must be a file inside the campaign folder"
         )
+    if path.exists() and not path.is_file():
+        raise CampaignFormatError(
+            path, None, "not read: not a regular file (a directory, a device or a pipe)"
+        )
     if not path.is_file():
         raise CampaignFormatError(
             path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
@@ -648,6 +652,13 @@ def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
         return "not read: not a regular file (a broken link, a device or a pipe)"
     if not os.access(path, os.R_OK):
         return "not read: permission denied (the file cannot be opened for reading)"
+    size_bytes = path.stat().st_size
+    if size_bytes > limits.MAX_RUN_FILE_BYTES:
+        return (
+            f"not read: {size_bytes} bytes, larger than a run file may be "
+            f"({limits.MAX_RUN_FILE_BYTES} bytes; docs/input-safety.md): cut the record "
+            "to the ring-down or export fewer channels"
+        )
     return None
 
 
