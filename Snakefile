@@ -48,6 +48,11 @@ onsuccess:
 
 onerror:
     cancel_scheduler_timers()
+    # Nothing analysed: the reasons, not Snakemake's lines, are the last thing printed.
+    nothing = nothing_analysed_this_run()
+    if nothing is not None:
+        print(f"\nlapjoint: {nothing}", file=sys.stderr)
+        sys.exit(1)
 
 
 rule measured:

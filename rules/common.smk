@@ -2,6 +2,8 @@
 
 import os
 import re
+import sys
+import time
 from dataclasses import asdict
 from pathlib import Path
 
@@ -46,6 +48,24 @@ if workflow.is_main_process:
 
     for _stale in clear_stale_snakemake_locks():
         logger.info(f"removed stale lock .snakemake/locks/{_stale} (no lapjoint run is alive here)")
+
+
+STARTED_S = time.time()
+"""When this Snakemake run started (the tables of an earlier run say nothing about it)."""
+
+
+def nothing_analysed_this_run():
+    """Why nothing could be analysed, when rule usable_segments stopped for it in this run,
+    else None."""
+    from workflow.measured.runs import NOTHING_ANALYSED, nothing_analysed_in_tables
+
+    log = Path("results/logs/usable_segments.log")
+    # a second of slack: some file systems keep whole seconds
+    if not (log.exists() and log.stat().st_mtime >= STARTED_S - 1.0 and NOTHING_ANALYSED in log.read_text()):
+        return None
+    return nothing_analysed_in_tables(
+        "results/tables/runs.parquet", "results/interim/segments.parquet", "results/tables/segments_rejected.parquet"
+    )
 
 
 def campaign_inventory():
