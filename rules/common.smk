@@ -7,6 +7,7 @@ from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
+from workflow.outputs.escape import terminal_text
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
 # asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
@@ -80,7 +81,8 @@ def campaign_inventory():
         raise WorkflowError(f"cannot read campaign {CAMPAIGN}: {error}") from None
     if SETTINGS.strict and excluded:
         raise WorkflowError(
-            "strict mode: campaign paths not read:\n" + "\n".join(entry.reason for entry in excluded)
+            "strict mode: campaign paths not read:\n"
+            + "\n".join(terminal_text(entry.reason) for entry in excluded)
         )
     rates_hz = {run.path: declared_sample_rate_hz(CAMPAIGN, run, campaign) for run in runs}
     known_hz = {path: rate for path, rate in rates_hz.items() if rate is not None}
@@ -99,11 +101,12 @@ CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:
     raise WorkflowError(
-        f"campaign {CAMPAIGN} has no run files" + "".join(f"\n{entry.reason}" for entry in EXCLUDED_PATHS)
+        f"campaign {terminal_text(CAMPAIGN)} has no run files"
+        + "".join(f"\n{terminal_text(entry.reason)}" for entry in EXCLUDED_PATHS)
     )
 if EXCLUDED_PATHS and workflow.is_main_process:
     for _entry in EXCLUDED_PATHS:
-        logger.warning(f"excluded {_entry.reason}")
+        logger.warning(f"excluded {terminal_text(_entry.reason)}")
 
 
 wildcard_constraints:
