@@ -7,7 +7,7 @@ from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
-from workflow.outputs.escape import terminal_text
+from workflow.outputs.escape import terminal_lines, terminal_text, visible_controls
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
 # asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
@@ -59,6 +59,7 @@ def campaign_inventory():
     from workflow.io.campaign import (
         CAMPAIGN_FILE,
         CampaignFormatError,
+        ExcludedPath,
         declared_sample_rate_hz,
         frequency_problem,
         load_campaign,
@@ -74,11 +75,32 @@ def campaign_inventory():
             f"campaign folder {CAMPAIGN} does not exist (working directory {Path.cwd()}); "
             "set campaign in config.yaml or with --config campaign=PATH"
         )
+    if visible_controls(CAMPAIGN) != str(CAMPAIGN):
+        raise WorkflowError(
+            f"the campaign folder's path {terminal_text(CAMPAIGN)} holds control characters, which "
+            "Snakemake prints raw with every job; rename the folder"
+        )
     try:
         campaign = load_campaign(CAMPAIGN)
         runs, excluded = scan_campaign(CAMPAIGN, campaign)
     except (CampaignFormatError, FileNotFoundError) as error:
-        raise WorkflowError(f"cannot read campaign {CAMPAIGN}: {error}") from None
+        raise WorkflowError(
+            f"cannot read campaign {terminal_text(CAMPAIGN)}: {terminal_lines(error)}"
+        ) from None
+    # Snakemake prints each job's input paths raw: a run file whose name would act on the
+    # terminal is listed as excluded instead of read
+    excluded += [
+        ExcludedPath(
+            run.configuration,
+            run.run,
+            run.path,
+            f"{CAMPAIGN.as_posix()}/{run.path}: not read: its name holds control characters "
+            "(shown as escapes), which a terminal would act on; rename the file",
+        )
+        for run in runs
+        if visible_controls(run.path) != run.path
+    ]
+    runs = [run for run in runs if visible_controls(run.path) == run.path]
     if SETTINGS.strict and excluded:
         raise WorkflowError(
             "strict mode: campaign paths not read:\n"
@@ -113,6 +135,13 @@ wildcard_constraints:
     configuration="|".join(re.escape(name) for name in CONFIGURATIONS),
     number=r"\d\d",
     group=r"runs\d+",
+
+
+def campaign_yaml(wildcards):
+    """The campaign's campaign.yaml, named by an input function: Snakemake's report
+    writes a rule's literal input paths and the params of a rule whose outputs it shows
+    raw into a <script> element, which a campaign path holding `</script>` would end."""
+    return CAMPAIGN / "campaign.yaml"
 
 
 def configuration_run_files(wildcards):

@@ -20,7 +20,7 @@ from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_measured")
 units = UNIT_SYSTEMS[snakemake.params.units]
-campaign_dir = Path(snakemake.params.campaign)
+campaign_dir = Path(snakemake.input.campaign_yaml).parent
 campaign = read_campaign(snakemake.input.campaign_settings)
 
 # figure 9

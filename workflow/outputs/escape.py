@@ -9,7 +9,7 @@ destination:
   captions and to the report's first page (no inline markup, no Jinja tag survives).
 * :func:`plot_text`: matplotlib text (no mathtext: ``$`` stays a dollar sign).
 * :func:`terminal_text`: the console and plain-text files (no escape sequence reaches
-  the terminal).
+  the terminal); :func:`terminal_lines` for a message of several lines (a log record).
 
 Each one first makes invisible characters visible (:func:`visible_controls`), so that a
 name reads the same everywhere and no line break, terminal escape or bidirectional
@@ -117,3 +117,9 @@ def terminal_text(text: Any, limit: int | None = DISPLAY_LIMIT) -> str:
     """``text`` for the console or a plain-text file: no character that a terminal
     interprets (escape sequences, carriage returns, line breaks) is left raw."""
     return display_text(text, limit)
+
+
+def terminal_lines(text: Any) -> str:
+    """Lines of a message for the console (a log record, a traceback): each line as
+    :func:`terminal_text`, the line breaks between them kept, nothing shortened."""
+    return "\n".join(visible_controls(line) for line in str(text).split("\n"))
