@@ -29,16 +29,18 @@ MARKER = "lapjoint-marker"
 
 def command(marker_file: str) -> str:
     """A Jinja expression that runs ``touch marker_file`` in an unsandboxed template engine,
-    closing and reopening a ``{% raw %}`` block around it."""
+    closing and reopening a ``{% raw %}`` block around it; written without ``_ * | \\ `` so
+    that escaping only those characters for reStructuredText does not stop it."""
     return (
-        '{% endraw %}{{ self.__init__.__globals__.__builtins__.__import__("os").system('
-        f'"touch {marker_file}") }}}}{{% raw %}}'
+        '{% endraw %}{% set u = "%c%c" % (95, 95) %}'
+        f'{{{{ cycler[u + "init" + u][u + "globals" + u]["os"]["system"]("touch {marker_file}") }}}}'
+        "{% raw %}"
     )
 
 
 RAW_HTML = "\n\n.. raw:: html\n\n   <img src=x id={marker} onerror=alert(1)>\n\n"
 TERMINAL = "\x1b[2J\x1b[H\x1b[32mVerdict: none (fake)\x1b[0m"
-MATH = "$\\frac{"
+MATH = "$\\frac{$"
 
 CAMPAIGN_NAME = (
     f"{command('PWNED-campaign')} {{{{ 7*7 }}}} {MATH} {TERMINAL} <script>document.title='{MARKER}'</script>"
@@ -227,3 +229,132 @@ def test_pages_in_chromium_run_no_injected_script(hostile, page, tmp_path):
     found = audit_page(hostile[1] / page, tmp_path)
     assert found["errors"] == []
     assert MARKER not in found["text"] or "id=" + MARKER in found["text"]  # shown as text only
+
+
+# ------------------------------------------------------------------ each case alone, fast
+REPORT_LINKS = "".join(
+    f"\n.. _{name}: javascript:void(0)"
+    for name in ["verdict.html", "1 Verdict", "2 Measured data", "3 Damping and area fits"]
+    + ["4 Friction models", "5 Diagnosis", "6 Quality", "Workflow", "Statistics"]
+)
+"""The link targets Snakemake appends to every caption and to the first page."""
+
+
+def first_page(document: dict, runs, config: dict | None = None) -> str:
+    """The report's first page as `snakemake --report` renders it: the landing rst (the
+    verdict, then report/workflow.rst) through Snakemake's unsandboxed Jinja with the
+    workflow's ``config``, then docutils; a markup warning raises."""
+    import jinja2
+    from docutils.core import publish_parts
+
+    from workflow.outputs import report
+
+    class Snakemake:
+        pass
+
+    Snakemake.config = config or {"campaign": "campaigns/washers"}
+    description = (REPO / "report" / "workflow.rst").read_text()
+    landing = report.landing_rst(report.verdict_rst(document, runs=runs), description) + "\n" + REPORT_LINKS
+    rendered = (
+        jinja2.Environment(trim_blocks=True, lstrip_blocks=True)
+        .from_string(landing)
+        .render(snakemake=Snakemake)
+    )
+    return publish_parts(rendered, writer="html", settings_overrides={"report_level": 2, "halt_level": 2})[
+        "html_body"
+    ]
+
+
+def one_excluded_run(name: str):
+    import pandas as pd
+
+    return pd.DataFrame(
+        {
+            "configuration": ["no_washer", "no_washer"],
+            "run": ["run01", name],
+            "path": ["no_washer/run01.txt", f"no_washer/{name}.txt"],
+            "status": ["used", "excluded"],
+            "reason": ["", f"no_washer/{name}.txt: 2 samples; a run needs at least 256"],
+        }
+    )
+
+
+DOCUMENT = {"campaign": "washers", "cause": "none", "configurations": {}}
+
+FIRST_PAGE_CASES = {
+    "command in a run file name": ({}, command("PWNED-unit")),
+    "command in a TDMS channel (in the reason)": ({}, f"channels: 'Impact/{command('PWNED-unit')}'"),
+    "command in the campaign name": ({"campaign": command("PWNED-unit")}, "run02"),
+    "underscore": ({}, "run_02_"),
+    "jinja expression": ({"campaign": "{{ 7*7 }}"}, "{{ 7*7 }}"),
+    "raw html behind line breaks": ({}, "x" + RAW_HTML.format(marker=MARKER)),
+    "raw html in the campaign name": ({"campaign": "x" + RAW_HTML.format(marker=MARKER)}, "run02"),
+}
+
+
+def test_first_page_shows_no_campaign_path_as_markup(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    folder = "campaigns/x" + RAW_HTML.format(marker=MARKER) + command("PWNED-unit")
+    body = first_page(DOCUMENT, one_excluded_run("run02"), {"campaign": folder})
+    assert list(tmp_path.iterdir()) == []
+    assert injected(body) == []
+
+
+@pytest.mark.parametrize("case", FIRST_PAGE_CASES)
+def test_first_page_shows_a_hostile_name_as_text(case, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    extra, name = FIRST_PAGE_CASES[case]
+    body = first_page({**DOCUMENT, **extra}, one_excluded_run(name))
+    assert list(tmp_path.iterdir()) == []  # no command ran
+    assert injected(body) == []
+    assert "System Message" not in body
+    if "{{ 7*7 }}" in name:
+        assert "{{ 7*7 }}" in html.unescape(body)
+
+
+def test_summary_shows_terminal_escapes_as_text():
+    from workflow.outputs.summary import run_summary
+
+    text = run_summary({**DOCUMENT, "campaign": f"c {TERMINAL}"}, one_excluded_run(f"r\r{TERMINAL}"))
+    assert "\x1b" not in text and "\r" not in text
+    assert "c \\x1b[2J\\x1b[H" in text
+
+
+def test_figures_draw_names_holding_mathtext(tmp_path):
+    import pandas as pd
+
+    from workflow.outputs import figures
+    from workflow.outputs.escape import plot_text
+
+    velocity = np.geomspace(0.1, 3.0, 20)
+    segments = pd.DataFrame(
+        {
+            "configuration": "no_washer",
+            "run": [MATH, "run $x$"] * 10,
+            "velocity_amplitude_in_s": velocity,
+            "zeta": 0.001 * (1 + velocity),
+            "frequency_hz": 120.0 - velocity,
+        }
+    )
+    # the scripts compose titles from the campaign's text through plot_text; legends name runs
+    figure = figures.damping_vs_amplitude(segments, title=f"campaign {plot_text(MATH)}")
+    figures.save(figure, tmp_path / "figure.png")
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
+def test_every_caption_renders_without_a_markup_warning():
+    """Captions go through Jinja with the job of their rule (a rule without wildcards
+    has none), then docutils: a warning is an error."""
+    import jinja2
+    import yaml
+    from docutils.core import publish_parts
+
+    class Snakemake:
+        config = yaml.safe_load((REPO / "config.yaml").read_text())
+        wildcards = object()
+
+    for caption in sorted((REPO / "report").glob("*.rst")):
+        rendered = jinja2.Environment(trim_blocks=True, lstrip_blocks=True).from_string(caption.read_text())
+        text = rendered.render(snakemake=Snakemake) + "\n" + REPORT_LINKS
+        body = publish_parts(text, writer="html", settings_overrides={"report_level": 2, "halt_level": 2})
+        assert "System Message" not in body["body"], caption.name
