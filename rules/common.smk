@@ -39,6 +39,30 @@ envvars:
 
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
+CAMPAIGN_FOLDER_FILE = Path("results/interim/campaign_folder.txt")
+"""The campaign folder whose results results/ holds (rule campaign_folder)."""
+
+
+def other_campaign_in_results():
+    """The campaign folder whose results results/ holds, when it is another one than
+    this run's (None when it is this one, or results/ records none)."""
+    if not CAMPAIGN_FOLDER_FILE.exists():
+        return None
+    recorded = CAMPAIGN_FOLDER_FILE.read_text(encoding="utf-8").strip()
+    return None if Path(recorded) == CAMPAIGN.resolve() else recorded
+
+
+if workflow.is_main_process and (_other := other_campaign_in_results()) is not None:
+    # results/ is per working directory (output contract): a second campaign's results
+    # would mix with the first's, figures and report included
+    raise WorkflowError(
+        f"results/ in {Path.cwd()} holds the results of the campaign in {terminal_text(_other)}, "
+        f"and this run is for {terminal_text(CAMPAIGN.resolve())}: their figures, tables and report "
+        "would mix. Run this campaign in a working directory of its own (add -d FOLDER, and "
+        f"-s {workflow.main_snakefile} if you are not in the project folder), or remove results/ "
+        "to replace the other campaign's results."
+    )
+
 if workflow.is_main_process:
     # After a hard kill, Snakemake's lock files stay behind; clear them when no other
     # lapjoint run is alive here, so that `snakemake -c2 all` resumes (workflow/runtime/locks.py).
@@ -191,6 +215,7 @@ def backbone_figures():
 def measured_outputs():
     """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
+        str(CAMPAIGN_FOLDER_FILE),
         "results/tables/segments.parquet",
         "results/tables/runs.parquet",
         "results/tables/runs.csv",
