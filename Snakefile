@@ -39,6 +39,12 @@ rule all:
         "results/summary.txt",
 
 
+onstart:
+    # results/ now holds this campaign's results: planning refuses another campaign here
+    # (rules/common.smk), so that two campaigns' figures and report never mix
+    record_campaign_folder()
+
+
 onsuccess:
     # The summary closes the console output of `all`, after Snakemake's own lines,
     # so that a reader sees the verdict and the excluded runs without scrolling.

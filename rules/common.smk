@@ -40,7 +40,14 @@ envvars:
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
 CAMPAIGN_FOLDER_FILE = Path("results/interim/campaign_folder.txt")
-"""The campaign folder whose results results/ holds (rule campaign_folder)."""
+"""The campaign folder whose results results/ holds (:func:`record_campaign_folder`)."""
+
+
+def record_campaign_folder():
+    """Record that results/ holds this campaign's results (the Snakefile's onstart: once
+    jobs are about to run, never on a dry run)."""
+    CAMPAIGN_FOLDER_FILE.parent.mkdir(parents=True, exist_ok=True)
+    CAMPAIGN_FOLDER_FILE.write_text(f"{CAMPAIGN.resolve()}\n", encoding="utf-8")
 
 
 def other_campaign_in_results():
@@ -215,7 +222,6 @@ def backbone_figures():
 def measured_outputs():
     """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
-        str(CAMPAIGN_FOLDER_FILE),
         "results/tables/segments.parquet",
         "results/tables/runs.parquet",
         "results/tables/runs.csv",

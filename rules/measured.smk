@@ -21,18 +21,6 @@ rule campaign_settings:
         "../scripts/campaign_settings.py"
 
 
-rule campaign_folder:
-    # Which campaign results/ belongs to: planning refuses another campaign's run here
-    # (rules/common.smk). A local job of one line, beside the analysis.
-    input:
-        campaign_yaml=campaign_yaml,
-    output:
-        CAMPAIGN_FOLDER_FILE,
-    localrule: True
-    run:
-        Path(output[0]).write_text(f"{Path(input.campaign_yaml).parent.resolve()}\n", encoding="utf-8")
-
-
 rule identify_mode:
     input:
         campaign_settings="results/interim/campaign.json",
