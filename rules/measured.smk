@@ -4,7 +4,7 @@
 
 rule campaign_settings:
     input:
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_yaml=campaign_yaml,
     output:
         "results/interim/campaign.json",
     log:
