@@ -32,8 +32,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from workflow.discovery.diagnosis import EXPLAINS_LIMIT, diagnose_campaign, evaluate_decision  # noqa: E402
-from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case  # noqa: E402
-from workflow.lab.virtual_lab import TIME_DOMAIN_EFFECTS, LabSettings  # noqa: E402
+from workflow.lab.hidden_effects import (  # noqa: E402
+    CASES,
+    campaign_segments,
+    generate_case,
+    time_domain_can_hide,
+)
+from workflow.lab.virtual_lab import LabSettings  # noqa: E402
 
 VERDICTS = [
     "none",
@@ -279,7 +284,7 @@ def main() -> None:
         report(results, args.causes)
         return
     integrator = "time_domain" if args.time_domain else "averaged"
-    hideable = [c for c in CASES if not args.time_domain or CASES[c][1] in TIME_DOMAIN_EFFECTS]
+    hideable = [c for c in CASES if not args.time_domain or time_domain_can_hide(c)]
     if args.causes is None:
         args.causes = hideable
     elif set(args.causes) - set(hideable):
