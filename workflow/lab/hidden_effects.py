@@ -216,7 +216,8 @@ def generate_case(
         sensors=(sensor,),
         noise_stream=noise_stream,
     )
-    channel = next(iter(truth["configurations"]["joint"]["channels"].values()))
+    configuration = truth["configurations"]["joint"]
+    channel = next(iter(configuration["channels"].values()))
     case = {
         **case,
         "causes": truth["causes"],
@@ -224,5 +225,6 @@ def generate_case(
         "mode1_gain": mode1_gain,
         "sensor_position_in": channel["position_in"],
         "sensor_noise_g": channel["noise_g"],
+        "sensor_mode1_ratio": abs(channel["participation"] / configuration["accelerometer_participation"]),
     }
     return case, out
