@@ -415,6 +415,16 @@ def first_cause_right(record: dict) -> bool:
     return bool(record["causes"]) and record["causes"][0] in case_causes(record["cause"])
 
 
+SHORT_NAMES = {"microslip_power_law": "micro", "quadratic_damping": "quad", "stiffness_nonlinearity": "stiff"}
+
+
+def short_label(label: str) -> str:
+    """A verdict's column heading: a combination's causes shortened, e.g. ``micro+quad``."""
+    if "+" not in label:
+        return label[:12]
+    return "+".join(SHORT_NAMES.get(c, c) for c in label.split("+"))
+
+
 def verdict_label(record: dict) -> str:
     return "+".join(record["causes"]) if record["causes"] else str(record["verdict"])
 
@@ -446,7 +456,11 @@ def report(results: list[dict], causes: list[str]) -> None:
     """Confusion table, hit rates, gain ratios, explains_data, reliability, visibility, misses."""
     labels = VERDICTS + [c for c in causes if "+" in c]
     width = max(len(c) for c in causes) + 2
-    header = "hidden cause".ljust(width) + "".join(v[:12].rjust(13) for v in labels) + "   other  hit  first"
+    header = (
+        "hidden cause".ljust(width)
+        + "".join(short_label(v).rjust(13) for v in labels)
+        + "   other  hit  first"
+    )
     print(header)
     for cause in causes:
         rows = [r for r in results if r["cause"] == cause]

@@ -82,3 +82,25 @@ def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
     margin = 0.05
     assert band_a[0] - margin <= b["gain"]["ratio"] <= band_a[1] + margin, (a["gain"], b["gain"], band_a)
     assert band_b[0] - margin <= a["gain"]["ratio"] <= band_b[1] + margin, (a["gain"], b["gain"], band_b)
+
+
+def test_placed_sensor_sees_mode1_at_the_drawn_gain():
+    """A placement's mode-1 gain against its noise floor is the one drawn: a point of the
+    beam with that shape ratio where one exists, else a quieter sensor at the free end
+    whose shape ratio times the noise-floor ratio is the gain."""
+    from workflow.lab.hidden_effects import PLACEMENT_GAIN_RANGE, draw_mode1_gain, placed_sensor
+    from workflow.lab.virtual_lab import LabSettings, mode1_gain, setup_configuration
+
+    settings = LabSettings()
+    area = 1.2
+    mode = setup_configuration("x", area, settings)[0].mode
+    gains = [draw_mode1_gain(cause, seed) for cause in CASES for seed in range(1, 6)]
+    assert PLACEMENT_GAIN_RANGE[0] <= min(gains) and max(gains) <= PLACEMENT_GAIN_RANGE[1]
+    for gain in (0.05, 0.3, 2.5, 8.0):
+        sensor = placed_sensor(area, gain, seed=4, settings=settings)
+        noise = sensor.noise_g if sensor.noise_g is not None else settings.acceleration_noise_g
+        seen = abs(mode1_gain(mode, settings, sensor)) * settings.acceleration_noise_g / noise
+        assert seen == pytest.approx(gain, rel=1e-9)
+    end = placed_sensor(area, 8.0, seed=4, settings=settings)
+    assert end.position_in in (0.0, settings.joint.geometry.total_length_in)
+    assert placed_sensor(area, 1.0, seed=4) == placed_sensor(area, 1.0, seed=5)

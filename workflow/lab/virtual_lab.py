@@ -499,6 +499,11 @@ def mode_table(
     )
     omega0 = setup.omega0_rad_s * run.frequency_factor
     zeta, omega = contact.equivalent_damping(a, omega0, run.zeta0, d, loss)
+    _, cubic = effect_coefficients(setup, effect, effect_size)
+    if cubic:
+        # Energy balance: a cubic spring's energy at amplitude a grows as
+        # (omega^2 + k3 a^2 / 4) a da, not omega^2 a da (omega^2 holds only 3/4 k3 a^2)
+        zeta = zeta * omega**2 / (omega**2 + 0.25 * cubic * a**2)
     return ModeTable.build(a, zeta, omega)
 
 
