@@ -671,3 +671,19 @@ def test_joint_on_two_modes_writes_a_truth_per_mode(tmp_path):
     assert len(mode2["configurations"]["joint"]["runs"]) == 2
     with pytest.raises(ValueError, match="two modes"):
         vl.generate_campaign(tmp_path / "bad", joint="dahl", nonlinear_modes=2)
+
+
+def test_one_hit_three_sensor_mat_file(tmp_path):
+    """Issue 32's record: one 12.8 kHz, 5 s hit in one MAT 5 file with ``t`` and three
+    acceleration variables, campaign.yaml asking for every mode and naming the channels."""
+    scipy_io = pytest.importorskip("scipy.io")
+    out = tmp_path / "hit"
+    vl.generate_one_hit(out)
+    assert sorted(p.name for p in (out / "hit").iterdir()) == ["run01.mat"]
+    mat = scipy_io.loadmat(out / "hit" / "run01.mat")
+    assert {"t", "force", "acc1", "acc2", "acc3"} <= set(mat)
+    assert mat["t"].size == 64000 and np.allclose(np.diff(mat["t"].ravel()), 1 / 12800)
+    meta = yaml.safe_load((out / "campaign.yaml").read_text())
+    assert meta["modes_hz"] == "auto" and meta["sample_rate_hz"] == 12800
+    assert meta["response"]["channels"] == ["acc1", "acc2", "acc3"]
+    assert vl.truth_path(out, 2).exists()
