@@ -594,12 +594,12 @@ def test_each_sensor_sees_every_mode_at_its_own_shape_value(three_sensors, no_wa
 def test_multi_sensor_columns_take_the_input_contracts_roles(three_sensors):
     """Every sensor column is a response by the ASCII reader's column-name rule, and
     campaign.yaml names them under ``response: {channels: [...]}``."""
-    from workflow.io.campaign import _column_role
+    from workflow.io.record_rules import column_role
 
     out, _, sensors = three_sensors
     header, _ = _read(out / "no_washer" / "run01.txt")
     names = header[3].split("\t")
-    assert [_column_role(name) for name in names] == ["time", "force", "response", "response", "response"]
+    assert [column_role(name) for name in names] == ["time", "force", "response", "response", "response"]
     meta = yaml.safe_load((out / "campaign.yaml").read_text())
     assert meta["response"] == {"quantity": "acceleration", "unit": "g", "channels": ["acc1", "acc2", "acc3"]}
     assert "mode_hz" in meta and "modes_hz" not in meta
