@@ -17,8 +17,14 @@ joint's equation of motion in time (contact patches: :func:`patch_mode_response_
 Dahl: :func:`workflow.models.ringdown.simulate_ringdown`) instead of the averaged equations, so that the discovery is not tested only on the
 model it fits.
 
+Sensors (:class:`Sensor`) stand at points of the beam and see every mode at its own
+shape value there, each with its own noise; several sensors are columns of one run file
+(or variables of one MAT file). The contact patches may carry a second mechanism (a
+velocity-squared loss, a stiffness term) and may act on mode 2 as well.
+
 The campaign folder follows ``campaign-format.md``; the truth is written
-beside it as ``<campaign_dir>.truth.json``, never inside.
+beside it as ``<campaign_dir>.truth.json`` (mode 2's as ``<campaign_dir>.mode2.truth.json``),
+never inside.
 """
 
 from __future__ import annotations
