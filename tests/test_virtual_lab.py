@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
+from workflow.io import campaign
 from workflow.lab import virtual_lab as vl
 from workflow.models import contact
 
@@ -66,7 +67,6 @@ def test_run_file_format_trigger_and_quantisation(demo):
 
 
 def test_campaign_reader_accepts_it(demo):
-    campaign = pytest.importorskip("workflow.io.campaign")
     out, _ = demo
     meta = campaign.load_campaign(out)
     runs = campaign.list_runs(out, meta)
