@@ -416,7 +416,6 @@ def analyse_run_file(
                 )
             except Exception as error:  # a fault on one run must not stop the others
                 logging.getLogger(__name__).exception("%s: not analysed", run_path)
-                segments, decay_rows = empty_segments(), []
                 problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
             else:
                 rows += decay_rows
