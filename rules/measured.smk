@@ -4,7 +4,7 @@
 
 rule campaign_settings:
     input:
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_yaml=campaign_yaml,
     output:
         "results/interim/campaign.json",
     log:
@@ -35,7 +35,7 @@ rule identify_mode:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=lambda wildcards, input: identify_mode_mem_mb(input.runs),
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
@@ -62,7 +62,7 @@ rule analyse_runs:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=1500,
+        mem_mb=lambda wildcards, input: analyse_runs_mem_mb(input.runs),
         runtime=10,
     params:
         campaign=str(CAMPAIGN),

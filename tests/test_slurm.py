@@ -70,7 +70,10 @@ def slurm_unavailable() -> str | None:
 
 REASON = slurm_unavailable()
 REQUIRED = os.environ.get("LAPJOINT_REQUIRE_SLURM") == "1"
-pytestmark = pytest.mark.skipif(REASON is not None and not REQUIRED, reason=f"SLURM smoke test: {REASON}")
+pytestmark = [
+    pytest.mark.group("slurm"),
+    pytest.mark.skipif(REASON is not None and not REQUIRED, reason=f"SLURM smoke test: {REASON}"),
+]
 
 
 def snakemake(workdir: Path, campaign: Path, *options: str) -> tuple[float, str]:
