@@ -222,7 +222,8 @@ def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | Non
 # Settings dataclasses (workflow/io/validation.py): load_campaign validates campaign.yaml
 # into them; jobs that read the validated copy (campaign_to_dict / campaign_from_dict)
 # never import pydantic or PyYAML.
-_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True}
+# allow_inf_nan: YAML's .inf and .nan are numbers to it; no campaign.yaml value may be one.
+_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True, "allow_inf_nan": False}
 
 
 @dataclass(frozen=True)
