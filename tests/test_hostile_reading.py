@@ -167,8 +167,13 @@ def test_a_campaign_name_of_100_kilobytes_is_refused_naming_its_line(tmp_path):
         tmp_path, f"name: {'N' * 100_000}\n" + ONE_CONFIGURATION.replace("name: hostile\n", "")
     )
     assert error.line == 1
-    assert "name 'NNN" in error.problem and "(100000 characters) is too long" in error.problem
+    assert "name 'NNN" in error.problem and "(100000 characters) is too long: at most 1000" in error.problem
     assert len(str(error)) < 500
+
+
+def test_a_campaign_name_of_1000_characters_is_a_title_and_is_read(tmp_path):
+    make_campaign(tmp_path, f"name: {'N' * 1000}\n" + ONE_CONFIGURATION.replace("name: hostile\n", ""), {})
+    assert load_campaign(tmp_path).name == "N" * 1000
 
 
 def test_a_channel_name_in_campaign_yaml_beyond_255_characters_is_refused(tmp_path):

@@ -534,7 +534,7 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
             problems.append(f"and {len(errors) - MAX_QUOTED_PROBLEMS} more problems")
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
     object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
-    long_name = name_length_problem("name", campaign.name)
+    long_name = name_length_problem("name", campaign.name, limits.MAX_CAMPAIGN_NAME_CHARACTERS)
     if long_name is not None:
         raise CampaignFormatError(path, _node_line(root, ("name",)), long_name)
     if campaign.sample_rate_hz is not None:
