@@ -222,7 +222,8 @@ def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | Non
 # Settings dataclasses (workflow/io/validation.py): load_campaign validates campaign.yaml
 # into them; jobs that read the validated copy (campaign_to_dict / campaign_from_dict)
 # never import pydantic or PyYAML.
-_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True}
+# allow_inf_nan: YAML's .inf and .nan are numbers to it; no campaign.yaml value may be one.
+_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True, "allow_inf_nan": False}
 
 
 @dataclass(frozen=True)
@@ -533,7 +534,7 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
             problems.append(f"and {len(errors) - MAX_QUOTED_PROBLEMS} more problems")
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
     object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
-    long_name = name_length_problem("name", campaign.name)
+    long_name = name_length_problem("name", campaign.name, limits.MAX_CAMPAIGN_NAME_CHARACTERS)
     if long_name is not None:
         raise CampaignFormatError(path, _node_line(root, ("name",)), long_name)
     if campaign.sample_rate_hz is not None:

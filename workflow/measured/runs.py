@@ -68,10 +68,9 @@ def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> 
     """
     if window_s is None:
         return 0, record.n_samples
-    start = int(round(window_s[0] * record.sample_rate_hz))
-    stop = int(round(window_s[1] * record.sample_rate_hz))
-    start = min(max(start, 0), record.n_samples)
-    stop = min(max(stop, start), record.n_samples)
+    # clamped before rounding: a window end of 1e308 s is past the record, not an overflow
+    start = int(round(min(max(window_s[0] * record.sample_rate_hz, 0.0), record.n_samples)))
+    stop = int(round(min(max(window_s[1] * record.sample_rate_hz, start), record.n_samples)))
     return start, stop
 
 
@@ -416,7 +415,6 @@ def analyse_run_file(
                 )
             except Exception as error:  # a fault on one run must not stop the others
                 logging.getLogger(__name__).exception("%s: not analysed", run_path)
-                segments, decay_rows = empty_segments(), []
                 problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
             else:
                 rows += decay_rows
