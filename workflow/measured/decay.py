@@ -418,6 +418,17 @@ SEGMENT_BLOCK_SAMPLES = 2**20
 side by side, so that a long record's overlapping segments do not fill memory)."""
 
 
+def _segment_blocks(starts: np.ndarray, stops: np.ndarray):
+    """Yield ``(rows, length)``: indices of segments of one length, at most
+    :data:`SEGMENT_BLOCK_SAMPLES` samples of them at a time."""
+    lengths = np.asarray(stops) - np.asarray(starts)
+    for length in np.unique(lengths):
+        same = np.flatnonzero(lengths == length)
+        per_block = max(1, SEGMENT_BLOCK_SAMPLES // max(int(length), 1))
+        for rows in np.array_split(same, -(-same.size // per_block)):
+            yield rows, int(length)
+
+
 def log_decrement_segments(
     envelope: np.ndarray,
     phase_rad: np.ndarray,
@@ -486,32 +497,28 @@ def log_decrement_segments(
             "min_envelope",
         )
     }
-    lengths = stops - starts
     with np.errstate(divide="ignore"):
         # ln undefined where the envelope touches 0: those segments are left NaN,
         # flagged invalid_fit by analyse_decay
         log_envelope = np.log(envelope)
-    for length in np.unique(lengths):
-        same = np.flatnonzero(lengths == length)
-        per_block = max(1, SEGMENT_BLOCK_SAMPLES // max(int(length), 1))
-        t_centred = _centred_times_s(int(length), fs_hz)
+    for rows, length in _segment_blocks(starts, stops):
+        t_centred = _centred_times_s(length, fs_hz)
         # every segment of this length as a row of a view (no copy until indexed)
         envelope_rows, log_rows, phase_rows = (
-            sliding_window_view(values, int(length)) for values in (envelope, log_envelope, phase_rad)
+            sliding_window_view(values, length) for values in (envelope, log_envelope, phase_rad)
         )
-        for rows in np.array_split(same, -(-same.size // per_block)):
-            first = starts[rows]
-            values = envelope_rows[first]
-            out["t_s"][rows] = (first + 0.5 * (length - 1)) / fs_hz
-            out["amplitude"][rows] = values.mean(axis=1)
-            out["min_envelope"][rows] = values.min(axis=1)
-            fit = out["min_envelope"][rows] > 0.0
-            rows, first = rows[fit], first[fit]
-            _, slope, out["fit_rms"][rows] = _line_fits(t_centred, log_rows[first])
-            _, omega_d, out["phase_rms_rad"][rows] = _line_fits(t_centred, phase_rows[first])
-            out["decay_rate_1_s"][rows] = -slope
-            out["zeta"][rows] = -slope / np.hypot(slope, omega_d)
-            out["frequency_hz"][rows] = omega_d / (2.0 * np.pi)
+        first = starts[rows]
+        values = envelope_rows[first]
+        out["t_s"][rows] = (first + 0.5 * (length - 1)) / fs_hz
+        out["amplitude"][rows] = values.mean(axis=1)
+        out["min_envelope"][rows] = values.min(axis=1)
+        fit = out["min_envelope"][rows] > 0.0
+        rows, first = rows[fit], first[fit]
+        _, slope, out["fit_rms"][rows] = _line_fits(t_centred, log_rows[first])
+        _, omega_d, out["phase_rms_rad"][rows] = _line_fits(t_centred, phase_rows[first])
+        out["decay_rate_1_s"][rows] = -slope
+        out["zeta"][rows] = -slope / np.hypot(slope, omega_d)
+        out["frequency_hz"][rows] = omega_d / (2.0 * np.pi)
     out["start_index"] = starts.copy()
     out["stop_index"] = stops.copy()
     return out
@@ -630,9 +637,9 @@ def envelope_rise(envelope: np.ndarray, starts: np.ndarray, stops: np.ndarray) -
     """
     envelope = np.asarray(envelope, dtype=float)
     rises = np.zeros(len(starts))
-    for k, (start, stop) in enumerate(zip(starts, stops)):
-        values = envelope[start:stop]
-        rises[k] = float(np.max(values - np.minimum.accumulate(values)))
+    for rows, length in _segment_blocks(starts, stops):
+        values = sliding_window_view(envelope, length)[np.asarray(starts)[rows]]
+        rises[rows] = np.max(values - np.minimum.accumulate(values, axis=1), axis=1)
     return rises
 
 
@@ -706,12 +713,13 @@ def _noise_standard_errors(
     sigma = floor / np.sqrt(2.0)
     zeta_std = np.full(starts.size, np.nan)
     frequency_std = np.full(starts.size, np.nan)
-    for k, (start, stop) in enumerate(zip(starts, stops)):
-        duration_s = (stop - start) / fs_hz
-        relative = np.mean((sigma / np.maximum(env[start:stop], 1e-300)) ** 2)
+    relative_power = (sigma / np.maximum(env, 1e-300)) ** 2
+    for rows, length in _segment_blocks(starts, stops):
+        duration_s = length / fs_hz
+        relative = sliding_window_view(relative_power, length)[starts[rows]].mean(axis=1)
         slope_std = np.sqrt(12.0 * relative / (bandwidth_hz * duration_s**3))
-        zeta_std[k] = slope_std / (2.0 * np.pi * frequency_hz[k])
-        frequency_std[k] = slope_std / (2.0 * np.pi)
+        zeta_std[rows] = slope_std / (2.0 * np.pi * frequency_hz[rows])
+        frequency_std[rows] = slope_std / (2.0 * np.pi)
     return zeta_std, frequency_std
 
 
