@@ -21,6 +21,9 @@ run forward and backward, analysis from 0.05 s after the largest sample to 2.0 s
 
 The parabolas are solved in closed form for all extrema at once (the port solves a
 3 x 3 system per extremum in a Python loop): a peer at least as fast as the published one.
+On the sample record it reproduces the method's published output
+(../shared/realdata/pff-lms-sample.reference.csv) between 0.3 and 1.8 s: damping -1.7 %
+in the median (5.5 % median absolute difference, point by point), frequency +0.014 Hz.
 
 The project's work on the same file is what its two per-record jobs do
 (``identify_mode`` and ``analyse_runs``, each a process of its own that reads the
