@@ -25,7 +25,7 @@ from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.io.units import SI
 from workflow.lab.virtual_lab import generate_campaign
-from workflow.outputs import report
+from workflow.outputs import figures, report
 
 REPO = Path(__file__).resolve().parents[1]
 FULL = os.environ.get("LAPJOINT_FULL_REPORT_TEST") == "1"
@@ -448,12 +448,84 @@ def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
     assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
 
 
+def few_runs_reach_further() -> pd.DataFrame:
+    """The demo's large washer in small: ten runs up to 1.6 in/s at a damping of 0.08 %,
+    three of them on to 4.4 in/s where the damping doubles (0.16 %)."""
+    rng = np.random.default_rng(3)
+    rows = []
+    for run in range(10):
+        top = 4.4 if run < 3 else 1.6
+        amplitude = np.logspace(np.log10(0.27), np.log10(top), 40 if run < 3 else 30)
+        zeta = 0.0008 * (1 + np.clip((amplitude - 1.6) / 2.8, 0, None))
+        rows.append(
+            pd.DataFrame(
+                {
+                    "configuration": "large_washer",
+                    "run": f"run{run:02d}",
+                    "velocity_amplitude_in_s": amplitude,
+                    "zeta": zeta * np.exp(0.01 * rng.standard_normal(amplitude.size)),
+                    "frequency_hz": 500.0 * (1 - 1e-3 * amplitude),
+                }
+            )
+        )
+    return pd.concat(rows, ignore_index=True)
+
+
+def _plotted_points(figure) -> tuple[np.ndarray, np.ndarray]:
+    """The segments' markers of a figure made by workflow.outputs.figures (x, y as drawn)."""
+    lines = [line for line in figure.axes[0].get_lines() if line.get_marker() == "o"]
+    return (
+        np.concatenate([line.get_xdata() for line in lines]),
+        np.concatenate([line.get_ydata() for line in lines]),
+    )
+
+
+def test_trend_sentence_says_what_the_damping_figure_shows():
+    # the sentence once used the lowest and highest 10 % of segments: "0.267 to 1.63 in/s,
+    # 0.0795 % to 0.0855 %" beside a figure whose runs reach 4.4 in/s at 0.16 %
+    segments = few_runs_reach_further()
+    sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"])
+    x, y = _plotted_points(figures.damping_vs_amplitude(segments, title="t"))
+    assert f"Measured from {report.fmt(x.min())} to {report.fmt(x.max())} in/s" in sentence
+    top = y[x >= 10 ** (np.floor(4 * np.log10(x.max())) / 4)]  # the figure's top quarter decade, in %
+    assert f"to {report.fmt(np.median(top))} % at" in sentence and "3 of 10 runs reach it" in sentence
+    # physics: the top end's damping is about double the low end's (0.16 % against 0.08 %)
+    trend = report.measured_trends(segments)["large_washer"]
+    assert 1.7 < trend["zeta_high"] / trend["zeta_low"] < 2.1 and "the damping rises" in sentence
+
+
+def test_trend_sentence_says_what_the_backbone_shows():
+    segments = few_runs_reach_further()
+    sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"], SI)
+    x, y = _plotted_points(figures.frequency_vs_amplitude(segments, title="t", units=SI))
+    assert f"Measured from {report.fmt(x.min())} to {report.fmt(x.max())} m/s" in sentence
+    # the lowest and highest quarter decades of amplitude (in/s) the segments reach
+    low = np.median(y[x < 0.0254 * 10 ** (np.ceil(4 * np.log10(0.27)) / 4)])
+    high = np.median(y[x >= 0.0254 * 10 ** (np.floor(4 * np.log10(4.4)) / 4)])
+    assert f"the frequency falls from {report.fmt(low, 5)} Hz to {report.fmt(high, 5)} Hz" in sentence
+
+
+def test_damping_low_point_on_the_way_is_said():
+    amplitude = np.logspace(-1, 1, 120)
+    segments = pd.DataFrame(
+        {
+            "configuration": "c",
+            "run": "r",
+            "velocity_amplitude_in_s": amplitude,
+            "zeta": 0.001 * (1 + np.log10(amplitude) ** 2),  # 0.2 % at both ends, 0.1 % at 1 in/s
+            "frequency_hz": 100.0,
+        }
+    )
+    sentence = report.trend_sentence(report.measured_trends(segments)["c"])
+    assert "the damping stays level" in sentence and "through a low of 0.1" in sentence
+
+
 def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
     segments = segments_with(-0.1, -0.004)
     trend = report.measured_trends(segments)["t5nm"]
-    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s," in report.trend_sentence(trend)
+    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s (" in report.trend_sentence(trend)
     in_si = report.trend_sentence(trend, SI)
-    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s," in in_si and "in/s" not in in_si
+    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s (" in in_si and "in/s" not in in_si
     assert report.amplitude_range(1.0, 10.0, SI) == "0.0254–0.254 m/s"
     page = report.verdict_html(
         document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36}, units=SI

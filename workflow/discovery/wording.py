@@ -7,7 +7,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["format_percent", "discrepancy_sentence"]
+__all__ = ["format_percent", "runs_words", "test_words", "discrepancy_sentence"]
 
 
 def _fmt_v(v: float) -> str:
@@ -47,54 +47,89 @@ def _misfit_words(model_name: str, row: Mapping) -> str:
     )
 
 
-def _negligible_misfit_words(model_name: str, row: Mapping) -> str:
-    """Why the bin with the largest |t| is not a misfit: not significant after the
-    Bonferroni correction, or smaller than the models' accuracy, or both."""
+def runs_words(n_runs: int) -> str:
+    """``1 run``, ``8 runs``."""
+    return f"{n_runs} run{'' if n_runs == 1 else 's'}"
+
+
+def test_words(row: Mapping) -> str:
+    """The t test behind a bin's verdict: ``|t|``, over what, ``p`` and its corrected limit.
+
+    ``|t|`` is quoted with its ``p``, which decides (:func:`~workflow.discovery.misfit.misfit_significant`):
+    the same ``|t|`` is clearer over many runs than over three. With one run the
+    segments are the observations.
+
+    Examples
+    --------
+    >>> test_words({"t": -6.49, "n_runs": 3, "p": 0.0013, "p_limit": 0.00083})
+    '|t| = 6.5 over 3 runs, p = 0.0013 against 0.00083 after correction'
+    >>> test_words({"t": 11.0, "n_runs": 1, "n_segments": 40, "p": 1e-9, "p_limit": 1e-3})
+    '|t| = 11.0 over the 40 segments of the one run, p = 1e-09 against 0.001 after correction'
+    """
+    over = (
+        f"the {row.get('n_segments', '?')} segments of the one run"
+        if row["n_runs"] == 1
+        else runs_words(row["n_runs"])
+    )
+    return f"|t| = {abs(row['t']):.1f} over {over}, p = {row['p']:.2g} against {row['p_limit']:.2g} after correction"
+
+
+def _judgement(row: Mapping) -> str:
+    """Why a bin is not a misfit: which half of
+    :func:`~workflow.discovery.misfit.misfit_significant` it fails."""
     tolerance = _misfit_percent(row["curve"], row["tolerance"])
     clear = row["p"] < row["p_limit"]
     small = abs(row["mean"]) <= row["tolerance"]
-    statistic = f"|t| = {abs(row['t']):.1f}, p = {row['p']:.2g} against {row['p_limit']:.2g} after correction"
+    statistic = test_words(row)
     accuracy = f"the {abs(tolerance):.2g} % in {row['curve']} the models are accurate to"
     if clear and small:
-        judgement = (
+        return (
             f"statistically clear ({statistic}) but physically negligible: smaller than {accuracy} "
             f"({abs(row['mean']) / row['tolerance']:.2g} of it)"
         )
-    elif small:
-        judgement = f"neither statistically significant ({statistic}) nor larger than {accuracy}"
-    else:
-        judgement = f"larger than {accuracy} but not statistically significant ({statistic})"
-    return f"the largest binned misfit, where {_misfit_words(model_name, row)}, is {judgement}"
+    if small:
+        return f"neither statistically significant ({statistic}) nor larger than {accuracy}"
+    return f"larger than {accuracy} but not statistically significant ({statistic})"
+
+
+def _negligible_misfit_words(model_name: str, row: Mapping, lead: str) -> str:
+    """``LEAD, where the measured damping lies ... , is JUDGEMENT``."""
+    return f"{lead}, where {_misfit_words(model_name, row)}, is {_judgement(row)}"
 
 
 def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, n_runs: int) -> str:
-    """Plain sentence: where and by how much the model is wrong (or that it is not).
+    """Plain sentence: where and by how much the model is wrong (or that it is not), in
+    damping and in frequency.
 
     Sizes are percentages of the model (two significant digits, so that a misfit that
     is not zero never reads as ``0.00 %``), with their direction in words. A misfit is
-    called significant only when it is both statistically clear (``p`` below the
-    corrected limit) and larger than the models' accuracy (``tolerance``); when no bin
-    is, the sentence says which of the two the largest one (by ``|t|``) fails.
+    significant by :func:`~workflow.discovery.misfit.misfit_significant` (statistically
+    clear and larger than the models' accuracy). Each curve is named: where it has
+    significant bins, their range and the largest; where it has none, its largest bin by
+    ``|t|`` and which half of the rule that bin fails, so that a large but uncertain
+    misfit in one curve is not left out beside a significant one in the other.
 
     Examples
     --------
     >>> discrepancy_sentence("dahl", [], None, 8)
     "The dahl baseline fits damping and frequency at every amplitude to within the run-to-run scatter or the models' accuracy (8 runs)."
     """
-    sig = [b for b in bins if b["significant"]]
-    parts = []
+    parts, quiet = [], []
     for curve in ("damping", "frequency"):
-        rows = [b for b in sig if b["curve"] == curve]
-        if not rows:
+        rows = [b for b in bins if b["curve"] == curve]
+        sig = [b for b in rows if b["significant"]]
+        if not sig:
+            if rows:
+                quiet.append(max(rows, key=lambda b: abs(b["t"])))
             continue
-        lo = min(b["v_low_in_s"] for b in rows)
-        hi = max(b["v_high_in_s"] for b in rows)
-        worst = max(rows, key=lambda b: abs(b["mean"]))
+        lo = min(b["v_low_in_s"] for b in sig)
+        hi = max(b["v_high_in_s"] for b in sig)
+        worst = max(sig, key=lambda b: abs(b["mean"]))
         parts.append(
             f"the measured {curve} differs from the {model_name} fit between "
             f"{_fmt_v(lo)} and {_fmt_v(hi)} in/s, by up to "
             f"{format_percent(_misfit_percent(curve, worst['mean']))} "
-            f"(|t| = {abs(worst['t']):.1f} over {worst['n_runs']} runs) at "
+            f"({test_words(worst)}) at "
             f"{_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s"
         )
     if trend is not None and trend["significant"]:
@@ -104,11 +139,16 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
             f"first to the last run where the shift is largest (t = {trend['t']:.1f})"
         )
     if not parts:
-        worst = max(bins, key=lambda b: abs(b["t"]), default=None)
-        tail = "" if worst is None else "; " + _negligible_misfit_words(model_name, worst)
+        tail = "".join(
+            "; " + _negligible_misfit_words(model_name, row, f"the largest {row['curve']} misfit")
+            for row in quiet
+        )
         return (
             f"The {model_name} baseline fits damping and frequency at every amplitude to "
-            f"within the run-to-run scatter or the models' accuracy ({n_runs} runs){tail}."
+            f"within the run-to-run scatter or the models' accuracy ({runs_words(n_runs)}){tail}."
         )
+    parts += [
+        _negligible_misfit_words(model_name, row, f"its largest {row['curve']} misfit") for row in quiet
+    ]
     text = "; ".join(parts)
     return text[0].upper() + text[1:] + "."

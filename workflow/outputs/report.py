@@ -23,9 +23,17 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.wording import runs_words
 from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.escape import display_text, html_text, rst_strong, rst_text
+from workflow.outputs.plain_words import (
+    left_out_caveat,
+    percent_of,
+    uncertainty_note,
+    unidentified_parameters,
+    unidentified_sentence,
+)
 
 __all__ = [
     "CAUSE_WORDS",
@@ -52,6 +60,7 @@ __all__ = [
     "threshold_sentences",
     "margin_words",
     "gain_words",
+    "END_SEGMENTS",
     "measured_trends",
     "trend_sentence",
     "campaign_headline",
@@ -384,42 +393,93 @@ def gain_words(gain_ratio: float | None, margin_ratio: float | None, confidence:
     return "better"
 
 
-def measured_trends(segments: pd.DataFrame, share: float = 0.15) -> dict[str, dict]:
-    """Damping and frequency at the low and the high end of each configuration's amplitudes.
+END_SEGMENTS = 3
+"""Fewest segments whose median stands for an end of the measured range: an end bin with
+fewer is widened inward by quarter decades until it has them."""
+
+
+def _end_bin(codes: np.ndarray, counts: np.ndarray, from_top: bool) -> np.ndarray:
+    """The quarter-decade codes making up one end of the range (at least :data:`END_SEGMENTS`)."""
+    order = codes[::-1] if from_top else codes
+    taken, total = [], 0
+    for code, count in zip(order, counts[::-1] if from_top else counts):
+        taken.append(code)
+        total += count
+        if total >= END_SEGMENTS:
+            break
+    return np.asarray(taken)
+
+
+def measured_trends(segments: pd.DataFrame, per_decade: int = 4) -> dict[str, dict]:
+    """What the measured damping and frequency do over each configuration's full range of
+    amplitudes, from the segments figures 10-12 and the backbones plot.
+
+    The range is that of every kept segment (the figures' horizontal extent). Each end's
+    damping and frequency are the medians of the segments in its ``1/per_decade`` decade
+    (widened inward until it holds :data:`END_SEGMENTS`), so that a few runs reaching
+    further than the others set the top end as they do on the figure; the medians of
+    the bins between give the lowest and highest damping on the way.
 
     Parameters
     ----------
     segments : DataFrame
-        results/tables/segments.parquet (``configuration``, ``velocity_amplitude_in_s``,
-        ``zeta``, ``frequency_hz``).
-    share : float
-        Fraction of a configuration's segments (lowest and highest amplitudes) whose
-        medians stand for each end: medians of many segments, not single noisy points.
+        results/tables/segments.parquet (``configuration``, ``run``,
+        ``velocity_amplitude_in_s``, ``zeta``, ``frequency_hz``).
+    per_decade : int
+        Amplitude bins per decade.
 
     Returns
     -------
     dict
-        Configuration -> ``amplitude_low_in_s``, ``amplitude_high_in_s`` (medians of each
-        end), ``zeta_low``, ``zeta_high`` (fraction of critical), ``frequency_low_hz``,
-        ``frequency_high_hz``; configurations with fewer than 6 segments are left out.
+        Configuration -> ``amplitude_low_in_s``, ``amplitude_high_in_s`` (the smallest and
+        largest segment amplitude), ``n_segments``, ``n_runs``; per end (``low``/``high``)
+        ``end_<end>_low_in_s``/``end_<end>_high_in_s`` (its amplitudes), ``runs_<end>``,
+        ``zeta_<end>`` (fraction of critical) and ``frequency_<end>_hz``; ``zeta_min``,
+        ``zeta_max`` and ``zeta_min_in_s``/``zeta_max_in_s`` over the bins' medians.
+        Configurations with fewer than ``2 * END_SEGMENTS`` segments are left out.
+
+    Examples
+    --------
+    >>> frame = pd.DataFrame({"configuration": "a", "run": ["r1"] * 6 + ["r2"] * 2,
+    ...     "velocity_amplitude_in_s": [0.1, 0.11, 0.12, 0.5, 0.6, 1.0, 4.0, 4.4],
+    ...     "zeta": [1e-3] * 6 + [2e-3] * 2, "frequency_hz": 100.0})
+    >>> trend = measured_trends(frame)["a"]
+    >>> trend["amplitude_high_in_s"], trend["zeta_high"], trend["runs_high"]
+    (4.4, 0.002, 2)
     """
     trends = {}
     if segments is None or segments.empty:
         return trends
     for name, part in segments.groupby("configuration", sort=False):
-        part = part.sort_values("velocity_amplitude_in_s")
-        count = max(int(round(share * len(part))), 3)
-        if len(part) < 2 * count:
+        part = part[part["velocity_amplitude_in_s"] > 0]
+        if len(part) < 2 * END_SEGMENTS:
             continue
-        low, high = part.iloc[:count], part.iloc[-count:]
-        trends[str(name)] = {
-            "amplitude_low_in_s": float(low["velocity_amplitude_in_s"].median()),
-            "amplitude_high_in_s": float(high["velocity_amplitude_in_s"].median()),
-            "zeta_low": float(low["zeta"].median()),
-            "zeta_high": float(high["zeta"].median()),
-            "frequency_low_hz": float(low["frequency_hz"].median()),
-            "frequency_high_hz": float(high["frequency_hz"].median()),
+        velocity = part["velocity_amplitude_in_s"].to_numpy(float)
+        code = np.floor(per_decade * np.log10(velocity)).astype(int)
+        codes, counts = np.unique(code, return_counts=True)
+        trend = {
+            "amplitude_low_in_s": float(velocity.min()),
+            "amplitude_high_in_s": float(velocity.max()),
+            "n_segments": len(part),
+            "n_runs": int(part["run"].nunique()) if "run" in part else 1,
         }
+        for end, from_top in (("low", False), ("high", True)):
+            inside = np.isin(code, _end_bin(codes, counts, from_top))
+            chosen = part[inside]
+            trend[f"end_{end}_low_in_s"] = float(velocity[inside].min())
+            trend[f"end_{end}_high_in_s"] = float(velocity[inside].max())
+            trend[f"runs_{end}"] = int(chosen["run"].nunique()) if "run" in chosen else 1
+            trend[f"zeta_{end}"] = float(chosen["zeta"].median())
+            trend[f"frequency_{end}_hz"] = float(chosen["frequency_hz"].median())
+        by_bin = part.groupby(code)
+        medians = by_bin["zeta"].median()[by_bin.size() >= END_SEGMENTS]
+        at = by_bin["velocity_amplitude_in_s"].median()
+        if medians.empty:
+            medians = pd.Series([trend["zeta_low"], trend["zeta_high"]])
+            at = pd.Series([trend["amplitude_low_in_s"], trend["amplitude_high_in_s"]])
+        trend["zeta_min"], trend["zeta_min_in_s"] = float(medians.min()), float(at[medians.idxmin()])
+        trend["zeta_max"], trend["zeta_max_in_s"] = float(medians.max()), float(at[medians.idxmax()])
+        trends[str(name)] = trend
     return trends
 
 
@@ -430,28 +490,71 @@ def _direction(low: float, high: float, flat: float) -> str:
     return "rises" if change > 0 else "falls"
 
 
+def _end_words(trend: Mapping, end: str, units: UnitSystem) -> str:
+    """``the median of 12 segments at 0.05-0.07 in/s`` (and how many runs reach the top)."""
+    where = amplitude_range(trend[f"end_{end}_low_in_s"], trend[f"end_{end}_high_in_s"], units)
+    runs = trend[f"runs_{end}"]
+    reach = f", {runs} of {trend['n_runs']} runs reach it" if end == "high" and runs < trend["n_runs"] else ""
+    return f"at {where}{reach}"
+
+
 def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
-    """What the measured damping and frequency do from low to high amplitude, in words
-    taken from the numbers (direction, both ends, the frequency's relative change)."""
+    """What the measured damping and frequency do over the full measured range, in words
+    taken from the numbers of :func:`measured_trends` (direction, both ends, the damping's
+    low or high point on the way when it lies beyond both ends, the frequency's relative
+    change)."""
     zeta = _direction(trend["zeta_low"], trend["zeta_high"], FLAT_CHANGE)
     frequency_change = trend["frequency_high_hz"] / trend["frequency_low_hz"] - 1.0
     # a joint's frequency moves by a fraction of a percent: 0.1 % is already a trend
     frequency = _direction(trend["frequency_low_hz"], trend["frequency_high_hz"], 1e-3)
+    ends = (trend["zeta_low"], trend["zeta_high"])
+    on_the_way = ""
+    if trend["zeta_min"] < (1 - FLAT_CHANGE) * min(ends):
+        on_the_way = (
+            f", through a low of {fmt(100 * trend['zeta_min'])} % near "
+            f"{fmt(units.per_in_s * trend['zeta_min_in_s'])} {units.velocity}"
+        )
+    elif trend["zeta_max"] > (1 + FLAT_CHANGE) * max(ends):
+        on_the_way = (
+            f", through a high of {fmt(100 * trend['zeta_max'])} % near "
+            f"{fmt(units.per_in_s * trend['zeta_max_in_s'])} {units.velocity}"
+        )
     return (
         f"Measured from {fmt(units.per_in_s * trend['amplitude_low_in_s'])} to "
-        f"{fmt(units.per_in_s * trend['amplitude_high_in_s'])} {units.velocity}, "
-        f"the damping {zeta} ({fmt(100 * trend['zeta_low'])} % to {fmt(100 * trend['zeta_high'])} %) "
-        f"and the frequency {frequency} ({fmt(trend['frequency_low_hz'], 5)} Hz to "
-        f"{fmt(trend['frequency_high_hz'], 5)} Hz, {100 * frequency_change:+.2f} %)."
+        f"{fmt(units.per_in_s * trend['amplitude_high_in_s'])} {units.velocity} "
+        f"({trend['n_segments']} segments, {runs_words(trend['n_runs'])}), "
+        f"the damping {zeta} from {fmt(100 * trend['zeta_low'])} % {_end_words(trend, 'low', units)} "
+        f"to {fmt(100 * trend['zeta_high'])} % {_end_words(trend, 'high', units)}{on_the_way} "
+        f"(medians of the segments there), and the frequency {frequency} from "
+        f"{fmt(trend['frequency_low_hz'], 5)} Hz to {fmt(trend['frequency_high_hz'], 5)} Hz "
+        f"({100 * frequency_change:+.2f} %)."
     )
 
 
-def _flags(entry: Mapping) -> list[str]:
-    """Warnings on the fitted parameters (at a bound, unidentifiable), when the diagnosis gives them."""
-    flags = []
-    for role, key in (("baseline", "baseline"), ("extended model", "extended_model")):
-        flags += [f"{role}: {flag}" for flag in (entry.get(key) or {}).get("flags") or []]
-    return flags
+def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
+    """The parameters of the baseline and the extended model that the data do not
+    determine (their ``flags``), each once (:func:`~workflow.outputs.plain_words.unidentified_parameters`)."""
+    return unidentified_parameters(
+        (("the baseline", entry.get("baseline")), ("the extended model", entry.get("extended_model"))),
+        units,
+    )
+
+
+def _unidentified_tag(entry: Mapping) -> str:
+    """A short tag pointing to the sentence on the parameters the data do not determine."""
+    count = len(_unidentified(entry))
+    if not count:
+        return ""
+    return " " + tag(
+        f"{count} fitted parameter{'s' if count > 1 else ''} not determined by the data (see How sure we are)",
+        "flag",
+    )
+
+
+def _n_runs(entry: Mapping) -> int:
+    """Runs behind a configuration's diagnosis (2 when the document does not say)."""
+    runs = (entry.get("evidence") or {}).get("n_runs")
+    return int(runs) if runs is not None else 2
 
 
 def campaign_headline(document: Mapping) -> str:
@@ -498,11 +601,14 @@ def campaign_headline(document: Mapping) -> str:
     text += f"The cause: {CAUSE_WORDS.get(cause, cause)}."
     if extended and ratios:
         best = min(ratios)
+        held_out = (
+            "predicts runs it was not fitted to"
+            if all(_n_runs(entries[n]) > 1 for n in failing)
+            else "predicts amplitude ranges held out of the fit (with one run, no run could be held out)"
+        )
         text += (
-            f" The extended model, {model_name(extended[0])}, predicts runs it was not "
-            f"fitted to with {ratio(best)} of the baseline's error"
-            + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "")
-            + "."
+            f" The extended model, {model_name(extended[0])}, {held_out} with {ratio(best)} of "
+            "the baseline's error" + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "") + "."
         )
     return text
 
@@ -539,10 +645,17 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
     items = []
     runs, segments = evidence.get("n_runs"), evidence.get("n_segments")
     if runs is not None:
-        items.append(
-            f"Based on {runs} runs and {segments} segments "
+        text = (
+            f"Based on {runs_words(runs)} and {segments} segments "
             f"({evidence.get('effective_observations', '?')} effectively independent)."
         )
+        if runs == 1:
+            text += (
+                " With one run, held out means a range of amplitudes of that run held out of the "
+                "fit, and the scatter is the segments' own: nothing here says how a second run of "
+                "the joint would differ."
+            )
+        items.append(text)
     baselines = evidence.get("baselines") or {}
     if baselines:
         parts = [f"{model_name(m)} {fmt(b.get('heldout_error'))}" for m, b in baselines.items()]
@@ -584,9 +697,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
             )
         elif margin["ratio"] >= 1:
             confidence = (entry.get("confidence") or {}).get(cause)
-            sure = (
-                f"; {fmt(100 * confidence, 2)} % of the resamples name it" if confidence is not None else ""
-            )
+            sure = f"; {percent_of(confidence)} of the resamples name it" if confidence is not None else ""
             items.append(
                 f"The verdict is {margin_words(margin['ratio'], confidence)} the next-best candidate, "
                 f"{candidate_name(margin['next'])}: its held-out error ({fmt(margin['next_score'])}) is "
@@ -601,8 +712,9 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"{evidence.get('decision_rule', 'see the decision rule')}."
             )
     items.extend(threshold_sentences(entry, units))
-    for flag in _flags(entry):
-        items.append(f"Fitted parameter to read with care, {flag}.")
+    unidentified = unidentified_sentence(_unidentified(entry, units))
+    if unidentified:
+        items.append(unidentified)
     items.extend(explains_sentences(entry, units))
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
@@ -740,7 +852,7 @@ def verdict_html(
                 f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
                 f"{esc(e.get('discrepancy', ''))}"
                 + (f" {esc(trend_sentence(trends[n], units))}" if n in trends else "")
-                + "".join(f" {tag('check: ' + flag, 'flag')}" for flag in _flags(e))
+                + _unidentified_tag(e)
                 + "</li>"
                 for n, e in entries.items()
             )
@@ -813,6 +925,13 @@ def verdict_html(
                 f"{esc(model_name(models.get('extended')))} (ratio {ratio(across.get('ratio'))}), "
                 "in units of the run-to-run scatter.</p>"
             )
+            caveat = left_out_caveat(
+                error
+                for c in (across.get("configurations") or {}).values()
+                for error in (c.get("baseline_error"), c.get("extended_error"))
+            )
+            if caveat:
+                parts.append(f"<p>{esc(caveat)}</p>")
         else:
             parts.append(f"<p>Not applicable: {esc(across.get('reason', 'no reason given'))}.</p>")
 
@@ -1010,7 +1129,9 @@ def model_fits_html(fits: pd.DataFrame) -> str:
     for (configuration, model), part in fits.groupby(["configuration", "model"], sort=False):
         first = part.iloc[0]
         params = "<br>".join(
-            f"{esc(p.parameter)} = {fmt(p.value, 4)} ± {fmt(p.std, 2)}" for p in part.itertuples()
+            f"{esc(p.parameter)} = {fmt(p.value, 4)} ± {fmt(p.std, 2)}"
+            + (f" <i>({esc(note)})</i>" if (note := uncertainty_note(p.value, p.std)) else "")
+            for p in part.itertuples()
         )
         rows.append(
             [
@@ -1158,7 +1279,8 @@ def verdict_rst(
             if entry.get("cause") != "unknown":
                 text += (
                     f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
-                    f"held-out runs with {ratio(gain.get('ratio'))} of {base}'s error "
+                    f"{'held-out runs' if _n_runs(entry) > 1 else 'held-out amplitude ranges of the one run'} "
+                    f"with {ratio(gain.get('ratio'))} of {base}'s error "
                     f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))})."
                 )
                 margin = candidate_margin(entry)
@@ -1171,8 +1293,9 @@ def verdict_rst(
                     )
         if name in trends:
             text += " " + trend_sentence(trends[name])
-        for flag in _flags(entry):
-            text += f" Check the fitted {flag}."
+        unidentified = unidentified_sentence(_unidentified(entry))
+        if unidentified:
+            text += " " + unidentified
         lines += [
             f"* {rst_strong(name)}: *{rst_text(cause_name(entry.get('cause')))}*. "
             + rst_text(text, limit=None),
