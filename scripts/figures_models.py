@@ -20,7 +20,7 @@ for path in snakemake.input.fits:
     document = json.loads(Path(path).read_text())
     documents[document["configuration"]] = document
 fits = fit_table(documents)
-write_table(fits, snakemake.output.table, unit_system=units)
+write_table(fits, snakemake.output.table)
 atomic_write_bytes(snakemake.output.page, model_fits_html(fits).encode())
 log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
 

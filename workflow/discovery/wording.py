@@ -7,11 +7,14 @@ from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["format_percent", "runs_words", "test_words", "discrepancy_sentence"]
+from workflow.io.units import INCH_SECOND, UnitSystem
+
+__all__ = ["format_percent", "runs_words", "statistic_words", "discrepancy_sentence"]
 
 
-def _fmt_v(v: float) -> str:
-    return f"{v:.3g}"
+def _span(low_in_s: float, high_in_s: float, units: UnitSystem, joiner: str = "-") -> str:
+    """``0.465-1.47 in/s``: amplitudes given in in/s, shown in ``units``."""
+    return f"{units.per_in_s * low_in_s:.3g}{joiner}{units.per_in_s * high_in_s:.3g} {units.velocity}"
 
 
 def format_percent(value_percent: float) -> str:
@@ -37,13 +40,13 @@ def _misfit_percent(curve: str, mean: float) -> float:
     return 100 * float(np.expm1(mean)) if curve == "damping" else 100 * float(mean)
 
 
-def _misfit_words(model_name: str, row: Mapping) -> str:
+def _misfit_words(model_name: str, row: Mapping, units: UnitSystem) -> str:
     """``the measured damping lies 4.2 % above the lugre fit at 1-3.2 in/s``."""
     size = _misfit_percent(row["curve"], row["mean"])
     side = "above" if size > 0 else "below" if size < 0 else "on"
     return (
         f"the measured {row['curve']} lies {format_percent(size).lstrip('+-')} {side} the "
-        f"{model_name} fit at {_fmt_v(row['v_low_in_s'])}-{_fmt_v(row['v_high_in_s'])} in/s"
+        f"{model_name} fit at {_span(row['v_low_in_s'], row['v_high_in_s'], units)}"
     )
 
 
@@ -52,7 +55,7 @@ def runs_words(n_runs: int) -> str:
     return f"{n_runs} run{'' if n_runs == 1 else 's'}"
 
 
-def test_words(row: Mapping) -> str:
+def statistic_words(row: Mapping) -> str:
     """The t test behind a bin's verdict: ``|t|``, over what, ``p`` and its corrected limit.
 
     ``|t|`` is quoted with its ``p``, which decides (:func:`~workflow.discovery.misfit.misfit_significant`):
@@ -61,9 +64,9 @@ def test_words(row: Mapping) -> str:
 
     Examples
     --------
-    >>> test_words({"t": -6.49, "n_runs": 3, "p": 0.0013, "p_limit": 0.00083})
+    >>> statistic_words({"t": -6.49, "n_runs": 3, "p": 0.0013, "p_limit": 0.00083})
     '|t| = 6.5 over 3 runs, p = 0.0013 against 0.00083 after correction'
-    >>> test_words({"t": 11.0, "n_runs": 1, "n_segments": 40, "p": 1e-9, "p_limit": 1e-3})
+    >>> statistic_words({"t": 11.0, "n_runs": 1, "n_segments": 40, "p": 1e-9, "p_limit": 1e-3})
     '|t| = 11.0 over the 40 segments of the one run, p = 1e-09 against 0.001 after correction'
     """
     over = (
@@ -80,7 +83,7 @@ def _judgement(row: Mapping) -> str:
     tolerance = _misfit_percent(row["curve"], row["tolerance"])
     clear = row["p"] < row["p_limit"]
     small = abs(row["mean"]) <= row["tolerance"]
-    statistic = test_words(row)
+    statistic = statistic_words(row)
     accuracy = f"the {abs(tolerance):.2g} % in {row['curve']} the models are accurate to"
     if clear and small:
         return (
@@ -92,12 +95,18 @@ def _judgement(row: Mapping) -> str:
     return f"larger than {accuracy} but not statistically significant ({statistic})"
 
 
-def _negligible_misfit_words(model_name: str, row: Mapping, lead: str) -> str:
+def _negligible_misfit_words(model_name: str, row: Mapping, lead: str, units: UnitSystem) -> str:
     """``LEAD, where the measured damping lies ... , is JUDGEMENT``."""
-    return f"{lead}, where {_misfit_words(model_name, row)}, is {_judgement(row)}"
+    return f"{lead}, where {_misfit_words(model_name, row, units)}, is {_judgement(row)}"
 
 
-def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, n_runs: int) -> str:
+def discrepancy_sentence(
+    model_name: str,
+    bins: list[dict],
+    trend: dict | None,
+    n_runs: int,
+    units: UnitSystem = INCH_SECOND,
+) -> str:
     """Plain sentence: where and by how much the model is wrong (or that it is not), in
     damping and in frequency.
 
@@ -108,6 +117,7 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
     significant bins, their range and the largest; where it has none, its largest bin by
     ``|t|`` and which half of the rule that bin fails, so that a large but uncertain
     misfit in one curve is not left out beside a significant one in the other.
+    Amplitudes (``v_low_in_s``, ``v_high_in_s`` of the bins, in/s) are shown in ``units``.
 
     Examples
     --------
@@ -127,10 +137,9 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
         worst = max(sig, key=lambda b: abs(b["mean"]))
         parts.append(
             f"the measured {curve} differs from the {model_name} fit between "
-            f"{_fmt_v(lo)} and {_fmt_v(hi)} in/s, by up to "
+            f"{_span(lo, hi, units, ' and ')}, by up to "
             f"{format_percent(_misfit_percent(curve, worst['mean']))} "
-            f"({test_words(worst)}) at "
-            f"{_fmt_v(worst['v_low_in_s'])}-{_fmt_v(worst['v_high_in_s'])} in/s"
+            f"({statistic_words(worst)}) at {_span(worst['v_low_in_s'], worst['v_high_in_s'], units)}"
         )
     if trend is not None and trend["significant"]:
         parts.append(
@@ -140,7 +149,7 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
         )
     if not parts:
         tail = "".join(
-            "; " + _negligible_misfit_words(model_name, row, f"the largest {row['curve']} misfit")
+            "; " + _negligible_misfit_words(model_name, row, f"the largest {row['curve']} misfit", units)
             for row in quiet
         )
         return (
@@ -148,7 +157,8 @@ def discrepancy_sentence(model_name: str, bins: list[dict], trend: dict | None, 
             f"within the run-to-run scatter or the models' accuracy ({runs_words(n_runs)}){tail}."
         )
     parts += [
-        _negligible_misfit_words(model_name, row, f"its largest {row['curve']} misfit") for row in quiet
+        _negligible_misfit_words(model_name, row, f"its largest {row['curve']} misfit", units)
+        for row in quiet
     ]
     text = "; ".join(parts)
     return text[0].upper() + text[1:] + "."

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from workflow.discovery.wording import runs_words
+from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.escape import display_text, html_text, rst_strong, rst_text
@@ -64,6 +64,8 @@ __all__ = [
     "measured_trends",
     "trend_sentence",
     "campaign_headline",
+    "discrepancy_text",
+    "hypotheses_in_units",
     "hypothesis_summary",
     "excluded_runs",
     "verdict_html",
@@ -531,6 +533,25 @@ def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
     )
 
 
+def discrepancy_text(entry: Mapping, units: UnitSystem = INCH_SECOND) -> str:
+    """A configuration's discrepancy sentence (diagnosis.json, amplitudes in in/s) with its
+    amplitudes in ``units``: rebuilt from the binned residuals and the run-order trend
+    the diagnosis keeps as evidence, so that the page speaks one unit. Kept as written
+    when the evidence does not rebuild it (the sentence is then in in/s)."""
+    text = entry.get("discrepancy", "")
+    evidence = entry.get("evidence") or {}
+    bins = evidence.get("binned_residuals")
+    model = (entry.get("baseline") or {}).get("model")
+    if units.velocity == INCH_SECOND.velocity or bins is None or not model:
+        return text
+    trend = evidence.get("run_order_trend")
+    runs = evidence.get("n_runs", 0)
+    as_written = discrepancy_sentence(model, bins, trend, runs)
+    if not text.endswith(as_written):
+        return text
+    return text[: len(text) - len(as_written)] + discrepancy_sentence(model, bins, trend, runs, units)
+
+
 def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
     """The parameters of the baseline and the extended model that the data do not
     determine (their ``flags``), each once (:func:`~workflow.outputs.plain_words.unidentified_parameters`)."""
@@ -731,11 +752,51 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
     return [esc(item) for item in items]
 
 
+_NUMBER = r"\d+(?:\.\d+)?(?:e[+-]?\d+)?"
+_IN_S = re.compile(rf"({_NUMBER})(?:-({_NUMBER}))? in/s")
+
+
+def hypotheses_in_units(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> pd.DataFrame:
+    """The hypotheses table (results/tables/hypotheses.parquet, in/s and in²) as shown in
+    ``units``: the amplitudes in each ``statistic`` converted, and the estimates and
+    intervals of a slope per in² (H2, ``1/in^2``) per ``units.area``.
+
+    Examples
+    --------
+    >>> from workflow.io.units import SI
+    >>> table = pd.DataFrame({"statistic": ["slope of fitted zeta vs bearing area at velocity "
+    ...     "amplitude 0.63 in/s, 1/in^2"], "estimate": [0.00064516], "ci_low": [0.0], "ci_high": [0.0]})
+    >>> row = hypotheses_in_units(table, SI).iloc[0]
+    >>> row["statistic"], round(float(row["estimate"]), 6)
+    ('slope of fitted zeta vs bearing area at velocity amplitude 0.016 m/s, 1/m²', 1.0)
+    """
+    if units.velocity == INCH_SECOND.velocity or hypotheses is None or hypotheses.empty:
+        return hypotheses
+
+    def amplitudes(match: re.Match) -> str:
+        low = f"{float(match[1]) * units.per_in_s:.3g}"
+        high = f"-{float(match[2]) * units.per_in_s:.3g}" if match[2] else ""
+        return f"{low}{high} {units.velocity}"
+
+    shown = hypotheses.copy()
+    per_area = shown["statistic"].astype(str).str.contains("1/in^2", regex=False)
+    for column in ("estimate", "ci_low", "ci_high"):
+        shown[column] = shown[column].where(~per_area, shown[column] / units.per_in2)
+    shown["statistic"] = (
+        shown["statistic"]
+        .astype(str)
+        .str.replace(_IN_S, amplitudes, regex=True)
+        .str.replace("1/in^2", f"1/{units.area}", regex=False)
+    )
+    return shown
+
+
 def hypothesis_summary(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> list[list[str]]:
-    """One row per hypothesis and configuration: verdicts over the amplitudes tested."""
+    """One row per hypothesis and configuration: verdicts over the amplitudes tested, in ``units``."""
     rows = []
     if hypotheses is None or hypotheses.empty:
         return rows
+    hypotheses = hypotheses_in_units(hypotheses, units)
     for (hypothesis, configuration), part in hypotheses.groupby(["hypothesis", "configuration"], sort=False):
         counts = part["verdict"].value_counts()
         if len(part) == 1:
@@ -767,7 +828,7 @@ def hypothesis_summary(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND
             )
         statistic = (
             re.sub(
-                r" at velocity amplitude [0-9.eE+-]+ in/s",
+                rf" at velocity amplitude [0-9.eE+-]+ {re.escape(units.velocity)}",
                 " at each amplitude",
                 str(part["statistic"].iloc[0]),
             )
@@ -850,7 +911,7 @@ def verdict_html(
             "<ul>"
             + "".join(
                 f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
-                f"{esc(e.get('discrepancy', ''))}"
+                f"{esc(discrepancy_text(e, units))}"
                 + (f" {esc(trend_sentence(trends[n], units))}" if n in trends else "")
                 + _unidentified_tag(e)
                 + "</li>"
@@ -860,10 +921,9 @@ def verdict_html(
         )
     if entries and units.velocity != INCH_SECOND.velocity:
         parts.append(
-            '<p class="note">The first sentence of each line quotes diagnosis.json, whose '
-            f"amplitudes are in in/s (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} {units.velocity}), "
-            "as do the statistics of the hypotheses, which are defined on in/s; the rest of this "
-            f"page is in {units.velocity}.</p>"
+            f'<p class="note">Shown in {units.velocity} and {units.area}; diagnosis.json and the '
+            f"tables keep in/s and in² (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} "
+            f"{units.velocity}).</p>"
         )
     skipped = document.get("skipped_configurations") or {}
     if skipped:
@@ -981,8 +1041,9 @@ def verdict_html(
 
 
 # ------------------------------------------------------------------ tables
-def hypotheses_html(hypotheses: pd.DataFrame) -> str:
-    """Every hypothesis test, one row per configuration and amplitude."""
+def hypotheses_html(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> str:
+    """Every hypothesis test, one row per configuration and amplitude, in ``units``."""
+    hypotheses = hypotheses_in_units(hypotheses, units)
     rows = [
         [
             esc(r.hypothesis),
@@ -992,7 +1053,7 @@ def hypotheses_html(hypotheses: pd.DataFrame) -> str:
             fmt(r.estimate),
             f"{fmt(r.ci_low)} – {fmt(r.ci_high)}",
             fmt(100 * r.confidence, 3),
-            esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s)),
+            esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s, units)),
             str(r.n_runs),
             esc(r.note or ""),
         ]
@@ -1253,6 +1314,7 @@ def verdict_rst(
     runs: pd.DataFrame | None = None,
     hypotheses: pd.DataFrame | None = None,
     segments: pd.DataFrame | None = None,
+    units: UnitSystem = INCH_SECOND,
 ) -> str:
     """The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
@@ -1275,7 +1337,7 @@ def verdict_rst(
         if entry.get("cause") == "none":
             text = f"{base} fits within the run-to-run scatter (held-out error {fmt(gain.get('baseline'))})."
         else:
-            text = entry.get("discrepancy", "")
+            text = discrepancy_text(entry, units)
             if entry.get("cause") != "unknown":
                 text += (
                     f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
@@ -1292,8 +1354,8 @@ def verdict_rst(
                         "its error."
                     )
         if name in trends:
-            text += " " + trend_sentence(trends[name])
-        unidentified = unidentified_sentence(_unidentified(entry))
+            text += " " + trend_sentence(trends[name], units)
+        unidentified = unidentified_sentence(_unidentified(entry, units))
         if unidentified:
             text += " " + unidentified
         lines += [
