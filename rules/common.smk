@@ -2,11 +2,14 @@
 
 import os
 import re
+import sys
+import time
 from dataclasses import asdict
 from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
+from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
 from workflow.outputs.escape import terminal_lines, terminal_text, visible_controls
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
@@ -39,6 +42,37 @@ envvars:
 
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
+CAMPAIGN_FOLDER_FILE = Path("results/interim/campaign_folder.txt")
+"""The campaign folder whose results results/ holds (:func:`record_campaign_folder`)."""
+
+
+def record_campaign_folder():
+    """Record that results/ holds this campaign's results (the Snakefile's onstart: once
+    jobs are about to run, never on a dry run)."""
+    CAMPAIGN_FOLDER_FILE.parent.mkdir(parents=True, exist_ok=True)
+    CAMPAIGN_FOLDER_FILE.write_text(f"{CAMPAIGN.resolve()}\n", encoding="utf-8")
+
+
+def other_campaign_in_results():
+    """The campaign folder whose results results/ holds, when it is another one than
+    this run's (None when it is this one, or results/ records none)."""
+    if not CAMPAIGN_FOLDER_FILE.exists():
+        return None
+    recorded = CAMPAIGN_FOLDER_FILE.read_text(encoding="utf-8").strip()
+    return None if Path(recorded) == CAMPAIGN.resolve() else recorded
+
+
+if workflow.is_main_process and (_other := other_campaign_in_results()) is not None:
+    # results/ is per working directory (output contract): a second campaign's results
+    # would mix with the first's, figures and report included
+    raise WorkflowError(
+        f"results/ in {Path.cwd()} holds the results of the campaign in {terminal_text(_other)}, "
+        f"and this run is for {terminal_text(CAMPAIGN.resolve())}: their figures, tables and report "
+        "would mix. Run this campaign in a working directory of its own (add -d FOLDER, and "
+        f"-s {workflow.main_snakefile} if you are not in the project folder), or remove results/ "
+        "to replace the other campaign's results."
+    )
+
 if workflow.is_main_process:
     # After a hard kill, Snakemake's lock files stay behind; clear them when no other
     # lapjoint run is alive here, so that `snakemake -c2 all` resumes (workflow/runtime/locks.py).
@@ -46,6 +80,24 @@ if workflow.is_main_process:
 
     for _stale in clear_stale_snakemake_locks():
         logger.info(f"removed stale lock .snakemake/locks/{_stale} (no lapjoint run is alive here)")
+
+
+STARTED_S = time.time()
+"""When this Snakemake run started (the tables of an earlier run say nothing about it)."""
+
+
+def nothing_analysed_this_run():
+    """Why nothing could be analysed, when rule usable_segments stopped for it in this run,
+    else None."""
+    from workflow.measured.runs import NOTHING_ANALYSED, nothing_analysed_in_tables
+
+    log = Path("results/logs/usable_segments.log")
+    # a second of slack: some file systems keep whole seconds
+    if not (log.exists() and log.stat().st_mtime >= STARTED_S - 1.0 and NOTHING_ANALYSED in log.read_text()):
+        return None
+    return nothing_analysed_in_tables(
+        "results/tables/runs.parquet", "results/interim/segments.parquet", "results/tables/segments_rejected.parquet"
+    )
 
 
 def campaign_inventory():

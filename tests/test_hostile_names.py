@@ -13,7 +13,9 @@ import base64
 import functools
 import html
 import json
+import os
 import re
+import sys
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -216,6 +218,42 @@ def test_figures_of_the_hostile_run_are_drawn(hostile):
     figures = workdir / "results" / "figures"
     for name in ("fig09_time_history", "fig10_damping_no_washer", "fig13_area_fits", "fig14_dahl_no_washer"):
         assert (figures / f"{name}.png").stat().st_size > 10_000
+
+
+# ------------------------------------------------------------------ the report command, results per campaign
+def test_printed_report_command_builds_the_report_from_another_folder(hostile, tmp_path):
+    """The command `all` prints (and writes to results/report_command.txt) works as
+    printed from any folder: here, with a campaign path that needs shell quoting."""
+    import subprocess
+
+    _, workdir, analysed, _ = hostile
+    command = (workdir / "results" / "report_command.txt").read_text().strip()
+    assert f"\n  {command}\n" in analysed.stderr
+    (workdir / "results" / "report.html").unlink()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    environment = {**os.environ, "PYTHONPATH": str(REPO)}
+    shell = command.replace("snakemake ", f"{sys.executable} -m snakemake ", 1)
+    result = subprocess.run(shell, shell=True, cwd=elsewhere, capture_output=True, text=True, env=environment)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert "Report created" in result.stderr
+    assert report_parts(workdir)[1]  # the report holds its results again
+    assert list(elsewhere.iterdir()) == []
+
+
+def test_another_campaign_in_the_same_results_is_refused_naming_both(hostile, tmp_path):
+    from workflow.lab.virtual_lab import generate_campaign
+
+    root, workdir, _, _ = hostile
+    other = tmp_path / "other"
+    generate_campaign(other, seed=3, runs_per_configuration=2, configurations={"no_washer": 1.36})
+    before = sorted(path.relative_to(workdir) for path in (workdir / "results").rglob("*"))
+    result = snakemake(workdir, "-n", "all", "--config", f"campaign={other}")
+    assert result.returncode != 0
+    message = " ".join((result.stdout + result.stderr).split())  # a dry run reports on stdout
+    assert f"holds the results of the campaign in {root / FOLDER}" in message
+    assert f"this run is for {other}" in message and "-d FOLDER" in message and "remove results/" in message
+    assert sorted(path.relative_to(workdir) for path in (workdir / "results").rglob("*")) == before
 
 
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium on this machine")

@@ -613,9 +613,12 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
 
 
 # ------------------------------------------------------------------ in a real browser
-needs_chromium = pytest.mark.skipif(
-    chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
-)
+def needs_chromium(test):
+    """Skipped without Chromium; a failure then with LAPJOINT_REQUIRE_CHROMIUM=1 (tests/conftest.py)."""
+    test = pytest.mark.skipif(
+        chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
+    )(test)
+    return pytest.mark.group("chromium")(test)
 
 
 @needs_chromium

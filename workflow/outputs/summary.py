@@ -10,6 +10,7 @@ import pandas as pd
 
 from workflow.outputs.escape import terminal_text
 from workflow.outputs.report import cause_name
+from workflow.outputs.report_command import REPORT_COMMAND_FILE
 
 __all__ = [
     "REASONS_SHOWN",
@@ -67,5 +68,5 @@ def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> s
     if len(excluded):
         lines.append("  every run and its reason: results/tables/runs.csv")
     lines.append("Report: results/report/verdict.html (verdict page)")
-    lines.append("  one-file report: snakemake --report results/report.html")
+    lines.append(f"  one-file report: the command in {REPORT_COMMAND_FILE} (works from any folder)")
     return "\n".join(lines) + "\n"
