@@ -22,6 +22,7 @@ import pytest
 from browser import WINDOW_WIDTH_PX, audit_page, chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
+from workflow.discovery.wording import discrepancy_sentence
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.io.units import SI
 from workflow.lab.virtual_lab import generate_campaign
@@ -531,7 +532,7 @@ def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, r
         document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36}, units=SI
     )
     assert "area (m²)" in page and report.fmt(1.36 * 0.0254**2) in page
-    assert "whose amplitudes are in in/s (1 in/s = 0.0254 m/s)" in page
+    assert "diagnosis.json and the tables keep in/s and in² (1 in/s = 0.0254 m/s)" in page
     default = report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36})
     assert "area (in²)" in default and "1 in/s =" not in default
 
@@ -724,3 +725,64 @@ def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_asid
     signature["shows_signature"] = True
     assert report.signature_sentences(entry) == []
     assert report.signature_sentences({"evidence": {}}) == []
+
+
+def test_si_page_speaks_one_unit(document):
+    # the discrepancy sentence of diagnosis.json (in/s) is rebuilt in m/s from its evidence
+    bins = [
+        {
+            "curve": "damping",
+            "v_low_in_s": 1.0,
+            "v_high_in_s": 3.16,
+            "mean": 0.3,
+            "t": 9.0,
+            "p": 1e-8,
+            "p_limit": 1e-3,
+            "tolerance": 0.02,
+            "n_runs": 10,
+            "significant": True,
+        }
+    ]
+    entry = document["configurations"]["no_washer"]
+    entry["evidence"]["binned_residuals"] = bins
+    entry["discrepancy"] = discrepancy_sentence("lugre", bins, entry["evidence"]["run_order_trend"], 10)
+    assert "1-3.16 in/s" in entry["discrepancy"]
+    assert "0.0254-0.0803 m/s" in report.discrepancy_text(entry, SI)
+    assert report.discrepancy_text(entry) == entry["discrepancy"]
+    page = report.verdict_html(document, units=SI)
+    assert "0.0254-0.0803 m/s" in page and "1-3.16 in/s" not in page
+    # H2's slope per in² is a slope per m² in SI, its amplitude in m/s
+    table = pd.DataFrame(
+        {
+            "statistic": ["slope of fitted zeta vs bearing area at velocity amplitude 0.63 in/s, 1/in^2"],
+            "estimate": [6.66e-4],
+            "ci_low": [6.0e-4],
+            "ci_high": [7.0e-4],
+        }
+    )
+    shown = report.hypotheses_in_units(table, SI).iloc[0]
+    assert shown["statistic"].endswith("0.016 m/s, 1/m²")
+    np.testing.assert_allclose(shown["estimate"], 6.66e-4 / 0.0254**2)
+
+
+def test_unidentified_parameters_said_once_in_words(document):
+    entry = document["configurations"]["no_washer"]
+    flag = "stiction_ratio = 3 at the upper edge of its fit range: not identified by the data"
+    entry["baseline"]["flags"] = [flag, "slip_velocity_in_s = 5.96e+03 at the upper edge of its fit range: x"]
+    entry["extended_model"]["flags"] = [flag]
+    entry["confidence"] = {"microslip_power_law": 1.0}
+    page = report.verdict_html(document, units=SI)
+    assert page.count("the stiction-to-friction ratio") == 1 and "stiction_ratio" not in page
+    assert "the baseline and the extended model: 3" in page
+    assert "151 m/s" in page and "slip_velocity_in_s" not in page  # 5960 in/s in SI
+    assert "2 fitted parameters not determined by the data" in page
+    assert "100 % of the resamples" in page and "1e+02" not in page
+
+
+def test_one_run_campaign_is_not_said_to_predict_runs(document):
+    for entry in document["configurations"].values():
+        entry["evidence"]["n_runs"] = 1
+    headline = report.campaign_headline(document)
+    assert "runs it was not fitted to" not in headline and "no run could be held out" in headline
+    page = report.verdict_html(document)
+    assert "Based on 1 run and" in page and "nothing here says how a second run" in page

@@ -164,7 +164,11 @@ def unidentified_sentence(parameters: list[dict]) -> str | None:
         )
         parts.append(f"{p['words']} ({roles}: {p['value']}, {edge})")
     text = "Not determined by these data: " + "; ".join(parts) + "."
-    text += " The fit stopped at that edge: the value is a bound, not a measurement."
+    text += (
+        " The fit stopped at that edge: the value is a bound, not a measurement."
+        if len(parts) == 1
+        else " The fits stopped at those edges: the values are bounds, not measurements."
+    )
     if physical:
         text += (
             " At a physical limit the data ask for more than a lap joint's contact can give "

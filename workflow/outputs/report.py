@@ -175,7 +175,16 @@ def _number(value: Any) -> float | str:
 
 
 def fmt(value: Any, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits; '-' for missing or non-finite."""
+    """A number with ``digits`` significant digits; '-' for missing or non-finite.
+
+    Plain below ``10**(digits + 2)`` (``100``, never ``1e+02``), in exponent form above
+    it and below 0.001.
+
+    Examples
+    --------
+    >>> fmt(100.0, 2), fmt(1234.0), fmt(0.0795), fmt(2.5e-4), fmt(None)
+    ('100', '1230', '0.0795', '2.50e-04', '–')
+    """
     number = _number(value)
     if isinstance(number, str):
         return number
@@ -183,6 +192,9 @@ def fmt(value: Any, digits: int = 3) -> str:
         return "–"
     if number != 0 and (abs(number) >= 10 ** (digits + 2) or abs(number) < 1e-3):
         return f"{number:.{digits - 1}e}"
+    if abs(number) >= 10**digits:
+        # the g format would write 100 as 1e+02 at two digits
+        return f"{round(number, digits - 1 - int(math.floor(math.log10(abs(number))))):.0f}"
     return f"{number:.{digits}g}"
 
 
@@ -496,7 +508,10 @@ def _end_words(trend: Mapping, end: str, units: UnitSystem) -> str:
     """``the median of 12 segments at 0.05-0.07 in/s`` (and how many runs reach the top)."""
     where = amplitude_range(trend[f"end_{end}_low_in_s"], trend[f"end_{end}_high_in_s"], units)
     runs = trend[f"runs_{end}"]
-    reach = f", {runs} of {trend['n_runs']} runs reach it" if end == "high" and runs < trend["n_runs"] else ""
+    verb = "reaches" if runs == 1 else "reach"
+    reach = (
+        f", {runs} of {trend['n_runs']} runs {verb} it" if end == "high" and runs < trend["n_runs"] else ""
+    )
     return f"at {where}{reach}"
 
 
