@@ -53,7 +53,7 @@ PARAMETER_WORDS: dict[str, str] = {
     "macro_ratio": "the macro-slip stiffness ratio",
     "quadratic_zeta_per_in_s": "the quadratic (velocity-squared) damping",
     "stiffness_shift": "the amplitude-dependent stiffness change",
-    "stiffness_exponent": "the power of amplitude of that stiffness change",
+    "stiffness_exponent": "the power of amplitude of the stiffness change",
     "drift": "the drift of the friction limit with run order",
 }
 
