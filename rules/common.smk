@@ -25,7 +25,7 @@ try:
         command_line=dict(workflow.config_settings.config),
     )
 except ConfigError as error:
-    raise WorkflowError(f"invalid configuration:\n{error}") from None
+    raise WorkflowError(f"invalid configuration:\n{terminal_lines(error)}") from None
 
 CAMPAIGN = Path(SETTINGS.campaign)
 
@@ -124,7 +124,7 @@ def campaign_inventory():
         return planned_run_files(SETTINGS.demo.runs_per_configuration), []
     if not CAMPAIGN.is_dir():
         raise WorkflowError(
-            f"campaign folder {CAMPAIGN} does not exist (working directory {Path.cwd()}); "
+            f"campaign folder {terminal_text(CAMPAIGN)} does not exist (working directory {Path.cwd()}); "
             "set campaign in config.yaml or with --config campaign=PATH"
         )
     if visible_controls(CAMPAIGN) != str(CAMPAIGN):
