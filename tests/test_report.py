@@ -784,5 +784,7 @@ def test_one_run_campaign_is_not_said_to_predict_runs(document):
         entry["evidence"]["n_runs"] = 1
     headline = report.campaign_headline(document)
     assert "runs it was not fitted to" not in headline and "no run could be held out" in headline
+    assert "predicts runs held out" not in headline
     page = report.verdict_html(document)
     assert "Based on 1 run and" in page and "nothing here says how a second run" in page
+    assert report.ONE_RUN_ERROR_UNIT.replace("'", "&#x27;") in page

@@ -43,6 +43,7 @@ __all__ = [
     "CAUSE_NAMES",
     "MODEL_NAMES",
     "ERROR_UNIT",
+    "ONE_RUN_ERROR_UNIT",
     "CSS",
     "fmt",
     "ratio",
@@ -131,6 +132,10 @@ ERROR_UNIT = (
     "held-out error: RMS of the residuals on runs left out of the fit, divided by "
     "the measured run-to-run scatter (1 = the model predicts a new run as well as the "
     "runs repeat each other)"
+)
+
+ONE_RUN_ERROR_UNIT = (
+    "; with one run, amplitude ranges of that run are left out and the scatter is the segments' own"
 )
 
 CSS = """
@@ -624,7 +629,8 @@ def campaign_headline(document: Mapping) -> str:
     text = (
         f"The paper's friction model (the better of Dahl and LuGre) falls short in "
         f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
-        f"({which}): a model with the missing physics predicts runs held out of the fit "
+        f"({which}): a model with the missing physics predicts "
+        f"{'runs' if all(_n_runs(entries[n]) > 1 for n in failing) else 'data'} held out of the fit "
         f"{word}. "
     )
     ratios = [
@@ -912,6 +918,7 @@ def verdict_html(
     across = document.get("across_configurations") or {}
     if not areas:
         areas = {n: c.get("bearing_area_in2") for n, c in (across.get("configurations") or {}).items()}
+    one_run = any(_n_runs(entry) == 1 for entry in entries.values())
     parts = [f"<h1>Verdict: campaign {esc(document.get('campaign', '?'))}</h1>"]
     kind = "none" if cause == "none" else ("unknown" if cause == "unknown" else "")
     parts.append(
@@ -969,7 +976,7 @@ def verdict_html(
         )
     )
     parts.append(
-        f'<p class="note">{esc(ERROR_UNIT)}. Ratio: extended / baseline held-out error; below 1 '
+        f'<p class="note">{esc(ERROR_UNIT)}{esc(ONE_RUN_ERROR_UNIT) if one_run else ""}. Ratio: extended / baseline held-out error; below 1 '
         "the extended model predicts better; with cause none the extended model is the "
         "baseline and the ratio is 1. Last column: the best other candidate's held-out error "
         "and how many times the verdict's it is.</p>"
