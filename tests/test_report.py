@@ -788,3 +788,23 @@ def test_one_run_campaign_is_not_said_to_predict_runs(document):
     page = report.verdict_html(document)
     assert "Based on 1 run and" in page and "nothing here says how a second run" in page
     assert report.ONE_RUN_ERROR_UNIT.replace("'", "&#x27;") in page
+
+
+def test_model_fits_say_undetermined_parameters_with_their_units():
+    fits = pd.DataFrame(
+        {
+            "configuration": "a",
+            "model": "lugre",
+            "parameter": ["sigma0", "alpha1", "v0"],
+            "value": [6073.0, 0.3504, 5.382],
+            "std": [290.0, 27.0, 0.0],
+            "rms_log_zeta": 0.05,
+            "rms_rel_frequency": 1e-3,
+        }
+    )
+    page = report.model_fits_html(fits)
+    assert "sigma0 = 6073 ± 290 lbf/in<br>" in page
+    assert "alpha1 = 0.3504 ± 27 lbf <i>(not determined: the uncertainty exceeds the value)</i>" in page
+    assert "v0 = 5.382 ± 0 in/s <i>(not determined: the fit does not change with it" in page
+    in_si = report.model_fits_html(fits, SI)
+    assert "m/s" in in_si and " N " in in_si and "lbf" not in in_si and "in/s" not in in_si

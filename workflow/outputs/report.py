@@ -25,7 +25,7 @@ import pandas as pd
 
 from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.recording_time import run_order
-from workflow.io.units import INCH_SECOND, UnitSystem
+from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem
 from workflow.outputs.escape import display_text, html_text, rst_strong, rst_text
 from workflow.outputs.plain_words import (
     left_out_caveat,
@@ -1206,16 +1206,26 @@ def damping_fits_html(fits: pd.DataFrame) -> str:
     return page("Damping fits", body)
 
 
-def model_fits_html(fits: pd.DataFrame) -> str:
-    """Dahl and LuGre parameters per configuration, value ± one sigma, fit quality."""
+def _parameter_line(name: str, value: float, std: float, units: UnitSystem) -> str:
+    """``sigma = 2891 ± 61 lbf/in`` (HTML), in ``units``, with a word when the uncertainty
+    leaves the value undetermined (:func:`~workflow.outputs.plain_words.uncertainty_note`)."""
+    unit, unit_si, factor_si = MODEL_PARAMETER_UNITS.get(name, ("", "", 1.0))
+    if units.name == "si":
+        unit, value, std = unit_si, value * factor_si, std * factor_si
+    unit = "" if unit in ("", "1") else f" {unit}"
+    note = uncertainty_note(value, std)
+    return f"{esc(name)} = {fmt(value, 4)} ± {fmt(std, 2)}{esc(unit)}" + (
+        f" <i>({esc(note)})</i>" if note else ""
+    )
+
+
+def model_fits_html(fits: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> str:
+    """Dahl and LuGre parameters per configuration, value ± one sigma with its unit (in
+    ``units``), fit quality."""
     rows = []
     for (configuration, model), part in fits.groupby(["configuration", "model"], sort=False):
         first = part.iloc[0]
-        params = "<br>".join(
-            f"{esc(p.parameter)} = {fmt(p.value, 4)} ± {fmt(p.std, 2)}"
-            + (f" <i>({esc(note)})</i>" if (note := uncertainty_note(p.value, p.std)) else "")
-            for p in part.itertuples()
-        )
+        params = "<br>".join(_parameter_line(p.parameter, p.value, p.std, units) for p in part.itertuples())
         rows.append(
             [
                 esc(configuration),
