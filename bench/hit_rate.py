@@ -125,9 +125,10 @@ def _one(args):
             v = v[np.isfinite(v) & (v > 0)]
             scatter = conf["evidence"]["scatter"]
             # the truth is against the reference accelerometer's velocity amplitude
+            ratio = case["sensors"][0]["mode1_ratio"]
             measured = (
                 case,
-                (float(v.min()) / case["sensor_mode1_ratio"], float(v.max()) / case["sensor_mode1_ratio"]),
+                (float(v.min()) / ratio, float(v.max()) / ratio),
                 scatter["ln_zeta_median"],
                 scatter["relative_frequency_median"],
             )

@@ -105,3 +105,22 @@ def test_placed_sensor_sees_mode1_at_the_drawn_gain():
     end = placed_sensor(area, 8.0, seed=4, settings=settings)
     assert end.position_in in (0.0, settings.joint.geometry.total_length_in)
     assert placed_sensor(area, 1.0, seed=4) == placed_sensor(area, 1.0, seed=5)
+
+
+def test_one_hit_seen_by_several_sensors_is_the_one_sensor_campaigns(tmp_path):
+    """A case recorded by three sensors in one file holds, column by column, what each
+    one-sensor campaign of the same gain and noise stream records (same physics, hits,
+    run-to-run draws and noise), and campaign.yaml names the channels."""
+    import yaml
+
+    gains = (1.0, 0.05, 5.0)
+    case, out = generate_case("run_drift", BASE_SEED, tmp_path, mode1_gain=gains)
+    meta = yaml.safe_load((out / "campaign.yaml").read_text())
+    assert meta["response"]["channels"] == ["acc1", "acc2", "acc3"]
+    assert [s["mode1_gain"] for s in case["sensors"]] == list(gains)
+    several = np.loadtxt(out / "joint" / "run03.txt", skiprows=4)
+    for stream, gain in enumerate(gains):
+        _, alone = generate_case("run_drift", BASE_SEED, tmp_path, mode1_gain=gain, noise_stream=stream)
+        single = np.loadtxt(alone / "joint" / "run03.txt", skiprows=4)
+        assert np.array_equal(single[:, :2], several[:, :2])
+        assert np.array_equal(single[:, 2], several[:, 2 + stream])
