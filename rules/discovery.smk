@@ -38,9 +38,8 @@ rule diagnose_configuration:
 
 
 rule diagnose:
-    # The campaign's diagnosis from its configurations', then every diagnosis figure, in
-    # one job: the figures read the two files written here, and in a job of their own
-    # a third of the time was start-up (Python, matplotlib, pandas).
+    # The campaign's diagnosis from its configurations'. It does not depend on config
+    # units: switching them redraws the figures below and re-runs no diagnosis.
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
@@ -53,6 +52,29 @@ rule diagnose:
             labels={"item": "file: diagnosis.json (download)"},
         ),
         residuals="results/tables/diagnosis_residuals.parquet",
+    log:
+        "results/logs/diagnose.log",
+    benchmark:
+        "results/benchmarks/diagnose.tsv"
+    # The report and the summary wait for it: ahead of the measured data's figures, so
+    # that it does not end the study alone on one core.
+    priority: 1
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
+    script:
+        "../scripts/diagnose.py"
+
+
+rule figures_discovery:
+    # Every diagnosis figure, from the two files the diagnosis wrote, in config units.
+    input:
+        diagnosis="results/diagnosis.json",
+        residuals="results/tables/diagnosis_residuals.parquet",
+    output:
         residual_figures=[
             report(
                 f"results/figures/discovery_residuals_{name}.png",
@@ -78,12 +100,9 @@ rule diagnose:
             labels={"item": "figure: prediction of a left-out bearing area"},
         ),
     log:
-        "results/logs/diagnose.log",
+        "results/logs/figures_discovery.log",
     benchmark:
-        "results/benchmarks/diagnose.tsv"
-    # The report and the summary wait for it: ahead of the measured data's figures, so
-    # that it does not end the study alone on one core.
-    priority: 1
+        "results/benchmarks/figures_discovery.tsv"
     conda:
         LAPJOINT_ENV
     threads: 1
@@ -94,4 +113,4 @@ rule diagnose:
         configurations=CONFIGURATIONS,
         units=SETTINGS.units,
     script:
-        "../scripts/diagnose.py"
+        "../scripts/figures_discovery.py"

@@ -11,7 +11,7 @@ from workflow.io.campaign import read_run
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
-from workflow.io.units import UNIT_SYSTEMS
+from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
 from workflow.measured.runs import analysis_window
 from workflow.outputs import figures
@@ -55,12 +55,14 @@ result = decay.analyse_decay(
     **asdict(DecaySettings(**snakemake.params.decay)),
 )
 time_s = np.arange(record.n_samples) / record.sample_rate_hz
+# in SI the record's unit (g, in/s, ...) is converted: one factor for all three curves
+scale, shown_unit = response_in_units(1.0, record.response_quantity, record.response_unit, units)
 figure = figures.time_history(
     time_s,
-    record.response,
-    result.filtered,
-    result.envelope,
-    response_label=f"{plot_text(record.response_quantity)} ({plot_text(record.response_unit)})",
+    scale * record.response,
+    scale * result.filtered,
+    scale * result.envelope,
+    response_label=f"{plot_text(record.response_quantity)} ({plot_text(shown_unit)})",
     title=f"{plot_text(configuration)} / {plot_text(row['run'])}: unfiltered and filtered response",
     band_hz=band_hz,
     decay_start_s=result.start_index / record.sample_rate_hz,

@@ -20,8 +20,8 @@ for path in snakemake.input.fits:
     document = json.loads(Path(path).read_text())
     documents[document["configuration"]] = document
 fits = fit_table(documents)
-write_table(fits, snakemake.output.table, unit_system=units)
-atomic_write_bytes(snakemake.output.page, model_fits_html(fits).encode())
+write_table(fits, snakemake.output.table)
+atomic_write_bytes(snakemake.output.page, model_fits_html(fits, units).encode())
 log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
 
 segments = read_table(snakemake.input.segments)

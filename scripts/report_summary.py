@@ -18,6 +18,7 @@ hypotheses = read_table(snakemake.input.hypotheses)
 segments = read_table(snakemake.input.segments)
 damping_fits = read_table(snakemake.input.damping_fits)
 areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]))
+units = UNIT_SYSTEMS[snakemake.params.units]
 
 pages = {
     "verdict": report.verdict_html(
@@ -26,9 +27,9 @@ pages = {
         hypotheses=hypotheses,
         areas=areas,
         segments=segments,
-        units=UNIT_SYSTEMS[snakemake.params.units],
+        units=units,
     ),
-    "hypotheses": report.hypotheses_html(hypotheses),
+    "hypotheses": report.hypotheses_html(hypotheses, units),
     "runs": report.runs_html(runs),
     "rejected": report.rejected_segments_html(read_table(snakemake.input.rejected)),
     "quality": report.quality_html(read_table(snakemake.input.quality)),
@@ -39,7 +40,7 @@ for name, text in pages.items():
     atomic_write_bytes(snakemake.output[name], text.encode())
 # the report's first page: the verdict, then report/workflow.rst (see rules/report.smk)
 landing = report.landing_rst(
-    report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments),
+    report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments, units=units),
     Path(snakemake.input.description).read_text(),
 )
 atomic_write_bytes(snakemake.output.landing, landing.encode())

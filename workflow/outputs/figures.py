@@ -513,6 +513,9 @@ def area_fits(
                 )
             else:
                 right.plot(area, 100 * part["zeta"], "o-", color=colour, label=label)
+        # areas in m² are small numbers (1e-4): few ticks at round steps, as plain numbers
+        right.xaxis.set_major_locator(ticker.MaxNLocator(4, steps=[1, 2, 5, 10]))
+        right.xaxis.set_major_formatter(ticker.FuncFormatter(lambda value, _: f"{value:.6g}"))
         right.set_xlabel(f"bearing area ({units.area})")
         right.set_ylabel(DAMPING_LABEL)
         right.set_title("damping vs bearing area at common amplitudes")
