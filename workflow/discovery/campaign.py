@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.confidence import verdict_causes, verdict_key
 from workflow.discovery.configuration import (
     ConfigurationDiagnosis,
     diagnose_configuration_segments,
@@ -151,11 +152,12 @@ def campaign_verdict(causes: Sequence[str], ratios: Sequence[float]) -> str:
 
 
 def campaign_confidence(diagnoses: Mapping[str, ConfigurationDiagnosis]) -> dict[str, float]:
-    """Fraction of joint resamples whose campaign verdict names each cause.
+    """Fraction of joint draws whose campaign verdict names each verdict (cause, or a
+    combination's ``+``-joined causes).
 
-    Resample ``b`` of every configuration (each drawn from its own runs) gives one set of
-    configuration causes and gain ratios, and :func:`campaign_verdict` turns it into one
-    campaign cause."""
+    Draw ``b`` of every configuration (a reweighting of its own runs, with one verdict
+    drawn from that reweighting's probabilities) gives one set of configuration verdicts
+    and gain ratios, and :func:`campaign_verdict` turns it into one campaign verdict."""
     counts = {len(d.resamples) for d in diagnoses.values()}
     if not diagnoses or len(counts) != 1 or 0 in counts:
         return {}
@@ -370,12 +372,22 @@ def campaign_document(
         reference velocity; all numbers finite (None where not applicable).
     """
     configurations = {n: d.document for n, d in diagnoses.items()}
-    cause = campaign_verdict(
-        [d["cause"] for d in configurations.values()], [d["gain"]["ratio"] for d in configurations.values()]
+    keys = [verdict_key(d.get("causes") or [d["cause"]]) for d in configurations.values()]
+    verdict = campaign_verdict(keys, [d["gain"]["ratio"] for d in configurations.values()])
+    # the causes in the order of the first configuration with that verdict (largest share first)
+    causes = next(
+        (
+            list(d.get("causes") or [d["cause"]])
+            for k, d in zip(keys, configurations.values())
+            if k == verdict
+        ),
+        verdict_causes(verdict),
     )
+    cause = causes[0]
     document = {
         "campaign": campaign_name,
         "cause": cause,
+        "causes": causes,
         "confidence": campaign_confidence(diagnoses),
         "campaign_rule": CAMPAIGN_RULE,
         "configurations": configurations,
