@@ -219,10 +219,21 @@ def soft_decisions(
     return p, ratio
 
 
+REPORTED_PROBABILITY = 1e-3
+"""Smallest mean probability reported: below a thousandth (one draw in a thousand) a
+verdict is not listed, and the rest are renormalised to sum to 1."""
+
+
 def mean_probabilities(probabilities: Mapping[str, np.ndarray]) -> dict[str, float]:
-    """Mean over the draws of each verdict's probability, the non-zero ones, largest first
-    (sums to 1)."""
+    """Mean over the draws of each verdict's probability, those of at least
+    :data:`REPORTED_PROBABILITY`, largest first (sums to 1).
+
+    Examples
+    --------
+    >>> mean_probabilities({"none": np.array([1.0, 0.5]), "run_drift": np.array([0.0, 0.5])})
+    {'none': 0.75, 'run_drift': 0.25}
+    """
     mean = {k: float(np.mean(v)) for k, v in probabilities.items()}
-    total = sum(mean.values()) or 1.0
-    kept = {k: v / total for k, v in mean.items() if v > 0}
-    return dict(sorted(kept.items(), key=lambda kv: -kv[1]))
+    kept = {k: v for k, v in mean.items() if v >= REPORTED_PROBABILITY} or mean
+    total = sum(kept.values()) or 1.0
+    return dict(sorted(((k, v / total) for k, v in kept.items()), key=lambda kv: -kv[1]))
