@@ -158,7 +158,7 @@ def soft_decisions(
     baselines: Sequence[str],
     options: Sequence[VerdictOption],
     *,
-    baseline_fails: bool,
+    baseline_fails: bool | np.ndarray,
     envelope_structure: bool,
     clear_gain: float,
     residual_gain: float,
@@ -169,8 +169,9 @@ def soft_decisions(
     Per reweighting ``b``: the baseline is the better of ``baselines``; the options that
     are eligible and predict better than it share the departure by their pseudo-BMA+
     weights (softmax of ``elpd``); the departure is certain when the baseline fails its
-    misfit tests, else it happens when the best option's error is below ``clear_gain`` of
-    the baseline's. An option that leaves a significant misfit and does not reach
+    misfit tests (``baseline_fails``: one verdict, or one per reweighting,
+    :func:`workflow.discovery.misfit.failure_draws`), else it happens when the best
+    option's error is below ``clear_gain`` of the baseline's. An option that leaves a significant misfit and does not reach
     ``residual_gain`` passes its share to ``unknown``. Not single-mode decays:
     ``unknown``. The same rule as :func:`workflow.discovery.decision.decide`, with the
     tie-break by BIC replaced by the weights.
@@ -180,22 +181,28 @@ def soft_decisions(
     probabilities : dict
         ``none``, ``unknown`` and every option's key -> array (B,), summing to 1 per draw.
     ratio : ndarray, shape (B,)
-        Per draw, the probability-weighted gain ratio (1 for ``none``).
+        Per draw, the probability-weighted gain ratio: 1 for ``none``, an option's
+        error over the baseline's for the option, the lowest of every option's for
+        ``unknown`` (its extended model is the best candidate tried).
     """
     n_draws = draws.shape[0]
     keys = ["none", "unknown"] + [o.key for o in options]
     p = {k: np.zeros(n_draws) for k in keys}
-    if envelope_structure:
-        p["unknown"][:] = 1.0
-        return p, np.ones(n_draws)
     models = list(dict.fromkeys([*baselines, *(o.model for o in options)]))
     elpd, error = pooled_log_density(channels, models, draws)
     row = {m: i for i, m in enumerate(models)}
     base = error[[row[m] for m in baselines]].min(axis=0)
     usable = [o for o in options if o.eligible]
+    fails = np.broadcast_to(np.asarray(baseline_fails, dtype=bool), (n_draws,))
+    all_errors = np.array([error[row[o.model]] for o in options]) if options else base[None, :]
+    unknown_ratio = all_errors.min(axis=0) / base
+    if envelope_structure:
+        p["unknown"][:] = 1.0
+        return p, unknown_ratio
     if not usable:
-        p["unknown" if baseline_fails else "none"][:] = 1.0
-        return p, np.ones(n_draws)
+        p["unknown"] += fails
+        p["none"] += ~fails
+        return p, p["none"] + p["unknown"] * unknown_ratio
     opt_error = np.array([error[row[o.model]] for o in usable])  # (K, B)
     better = opt_error < base
     log_w = np.where(better, np.array([elpd[row[o.model]] for o in usable]), -np.inf)
@@ -204,19 +211,20 @@ def soft_decisions(
     w = np.where(better, np.exp(log_w - top), 0.0)
     w /= np.maximum(w.sum(axis=0), 1e-300)
     ratio_best = np.where(any_better, opt_error.min(axis=0) / base, 1.0)
-    departs = any_better & (baseline_fails | (ratio_best < clear_gain))
+    departs = any_better & (fails | (ratio_best < clear_gain))
     # no option better: the baseline stands where it fits, nothing removes its misfit where it fails
-    p["unknown" if baseline_fails else "none"] += ~any_better
+    p["unknown"] += ~any_better & fails
+    p["none"] += ~any_better & ~fails
     p["none"] += any_better & ~departs
-    ratio = np.ones(n_draws)
+    ratio = np.zeros(n_draws)
     for k, o in enumerate(usable):
         share = np.where(departs, w[k], 0.0)
         ratio_k = opt_error[k] / base
         to_unknown = o.residual_significant & (ratio_k >= residual_gain)
         p["unknown"] += np.where(to_unknown, share, 0.0)
         p[o.key] += np.where(to_unknown, 0.0, share)
-        ratio += share * (ratio_k - 1.0)
-    return p, ratio
+        ratio += np.where(to_unknown, 0.0, share * ratio_k)
+    return p, ratio + p["none"] + p["unknown"] * unknown_ratio
 
 
 REPORTED_PROBABILITY = 1e-3

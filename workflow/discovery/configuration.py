@@ -242,16 +242,23 @@ def add_combinations(
     return result, combinations, options
 
 
-def most_confident_named(verdict: str, confidence: Mapping[str, float]) -> str:
-    """The verdict, or, when it names a cause, the named verdict with the largest
-    confidence: candidates that predict held-out data equally well share the confidence,
-    and the one the held-out evidence favours is named (not the one with fewer
-    parameters)."""
-    if verdict in ("none", "unknown"):
-        return verdict
-    named = {k: v for k, v in confidence.items() if k not in ("none", "unknown")}
-    best = max(named, key=named.get, default=verdict)
-    return best if named.get(best, 0.0) > named.get(verdict, 0.0) else verdict
+def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
+    """The verdict with the largest confidence (``verdict`` itself on a tie).
+
+    The confidence re-takes the decision on reweightings of the runs, sharing ties
+    between candidates by their held-out evidence: where the decision on all the data
+    sits at one of its margins (a gain ratio at ``CLEAR_GAIN``, a near-tie broken by the
+    BIC), the verdict is the one most of the reweightings take.
+
+    Examples
+    --------
+    >>> most_probable_verdict("unknown", {"stiffness_nonlinearity": 0.6, "unknown": 0.4})
+    'stiffness_nonlinearity'
+    >>> most_probable_verdict("none", {"none": 0.5, "run_drift": 0.5})
+    'none'
+    """
+    best = max(confidence, key=confidence.get, default=verdict)
+    return best if confidence.get(best, 0.0) > confidence.get(verdict, 0.0) else verdict
 
 
 def diagnose_configuration(
@@ -347,7 +354,13 @@ def diagnose_configuration(
         n_draws=settings.resamples,
         seed=settings.seed,
     )
-    result["verdict"] = most_confident_named(result["verdict"], confidence)
+    verdict = most_probable_verdict(result["verdict"], confidence)
+    if verdict != result["verdict"]:
+        result["reason"] = (
+            f"{verdict}, the most probable verdict over reweightings of the runs "
+            f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
+        )
+    result["verdict"] = verdict
     causes = combinations[result["verdict"]]["causes"] if result["verdict"] in combinations else None
     causes = causes or verdict_causes(result["verdict"])
     result["cause"] = causes[0]

@@ -28,7 +28,7 @@ from workflow.discovery.heldout import (
     information_criterion,
     weighted_rms,
 )
-from workflow.discovery.misfit import binned_discrepancy, run_order_trend
+from workflow.discovery.misfit import binned_discrepancy, failure_draws, run_order_trend
 from workflow.models.configuration_data import ConfigurationData
 
 __all__ = [
@@ -253,6 +253,7 @@ def evaluate_decision(
                 "ln_zeta_calibrated",
                 "ln_zeta_slope",
                 "calibration",
+                "scatter_ln_zeta",
                 "z_noise",
                 "f_noise",
             )
@@ -356,9 +357,9 @@ def confidence_draws(
     confidence : dict
         Verdict key -> mean probability over the draws (sums to 1, largest first).
     draws : list of dict
-        Per draw: ``probabilities`` (verdict key -> probability), ``ratio`` (the
-        probability-weighted gain ratio) and ``cause``, one verdict drawn from the
-        probabilities (the campaign's confidence combines the configurations' draws).
+        Per draw: ``probabilities`` (verdict key -> probability) and ``ratio`` (the
+        probability-weighted gain ratio); the campaign's confidence combines the
+        configurations' draws.
     """
     rng = np.random.default_rng(seed)
     channel = ChannelEvidence(result["unit_squares"], result["unit_weights"], result["n_eff"])
@@ -367,7 +368,7 @@ def confidence_draws(
         [channel],
         [m for m in BASELINE_MODELS if m in result["errors"]],
         options,
-        baseline_fails=result["baseline_fails"],
+        baseline_fails=failure_draws(result["bins"], result["trend"], weights),
         envelope_structure=envelope_significant,
         clear_gain=CLEAR_GAIN,
         residual_gain=RESIDUAL_GAIN,
@@ -375,11 +376,10 @@ def confidence_draws(
     )
     keys = list(probabilities)
     table = np.array([probabilities[k] for k in keys]).T
-    draws = []
-    for row, r in zip(table, ratio):
-        drawn = keys[int(rng.choice(len(keys), p=row / row.sum()))]
-        kept = {k: float(v) for k, v in zip(keys, row) if v > 0}
-        draws.append({"cause": drawn, "ratio": float(r), "probabilities": kept})
+    draws = [
+        {"ratio": float(r), "probabilities": {k: float(v) for k, v in zip(keys, row) if v > 0}}
+        for row, r in zip(table, ratio)
+    ]
     return mean_probabilities(probabilities), draws
 
 

@@ -571,8 +571,9 @@ def model_residuals(
     ``ln_zeta_shared``, the damping residual of the shared model before the offsets, and
     ``ln_zeta_calibrated``, the damping residual with each run's offsets set by its own
     lowest-amplitude segments (``calibration``, :func:`calibration_segments`) as a
-    held-out run's are, and ``ln_zeta_slope``, the shared model's log-log damping slope
-    (:func:`damping_curve_slope`).
+    held-out run's are, ``ln_zeta_slope``, the shared model's log-log damping slope
+    (:func:`damping_curve_slope`), and ``scatter_ln_zeta``, the measured scatter of
+    ``ln zeta`` at each segment.
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
@@ -612,6 +613,7 @@ def model_residuals(
             data.velocity_in_s, np.log(np.maximum(shared_zeta, 1e-12)), data.run_index
         ),
         "calibration": calibration,
+        "scatter_ln_zeta": scatter.noise_ln_zeta,
     }
 
 
