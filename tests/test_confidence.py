@@ -143,3 +143,35 @@ def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
     # both add, but one only a tenth of the other: not a second cause
     parts = {"a": combined + 1.0, "b": combined + 0.1}
     assert not combination_test(combined, parts, w, paired_standard_errors=0.0)["named"]
+
+
+def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():
+    """All-ones weights are the data: the bin's t test and the trend's regression p value
+    (scipy's linregress) decide as on the data; reweightings then spread around it."""
+    from scipy import stats
+
+    from workflow.discovery.misfit import failure_draws
+
+    rng = np.random.default_rng(23)
+    y = 0.01 + 0.004 * rng.standard_normal(N_UNITS)  # a bin mean 0.01, t ~ 7
+    t = y.mean() / (y.std(ddof=1) / np.sqrt(N_UNITS))
+    p = 2 * stats.t.sf(abs(t), N_UNITS - 1)
+    row = {"run_ids": list(range(N_UNITS)), "run_means": y.tolist(), "tolerance": 0.005}
+    ones = np.ones((1, N_UNITS))
+    for limit in (p * 1.01, p * 0.99):  # just above and just below the data's p value
+        assert failure_draws([{**row, "p_limit": limit}], None, ones)[0] == (p < limit)
+    x = np.arange(N_UNITS, dtype=float)
+    projections = -0.03 * x + 0.02 * rng.standard_normal(N_UNITS)
+    fit = stats.linregress(x, projections)
+    trend = {
+        "run_ids": list(range(N_UNITS)),
+        "run_positions": x.tolist(),
+        "run_projections": projections.tolist(),
+        "largest_shape": 1.0,
+    }
+    for limit in (fit.pvalue * 1.01, fit.pvalue * 0.99):
+        assert failure_draws([], {**trend, "p_limit": limit}, ones)[0] == (fit.pvalue < limit)
+    # at its limit, about half of the reweightings fail
+    draws = dirichlet_unit_weights(400, N_UNITS, rng)
+    share = failure_draws([], {**trend, "p_limit": fit.pvalue}, draws).mean()
+    assert 0.2 < share < 0.8
