@@ -133,16 +133,17 @@ def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
     rng = np.random.default_rng(21)
     w = np.ones(N_UNITS)
     combined = 1.0 + 0.05 * rng.standard_normal(N_UNITS)
+    baseline = combined + 3.0  # the two mechanisms' effects add: 1 + 2
     parts = {"a": combined + 2.0, "b": combined + 1.0}  # each part misses what the other adds
-    result = combination_test(combined, parts, w)
+    result = combination_test(combined, parts, baseline, w)
     assert result["named"] and result["causes"] == ["b", "a"]
     assert result["shares"]["b"] == pytest.approx(2.0 / 3.0)
     # one part alone as good as the combination (up to noise): the second mechanism adds nothing
     parts = {"a": combined + 0.05 * rng.standard_normal(N_UNITS), "b": combined + 1.0}
-    assert not combination_test(combined, parts, w)["named"]
-    # both add, but one only a tenth of the other: not a second cause
-    parts = {"a": combined + 1.0, "b": combined + 0.1}
-    assert not combination_test(combined, parts, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, parts, baseline, w)["named"]
+    # both add, but one only a twentieth of the gain: not a second cause
+    parts = {"a": combined + 2.85, "b": combined + 0.15}
+    assert not combination_test(combined, parts, baseline, w, paired_standard_errors=0.0)["named"]
 
 
 def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():

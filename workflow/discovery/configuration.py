@@ -163,11 +163,12 @@ def add_combinations(
     """Fit the combinations of two mechanisms the single-cause decision points to, and name
     one where it passes :func:`workflow.discovery.combined.combination_test`.
 
-    Tried after a named cause that a combination contains, or after ``unknown``
+    Tried after a named cause of the joint's physics, or after ``unknown``
     (:func:`combinations_to_try`); the fits, held-out errors and residuals are added to
     ``fits``, ``cv``, ``residuals`` and ``evidence``. A combination becomes the verdict when
     it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
-    it has a stiffness term, and does not leave a significant misfit with less than
+    it has a stiffness term, predicts held-out data better than the single verdict's model,
+    and does not leave a significant misfit with less than
     ``RESIDUAL_GAIN`` of the baseline's error; among several, the lower held-out error.
 
     Returns
@@ -208,7 +209,9 @@ def add_combinations(
     for model in tried:
         causes = COMBINATION_CAUSES[model]
         parts = {c: result["unit_squares"][result["extended_models"][c]] for c in causes}
-        test = combination_test(result["unit_squares"][model], parts, result["unit_weights"])
+        test = combination_test(
+            result["unit_squares"][model], parts, result["unit_squares"][base], result["unit_weights"]
+        )
         bins = binned_discrepancy(data, residuals[model])
         trend = run_order_trend(data, residuals[model], n_tests=RUN_ORDER_TESTS)
         significant = any(b["significant"] for b in bins) or bool(trend and trend["significant"])
@@ -230,15 +233,22 @@ def add_combinations(
             "flags": bound_flags(model, fits[model].coords, data),
         }
         options.append(VerdictOption(key, model, bool(eligible), bool(significant)))
+    # a combination replaces the single verdict only where it also predicts better than it
+    single = errors[result["extended_models"][verdict]]["error"] if verdict in CAUSE_MODELS else np.inf
     named = [
         k
         for k, v in combinations.items()
-        if v["eligible"] and not (v["residual_significant"] and v["ratio_to_baseline"] >= RESIDUAL_GAIN)
+        if v["eligible"]
+        and v["heldout_error"] < single
+        and not (v["residual_significant"] and v["ratio_to_baseline"] >= RESIDUAL_GAIN)
     ]
     if named:
         best = min(named, key=lambda k: combinations[k]["heldout_error"])
         result["verdict"] = best
-        result["reason"] = f"{result['reason']}; {combinations[best]['model']} {combinations[best]['rule']}"
+        result["reason"] = (
+            f"{result['reason']}; two mechanisms, {combinations[best]['model']}, predict better still "
+            f"({combinations[best]['rule']})"
+        )
     return result, combinations, options
 
 
