@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.confidence import verdict_key
 from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem
@@ -102,7 +103,8 @@ CLEAR_MARGIN = 1.5
 held-out error is at least this many times the verdict's ..."""
 
 CLEAR_CONFIDENCE = 0.8
-"""... and at least this fraction of the resamples name the same cause."""
+"""... and the verdict's confidence (its probability over reweightings of the runs) is at
+least this."""
 
 FLAT_CHANGE = 0.05
 """A measured trend smaller than this relative change (5 %) over the amplitude range is
@@ -738,8 +740,8 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"times its held-out error ({fmt(margin['next_score'])})."
             )
         elif margin["ratio"] >= 1:
-            confidence = (entry.get("confidence") or {}).get(cause)
-            sure = f"; {percent_of(confidence)} of the resamples name it" if confidence is not None else ""
+            confidence = (entry.get("confidence") or {}).get(verdict_key(entry.get("causes") or [cause]))
+            sure = f"; its confidence is {percent_of(confidence)}" if confidence is not None else ""
             items.append(
                 f"The verdict is {margin_words(margin['ratio'], confidence)} the next-best candidate, "
                 f"{candidate_name(margin['next'])}: its held-out error ({fmt(margin['next_score'])}) is "
