@@ -353,6 +353,7 @@ def analyse_run_file(
         "status": "excluded" if problems else "used",
         "reason": "; ".join(problems),
         "record_start": "" if record is None else record.record_start,
+        "response_units": {} if record is None else {c.name: c.unit for c in record.responses},
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
 
@@ -455,6 +456,27 @@ def analyse_campaign(
     return pd.concat(frames, ignore_index=True)
 
 
+def response_unit_label(campaign, statuses: list[dict]) -> str:
+    """The unit of the tables' ``response_amplitude``, for the Parquet metadata:
+    campaign.yaml's response unit, else the one the run files record (each channel's
+    when they differ), with the quantity; e.g. ``m/s (velocity)``."""
+    quantity = campaign.response.quantity
+    if campaign.response.unit is not None:
+        return f"{campaign.response.unit} ({quantity})"
+    found: dict[str, set[str]] = {}
+    for status in statuses:
+        for channel, unit in status.get("response_units", {}).items():
+            found.setdefault(channel, set()).add(unit)
+    every = sorted(set().union(*found.values())) if found else []
+    if len(every) == 1:
+        return f"{every[0]} ({quantity})"
+    if not every:
+        return f"unit of the run files ({quantity})"
+    return f"{quantity}, per channel: " + "; ".join(
+        f"{name} {', '.join(sorted(units_))}" for name, units_ in found.items()
+    )
+
+
 def collect_tables(
     *, segment_paths, quality_paths, status_paths, mode_paths, campaign, excluded_paths=()
 ) -> dict[str, pd.DataFrame]:
@@ -480,7 +502,8 @@ def collect_tables(
     from workflow.io.interim import read_mode, read_run_statuses
     from workflow.io.tables import read_columns
 
-    statuses = pd.DataFrame(read_run_statuses(status_paths) + list(excluded_paths))
+    status_rows = read_run_statuses(status_paths)
+    statuses = pd.DataFrame(status_rows + list(excluded_paths))
     statuses = statuses.reindex(columns=RUN_COLUMNS).fillna({"record_start": ""})
     runs = statuses.reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
@@ -527,6 +550,9 @@ def collect_tables(
         "runs": runs,
         "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True),
         "modes": pd.DataFrame(mode_rows),
+        "response_unit": response_unit_label(
+            campaign, [row for row in status_rows if row["status"] == "used"]
+        ),
     }
 
 

@@ -1,0 +1,355 @@
+"""Several sensors and several modes of one hit (campaign-format.md): campaign.yaml's
+``response.channels``, ``modes_hz`` / ``bands_hz`` / ``modes_hz: auto``, a response unit
+read from the file, and every reader's multi-channel path, each checked against a file
+written by its format's own library."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from system_format_files import (
+    lms_export_group,
+    to_uff_ascii_precision,
+    uff58_record,
+    write_mat73,
+    write_plain_mat,
+    write_tdms,
+    write_testlab_mat,
+    write_uff58,
+)
+
+from workflow.io.campaign import (
+    SINGLE_CHANNEL_NAME,
+    CampaignFormatError,
+    campaign_from_dict,
+    campaign_to_dict,
+    load_campaign,
+    read_run,
+)
+
+N = 4096
+RATE_HZ = 2560.0
+DT_S = 1.0 / RATE_HZ
+
+
+def three_sensors():
+    """Three accelerometers (g) seeing one hit: two modes, each sensor its own mix."""
+    t = np.arange(N) * DT_S
+    first = np.exp(-4.0 * t) * np.sin(2 * np.pi * 80.5 * t)
+    second = np.exp(-9.0 * t) * np.sin(2 * np.pi * 297.7 * t)
+    return {
+        "acc1": 1.0 * first + 0.2 * second,
+        "acc2": 0.5 * first - 0.7 * second,
+        "acc3": -0.8 * first + 0.4 * second,
+    }
+
+
+def write_campaign(tmp_path, yaml_text, name, writer):
+    folder = tmp_path / "campaign"
+    (folder / "c").mkdir(parents=True, exist_ok=True)
+    (folder / "campaign.yaml").write_text(yaml_text)
+    writer(folder / "c" / name)
+    return folder
+
+
+def read_one(tmp_path, yaml_text, name, writer):
+    folder = write_campaign(tmp_path, yaml_text, name, writer)
+    return read_run(folder, f"c/{name}", load_campaign(folder))
+
+
+def yaml_with(response, extra=""):
+    return f'name: t\nsample_rate_hz: {RATE_HZ:g}\nresponse: {response}\n{extra}configurations:\n  c: {{files: "c/*"}}\n'
+
+
+def assert_channels(record, expected, names, unit="g"):
+    """The record's response channels are ``expected``'s ``names``, in that order, in ``unit``."""
+    assert record.channel_names() == tuple(names)
+    for channel, name in zip(record.responses, names):
+        np.testing.assert_array_equal(channel.values, expected[name])
+        assert channel.unit == unit
+    np.testing.assert_array_equal(record.response, expected[names[0]])
+    second = record.for_channel(names[-1])
+    np.testing.assert_array_equal(second.response, expected[names[-1]])
+    assert second.response_unit == unit and second.n_samples == record.n_samples
+
+
+# --------------------------------------------------------------------------------------
+# campaign.yaml
+
+
+def load(tmp_path, yaml_text):
+    (tmp_path / "campaign.yaml").write_text(yaml_text)
+    return load_campaign(tmp_path)
+
+
+def load_error(tmp_path, yaml_text) -> str:
+    with pytest.raises(CampaignFormatError) as caught:
+        load(tmp_path, yaml_text)
+    return str(caught.value)
+
+
+def test_channels_and_modes_are_read_and_survive_the_json_copy(tmp_path):
+    campaign = load(
+        tmp_path,
+        yaml_with(
+            "{quantity: acceleration, channels: [acc1, 2, 'Time Acc3:+X']}",
+            "modes_hz: [80.5, 297.7]\nbands_hz: [[70, 90], [280, 310]]\n",
+        ),
+    )
+    assert campaign.response.channels == ("acc1", 2, "Time Acc3:+X")
+    assert campaign.response.channel_names() == ("acc1", "2", "Time Acc3:+X")
+    assert campaign.response.unit is None
+    assert campaign.mode_requests() == ((80.5, (70.0, 90.0)), (297.7, (280.0, 310.0)))
+    assert campaign_from_dict(campaign_to_dict(campaign)) == dataclasses.replace(campaign)
+
+
+def test_auto_modes_and_the_one_mode_forms(tmp_path):
+    auto = load(tmp_path, yaml_with("{quantity: acceleration, unit: g}", "modes_hz: auto\n"))
+    assert auto.auto_modes and auto.mode_requests() == ()
+    assert campaign_from_dict(campaign_to_dict(auto)) == dataclasses.replace(auto)
+    one = load(
+        tmp_path, yaml_with("{quantity: acceleration, unit: g}", "mode_hz: 125\nband_hz: [100, 150]\n")
+    )
+    assert not one.auto_modes and one.mode_requests() == ((125.0, (100.0, 150.0)),)
+    assert one.response.channel_names() == (SINGLE_CHANNEL_NAME,)
+    named = load(tmp_path, yaml_with("{quantity: acceleration, unit: g, channel: 1}"))
+    assert named.mode_requests() == ((None, None),) and named.response.channel_names() == ("1",)
+
+
+@pytest.mark.parametrize(
+    ("response", "extra", "line", "words"),
+    [
+        ("{quantity: acceleration, unit: g, channel: a, channels: [b]}", "", 3, ["response", "not both"]),
+        ("{quantity: acceleration, unit: g, channels: []}", "", 3, ["response.channels", "at least one"]),
+        (
+            "{quantity: acceleration, unit: g, channels: [a, a]}",
+            "",
+            3,
+            ["response.channels", "'a' more than once"],
+        ),
+        ("{quantity: acceleration, unit: g}", "modes_hz: [300, 80]\n", 4, ["modes_hz", "increase"]),
+        ("{quantity: acceleration, unit: g}", "modes_hz: []\n", 4, ["modes_hz", "at least one"]),
+        ("{quantity: acceleration, unit: g}", "modes_hz: [80]\nmode_hz: 80\n", 5, ["mode_hz", "not both"]),
+        ("{quantity: acceleration, unit: g}", "bands_hz: [[70, 90]]\n", 4, ["bands_hz", "needs modes_hz"]),
+        (
+            "{quantity: acceleration, unit: g}",
+            "modes_hz: [80, 300]\nbands_hz: [[70, 90]]\n",
+            5,
+            ["1 band(s) for 2"],
+        ),
+        (
+            "{quantity: acceleration, unit: g}",
+            "modes_hz: [80, 300]\nbands_hz: [[70, 90], [200, 250]]\n",
+            5,
+            ["bands_hz", "does not hold its mode 300"],
+        ),
+        ("{quantity: acceleration, unit: g}", "modes_hz: [80, 1300]\n", 4, ["modes_hz[1]", "Nyquist"]),
+        (
+            "{quantity: acceleration, unit: g}",
+            "modes_hz: automatic\n",
+            4,
+            ["modes_hz: expected a list", "or auto"],
+        ),
+    ],
+)
+def test_bad_channel_and_mode_keys_name_the_key_and_line(tmp_path, response, extra, line, words):
+    message = load_error(tmp_path, yaml_with(response, extra))
+    assert f"campaign.yaml:{line}:" in message
+    for word in words:
+        assert word in message
+
+
+def test_the_contracts_example_reads_three_sensors_of_a_mat_file(tmp_path):
+    # campaign-format.md, "Several sensors and several modes of one hit", as written there
+    yaml_text = (
+        "name: contract-example\n"
+        "modes_hz: [80.5, 297.7]            # several modes; or `modes_hz: auto` (every mode found)\n"
+        "response: {quantity: acceleration, unit: m/s^2, channels: [acc1, acc2, acc3]}\n"
+        "configurations:\n"
+        '  torque_20nm: {files: "t20/*.mat"}\n'
+    )
+    folder = tmp_path / "campaign"
+    (folder / "t20").mkdir(parents=True)
+    (folder / "campaign.yaml").write_text(yaml_text)
+    sensors = three_sensors()
+    write_plain_mat(folder / "t20" / "hit01.mat", t=np.arange(N) * DT_S, **sensors)
+    campaign = load_campaign(folder)
+    assert campaign.mode_requests() == ((80.5, None), (297.7, None))
+    record = read_run(folder, "t20/hit01.mat", campaign)
+    assert record.sample_rate_hz == pytest.approx(RATE_HZ, rel=1e-9)
+    assert_channels(record, sensors, ["acc1", "acc2", "acc3"], unit="m/s^2")
+    # and with the bands it names
+    (folder / "campaign.yaml").write_text(
+        yaml_text.replace("configurations:", "bands_hz: [[70, 90], [280, 310]]\nconfigurations:")
+    )
+    assert load_campaign(folder).mode_requests() == ((80.5, (70.0, 90.0)), (297.7, (280.0, 310.0)))
+
+
+# --------------------------------------------------------------------------------------
+# ASCII: columns by name or index
+
+
+def ascii_writer(columns, names=None):
+    def write(path):
+        rows = "\n".join("\t".join(repr(float(v)) for v in row) for row in zip(*columns))
+        head = "" if names is None else "\t".join(names) + "\n"
+        path.write_text(head + rows + "\n")
+
+    return write
+
+
+def test_ascii_columns_by_name_with_units_from_the_file(tmp_path):
+    sensors = three_sensors()
+    t = np.arange(N) * DT_S
+    writer = ascii_writer([t, *sensors.values()], ["Time (s)", "acc1 (g)", "acc2 (g)", "acc3 (g)"])
+    record = read_one(
+        tmp_path, yaml_with("{quantity: acceleration, channels: [acc3, ACC1]}"), "run.txt", writer
+    )
+    assert record.channel_names() == ("acc3", "ACC1")
+    np.testing.assert_array_equal(record.responses[0].values, sensors["acc3"])
+    np.testing.assert_array_equal(record.responses[1].values, sensors["acc1"])
+    assert record.responses[1].source == "acc1 (g)"
+    assert record.time_s is not None
+
+
+def test_ascii_columns_by_index_without_names(tmp_path):
+    sensors = three_sensors()
+    t = np.arange(N) * DT_S
+    writer = ascii_writer([t, *sensors.values()])
+    record = read_one(
+        tmp_path, yaml_with("{quantity: acceleration, unit: g, channels: [1, 2, 3]}"), "run.txt", writer
+    )
+    assert_channels(
+        record, {"1": sensors["acc1"], "2": sensors["acc2"], "3": sensors["acc3"]}, ["1", "2", "3"]
+    )
+    assert record.time_s is not None and record.force_lbf is None
+
+
+@pytest.mark.parametrize(
+    ("response", "names", "words"),
+    [
+        (
+            "{quantity: acceleration, channels: [acc1, acc2]}",
+            ["Time (s)", "acc1 (g)", "acc2", "acc3 (g)"],
+            ["'acc2'", "no unit"],
+        ),
+        (
+            "{quantity: acceleration, unit: g, channels: [acc1, acc9]}",
+            ["Time (s)", "acc1 (g)", "acc2 (g)", "acc3 (g)"],
+            ["'acc9'", "no column", "[3] 'acc3 (g)'"],
+        ),
+        (
+            "{quantity: acceleration, unit: g, channels: [acc1, 7]}",
+            ["Time (s)", "acc1 (g)", "acc2 (g)", "acc3 (g)"],
+            ["7", "4 column(s)"],
+        ),
+        (
+            "{quantity: acceleration, unit: m/s^2, channels: [acc1, acc2]}",
+            ["Time (s)", "acc1 (g)", "acc2 (g)", "acc3 (g)"],
+            ["'acc1 (g)'", "disagrees", "'m/s^2'"],
+        ),
+        (
+            "{quantity: acceleration, unit: g, channels: [acc1, acc2]}",
+            None,
+            ["'acc1'", "no line of column names"],
+        ),
+    ],
+)
+def test_ascii_channel_errors_name_the_file_and_the_column(tmp_path, response, names, words):
+    sensors = three_sensors()
+    writer = ascii_writer([np.arange(N) * DT_S, *sensors.values()], names)
+    with pytest.raises(CampaignFormatError) as caught:
+        read_one(tmp_path, yaml_with(response), "run.txt", writer)
+    message = str(caught.value)
+    assert "c/run.txt" in message
+    for word in words:
+        assert word in message
+
+
+# --------------------------------------------------------------------------------------
+# System formats, each file written by its own library
+
+
+def test_plain_mat_variables(tmp_path):
+    sensors = three_sensors()
+    writer = lambda p: write_plain_mat(p, t=np.arange(N) * DT_S, **sensors)  # noqa: E731
+    record = read_one(
+        tmp_path,
+        yaml_with("{quantity: acceleration, unit: g, channels: [acc1, acc2, acc3]}"),
+        "run.mat",
+        writer,
+    )
+    assert_channels(record, sensors, ["acc1", "acc2", "acc3"])
+
+
+def test_mat73_variables(tmp_path):
+    sensors = three_sensors()
+    writer = lambda p: write_mat73(p, {"t": np.arange(N) * DT_S, **sensors})  # noqa: E731
+    record = read_one(
+        tmp_path, yaml_with("{quantity: acceleration, unit: g, channels: [acc2, acc3]}"), "run.mat", writer
+    )
+    assert_channels(record, sensors, ["acc2", "acc3"])
+
+
+def test_testlab_function_records_with_units_from_the_file(tmp_path):
+    sensors = three_sensors()
+    names = ["Time Acc1:+X", "Time Acc2:+X", "Time Acc3:+X"]
+    group = lms_export_group(names, np.column_stack(list(sensors.values())), "g", DT_S)
+    writer = lambda p: write_testlab_mat(p, {"Signal": group})  # noqa: E731
+    # neither sample rate nor unit in campaign.yaml: the export records both
+    yaml_text = "name: t\nresponse: {quantity: acceleration, channels: ['Time Acc1:+X', 2]}\nconfigurations:\n  c: {files: 'c/*'}\n"
+    record = read_one(tmp_path, yaml_text, "run.mat", writer)
+    expected = {"Time Acc1:+X": sensors["acc1"], "2": sensors["acc3"]}
+    assert_channels(record, expected, ["Time Acc1:+X", "2"])
+    assert record.responses[1].source == "Time Acc3:+X"
+    assert record.sample_rate_hz == pytest.approx(RATE_HZ)
+
+
+def test_uff58_datasets(tmp_path):
+    sensors = three_sensors()
+    records = [uff58_record(name, values, "g", 12, DT_S) for name, values in sensors.items()]
+    writer = lambda p: write_uff58(p, records)  # noqa: E731
+    yaml_text = "name: t\nresponse: {quantity: acceleration, channels: [acc3, acc1]}\nconfigurations:\n  c: {files: 'c/*'}\n"
+    record = read_one(tmp_path, yaml_text, "run.uff", writer)
+    expected = {name: to_uff_ascii_precision(values) for name, values in sensors.items()}
+    assert_channels(record, expected, ["acc3", "acc1"])
+
+
+def test_tdms_channels(tmp_path):
+    sensors = three_sensors()
+    properties = {"unit_string": "g", "wf_increment": DT_S, "wf_start_offset": 0.0}
+    writer = lambda p: write_tdms(p, "hit", {name: (v, properties) for name, v in sensors.items()})  # noqa: E731
+    yaml_text = "name: t\nresponse: {quantity: acceleration, channels: [hit/acc2, acc1]}\nconfigurations:\n  c: {files: 'c/*'}\n"
+    record = read_one(tmp_path, yaml_text, "run.tdms", writer)
+    expected = {"hit/acc2": sensors["acc2"], "acc1": sensors["acc1"]}
+    assert_channels(record, expected, ["hit/acc2", "acc1"])
+
+
+def test_system_channel_errors(tmp_path):
+    sensors = three_sensors()
+    writer = lambda p: write_plain_mat(p, t=np.arange(N) * DT_S, **sensors)  # noqa: E731
+    with pytest.raises(
+        CampaignFormatError, match=r"c/run.mat: campaign.yaml response.channels: 'acc7' matches no channel"
+    ):
+        read_one(
+            tmp_path,
+            yaml_with("{quantity: acceleration, unit: g, channels: [acc1, acc7]}"),
+            "run.mat",
+            writer,
+        )
+    with pytest.raises(CampaignFormatError, match=r"c/run.mat: .*'acc1' more than once"):
+        read_one(
+            tmp_path, yaml_with("{quantity: acceleration, unit: g, channels: [acc1, 1]}"), "run.mat", writer
+        )
+    # a plain MAT file records no unit: campaign.yaml must give it
+    with pytest.raises(CampaignFormatError, match=r"c/run.mat: variable 'acc2'.*records no unit.*add unit"):
+        read_one(tmp_path, yaml_with("{quantity: acceleration, channels: [acc2]}"), "run.mat", writer)
+
+
+def test_a_file_unit_of_another_quantity_is_refused_without_yaml_unit(tmp_path):
+    sensors = three_sensors()
+    group = lms_export_group(["Time Laser:+X"], sensors["acc1"][:, None], "m/s", DT_S)
+    writer = lambda p: write_testlab_mat(p, {"Laser": group})  # noqa: E731
+    yaml_text = "name: t\nresponse: {quantity: acceleration}\nconfigurations:\n  c: {files: 'c/*'}\n"
+    with pytest.raises(CampaignFormatError, match=r"unit 'm/s' in the file is not a unit of acceleration"):
+        read_one(tmp_path, yaml_text, "run.mat", writer)
