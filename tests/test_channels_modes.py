@@ -4,6 +4,8 @@ read from the file, and every reader's multi-channel path, each checked against 
 written by its format's own library."""
 
 import dataclasses
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -353,3 +355,133 @@ def test_a_file_unit_of_another_quantity_is_refused_without_yaml_unit(tmp_path):
     yaml_text = "name: t\nresponse: {quantity: acceleration}\nconfigurations:\n  c: {files: 'c/*'}\n"
     with pytest.raises(CampaignFormatError, match=r"unit 'm/s' in the file is not a unit of acceleration"):
         read_one(tmp_path, yaml_text, "run.mat", writer)
+
+
+# --------------------------------------------------------------------------------------
+# Modes that decay, lines that do not
+
+
+def decay_and_dwell(fs_hz=1024.0, duration_s=64.0, switch_off_s=51.2):
+    """A 9 Hz dwell with its 18 Hz harmonic until ``switch_off_s``, then the free decay of
+    an 18.79 Hz mode (zeta 0.4 %) it leaves ringing, as on the UNESP beam."""
+    t = np.arange(int(duration_s * fs_hz)) / fs_hz
+    on = t < switch_off_s
+    dwell = on * (0.03 * np.sin(2 * np.pi * 9.0 * t) + 0.015 * np.sin(2 * np.pi * 18.0 * t))
+    after = np.clip(t - switch_off_s, 0.0, None)
+    omega = 2 * np.pi * 18.79
+    mode = ~on * 0.05 * np.exp(-0.004 * omega * after) * np.sin(omega * after)
+    noise = 1e-5 * np.random.default_rng(1).standard_normal(t.size)
+    return t, dwell + mode + noise
+
+
+def test_hold_fraction_of_a_free_decay_is_its_analytic_value():
+    from scipy.optimize import brentq
+    from scipy.special import log_ndtr
+
+    from workflow.measured.mode import LINE_TRACK_RELATIVE_WIDTH, line_hold_fraction
+
+    fs_hz, f_hz, zeta = 2560.0, 125.0, 0.01
+    n = int(3.2 * fs_hz)
+    t = np.arange(n) / fs_hz
+    sigma = zeta * 2 * np.pi * f_hz
+    x = np.exp(-sigma * t) * np.sin(2 * np.pi * f_hz * t)
+    # The Gaussian band of time width s turns the decay starting at 0 into
+    # exp(-sigma t) Phi((t - sigma s^2) / s); past the edges (three s each) the track holds
+    # 3 dB from the interior's first sample until log(track) has fallen by ln(2) / 2.
+    s = 1.0 / (2 * np.pi * LINE_TRACK_RELATIVE_WIDTH * f_hz)
+    edge = int(np.ceil(3.0 * s * fs_hz))
+
+    def log_track(time_s):
+        return -sigma * time_s + log_ndtr((time_s - sigma * s**2) / s)
+
+    start_s = edge / fs_hz
+    cross_s = brentq(lambda time_s: log_track(start_s) - log_track(time_s) - np.log(2.0) / 2, start_s, 1.0)
+    expected = (cross_s - start_s) / ((n - 2 * edge) / fs_hz)
+    assert line_hold_fraction([x], fs_hz, f_hz) == pytest.approx(expected, abs=1.5 / (n - 2 * edge))
+
+
+def test_a_steady_line_beside_a_mode_does_not_decay_and_the_mode_does():
+    from workflow.measured.mode import STATIONARY_HOLD_FRACTION, line_hold_fraction
+
+    _, x = decay_and_dwell()
+    assert line_hold_fraction([x], 1024.0, 18.0) > 0.75  # on for 51 of 64 s
+    assert line_hold_fraction([x], 1024.0, 18.79) < STATIONARY_HOLD_FRACTION / 5
+
+
+def test_auto_modes_leave_out_a_dwell_and_its_harmonic():
+    from workflow.measured import mode as modal_id
+
+    fs_hz = 2560.0
+    t = np.arange(int(5 * fs_hz)) / fs_hz
+    modes = [(80.5, 0.01, 1.0), (297.7, 0.005, 0.3), (610.0, 0.004, 0.1)]
+    x = sum(a * np.exp(-z * 2 * np.pi * f * t) * np.sin(2 * np.pi * f * t) for f, z, a in modes)
+    x = x + 0.05 * np.sin(2 * np.pi * 50.0 * t) + 0.03 * np.sin(2 * np.pi * 150.0 * t)
+    x = x + 1e-4 * np.random.default_rng(2).standard_normal(t.size)
+    frequency_hz, psd = modal_id.response_spectrum([x], fs_hz)
+    found, left_out = modal_id.find_decaying_modes(
+        [x], fs_hz, frequency_hz, np.sqrt(psd), (5.0, 0.4 * fs_hz), 0.2, 2.0
+    )
+    assert len(found) == 3
+    # each within 5 % of its half-power bandwidth 2 zeta f (the peak's own width)
+    for found_hz, (f, zeta, _) in zip(found, modes):
+        assert abs(found_hz - f) < 0.05 * 2 * zeta * f
+    assert any(
+        "150.000 Hz" in reason and "3rd harmonic of the steady line at 50.000 Hz" in reason
+        for reason in left_out
+    )
+    assert any("50.000 Hz does not decay" in reason for reason in left_out)
+
+
+def test_the_first_mode_search_stops_on_a_line_that_does_not_decay(tmp_path):
+    t, x = decay_and_dwell()
+    writer = lambda p: write_plain_mat(p, t=t, v=x)  # noqa: E731
+    yaml_text = "name: t\nmode_hz: 18.7\nresponse: {quantity: velocity, unit: m/s, channel: v}\nconfigurations:\n  c: {files: 'c/*'}\n"
+    assert_dwell_line_named_then_mode_found(write_campaign(tmp_path, yaml_text, "run.mat", writer), yaml_text)
+
+
+def assert_dwell_line_named_then_mode_found(folder, yaml_text):
+    """Without window_s the search stops on the dwell's 18 Hz harmonic, naming it and asking
+    for the window; with the window from the switch-off (51.2 s) it finds the 18.79 Hz mode."""
+    found = identify(folder)
+    assert found.mode is None
+    assert "18.000 Hz does not decay in the analysis window" in found.error
+    assert "2nd harmonic of the steady line at 9.000 Hz" in found.error and "window_s" in found.error
+    (folder / "campaign.yaml").write_text(
+        yaml_text.replace("{files: 'c/*'}", "{files: 'c/*', window_s: [51.2, 64]}")
+    )
+    found = identify(folder)
+    # to half the resolution of a 12.8 s window (0.08 Hz)
+    assert found.mode is not None and found.mode.mode_hz == pytest.approx(18.79, abs=0.04)
+
+
+def identify(folder):
+    from workflow.io.settings import AnalysisSettings, QualitySettings
+    from workflow.measured.runs import identify_configuration_mode
+
+    return identify_configuration_mode(
+        folder,
+        ["c/run.mat"],
+        configuration="c",
+        campaign=load_campaign(folder),
+        mode_search=AnalysisSettings().mode_search(),
+        quality_settings=QualitySettings(),
+    )
+
+
+REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
+UNESP_EXPORT = REALDATA / "raw" / "unesp_T5Nm_Sine_09Hz_Time.mat"
+
+
+@pytest.mark.skipif(
+    not UNESP_EXPORT.is_file(), reason=f"{UNESP_EXPORT} absent (../shared beside the repository)"
+)
+def test_unesp_export_without_window_or_unit_names_the_dwell_line_and_asks_for_the_window(tmp_path):
+    yaml_text = (
+        "name: unesp\nmode_hz: 18.7\n"
+        'response: {quantity: velocity, channel: "Time Laser:+X"}\n'
+        "configurations:\n  c: {files: 'c/*'}\n"
+    )
+    folder = write_campaign(tmp_path, yaml_text, "run.mat", lambda p: shutil.copyfile(UNESP_EXPORT, p))
+    record = read_run(folder, "c/run.mat", load_campaign(folder))
+    assert record.response_unit == "m/s" and record.sample_rate_hz == 1024.0  # from the file
+    assert_dwell_line_named_then_mode_found(folder, yaml_text)

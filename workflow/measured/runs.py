@@ -66,6 +66,13 @@ def mode_search_range(
     return 5.0, 0.4 * sample_rate_hz
 
 
+WINDOW_ADVICE = (
+    "give the configuration window_s: [start, end] in campaign.yaml, the seconds of every run "
+    "where the free decay is (after the excitation stops)"
+)
+"""What a message about a line that does not decay asks the user for."""
+
+
 def identify_mode(
     records: list[RunRecord],
     *,
@@ -107,6 +114,9 @@ def identify_mode(
     )
     if not_a_resonance:
         raise ValueError(not_a_resonance)
+    forced = modal_id.forced_line_problem(responses, sample_rate_hz, mode_hz, frequency_hz, amplitude)
+    if forced is not None:
+        raise ValueError(f"{forced}; {WINDOW_ADVICE}")
     if campaign_band_hz is not None:
         band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
     else:
