@@ -94,7 +94,17 @@ def campaign_inventory():
     return runs, excluded
 
 
+def response_channels():
+    """The response channels' names in the tables (campaign.yaml's ``response``)."""
+    from workflow.io.campaign import SINGLE_CHANNEL_NAME, load_campaign
+
+    if USES_DEMO:
+        return (SINGLE_CHANNEL_NAME,)
+    return load_campaign(CAMPAIGN).response.channel_names()
+
+
 RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
+RESPONSE_CHANNELS = response_channels()
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:

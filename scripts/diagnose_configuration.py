@@ -13,13 +13,15 @@ from workflow.discovery.diagnosis import (
 from workflow.io.interim import DiagnosedConfiguration, read_campaign, write_configuration_diagnosis
 from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
+from workflow.measured.runs import first_mode_and_channel, first_mode_rows
 from workflow.models.paper import configuration_models_document
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose_configuration")
 configuration = snakemake.wildcards.configuration
 campaign = read_campaign(snakemake.input.campaign_settings)
-segments = read_table(snakemake.input.segments)
+# the first mode, seen by the first channel (docs/outputs.md)
+segments = first_mode_and_channel(read_table(snakemake.input.segments), campaign.response.channel_names()[0])
 decay = DecaySettings(**snakemake.params.decay)
 # the reference velocity comes from every configuration's segments, not this one's
 context = campaign_fit_context(segments)
@@ -68,7 +70,7 @@ write_configuration_diagnosis(
 document = configuration_models_document(
     segments,
     configuration,
-    read_table(snakemake.input.modes).set_index("configuration"),
+    first_mode_rows(read_table(snakemake.input.modes)).set_index("configuration"),
     {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()},
     response_quantity=campaign.response.quantity,
     analysis=decay,

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table, write_table
 from workflow.io.units import UNIT_SYSTEMS
+from workflow.measured.runs import first_mode_and_channel
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
 from workflow.outputs.report import model_fits_html
@@ -23,7 +24,7 @@ write_table(fits, snakemake.output.table, unit_system=units)
 atomic_write_bytes(snakemake.output.page, model_fits_html(fits).encode())
 log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
 
-segments = read_table(snakemake.input.segments)
+segments = first_mode_and_channel(read_table(snakemake.input.segments), snakemake.params.first_channel)
 for configuration, dahl_path, lugre_path in zip(
     snakemake.params.configurations, snakemake.output.dahl, snakemake.output.lugre, strict=True
 ):
