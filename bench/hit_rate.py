@@ -31,7 +31,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from workflow.discovery.diagnosis import EXPLAINS_LIMIT, diagnose_campaign, evaluate_decision  # noqa: E402
+from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
+from workflow.discovery.decision import evaluate_decision  # noqa: E402
+from workflow.discovery.misfit import EXPLAINS_LIMIT  # noqa: E402
 from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case  # noqa: E402
 from workflow.lab.virtual_lab import TIME_DOMAIN_EFFECTS, LabSettings  # noqa: E402
 
@@ -60,7 +62,8 @@ def _one(args):
             cause, seed, Path(work), settings=lab_settings(variability), integrator=integrator
         )
         segments = campaign_segments(out)
-        doc, details = diagnose_campaign(segments, out.name, return_details=True)
+        context, details, skipped = diagnose_configurations(segments)
+        doc = campaign_document(out.name, context, details, skipped)
         conf = next(iter(doc["configurations"].values()), None)
         ratio = conf["gain"]["ratio"] if conf else None
         verdict = doc["cause"] if conf else "no data"
@@ -139,15 +142,9 @@ def baseline_misfit_on_truth(
     where both stay within ``EXPLAINS_LIMIT`` the baseline explains the effect-laden
     truth itself, and ``none`` is the contract's reading of any campaign of that case.
     """
-    from workflow.discovery.diagnosis import (
-        ConfigurationData,
-        FitContext,
-        FitSettings,
-        Scatter,
-        fit_model,
-        model_residuals,
-    )
     from workflow.lab import virtual_lab as vl
+    from workflow.models.averaged_fit import FitContext, FitSettings, fit_model, model_residuals
+    from workflow.models.configuration_data import ConfigurationData, Scatter
 
     lab = vl.LabSettings()
     v = np.geomspace(*velocity_range_in_s, 60)

@@ -6,10 +6,12 @@ prediction."""
 import json
 from pathlib import Path
 
-from workflow.discovery.diagnosis import FitContext, campaign_document, configuration_outcomes, residual_table
-from workflow.io.interim import read_campaign, read_configuration_diagnosis
+from workflow.discovery.campaign import campaign_document, configuration_outcomes, residual_table
+from workflow.discovery.diagnosis_files import read_configuration_diagnosis
+from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json, write_table
 from workflow.io.units import UNIT_SYSTEMS
+from workflow.models.averaged_fit import FitContext
 from workflow.outputs import discovery_figures, figures
 from workflow.runtime.logs import setup_script_logging
 

@@ -4,16 +4,14 @@ verdict and its resamples), for the campaign's diagnose rule, then the paper's m
 
 import time
 
-from workflow.discovery.diagnosis import (
-    FitSettings,
-    campaign_fit_context,
-    diagnose_configuration_segments,
-    record_starts,
-)
-from workflow.io.interim import DiagnosedConfiguration, read_campaign, write_configuration_diagnosis
+from workflow.discovery.campaign import campaign_fit_context
+from workflow.discovery.configuration import diagnose_configuration_segments, record_starts
+from workflow.discovery.diagnosis_files import DiagnosedConfiguration, write_configuration_diagnosis
+from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
 from workflow.measured.runs import first_mode_and_channel, first_mode_rows
+from workflow.models.averaged_fit import FitSettings
 from workflow.models.paper import configuration_models_document
 from workflow.runtime.logs import setup_script_logging
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 
-from workflow.models import contact
+from workflow.models import contact, friction
 
 
 def _cycle(amplitude, n=4000):
@@ -101,7 +101,7 @@ def test_dahl_dissipation_formula_by_time_integration():
             force[i] = dahl_force_update(force[i - 1], x[i] - x[i - 1], sigma, fc)
         last = slice(14 * n, 15 * n + 1)
         work = np.sum(0.5 * (force[last][1:] + force[last][:-1]) * np.diff(x[last]))
-        assert work == pytest.approx(contact.dahl_dissipation_per_cycle(amplitude, sigma, fc), rel=2e-3)
+        assert work == pytest.approx(friction.dahl_dissipation_per_cycle(amplitude, sigma, fc), rel=2e-3)
         # loop saturates at +-Fc and never exceeds it
         assert np.max(np.abs(force)) <= fc * (1 + 1e-12)
         assert np.max(force[last]) == pytest.approx(fc * np.tanh(sigma * amplitude / fc), rel=1e-3)

@@ -8,13 +8,22 @@ import json
 import numpy as np
 import pandas as pd
 
+from tests.support.discovery import diagnose_with_details
 from tests.test_discovery import DAHL, FAST, synthetic_segments
-from workflow.discovery import diagnosis as disc
-from workflow.io.interim import (
+from workflow.discovery.campaign import (
+    campaign_document,
+    campaign_fit_context,
+    configuration_outcomes,
+    residual_table,
+)
+from workflow.discovery.configuration import diagnose_configuration_segments
+from workflow.discovery.diagnosis_files import (
     DiagnosedConfiguration,
     read_configuration_diagnosis,
     write_configuration_diagnosis,
 )
+from workflow.models.averaged import MODELS
+from workflow.models.averaged_fit import FitContext, FitResult, FitSettings, model_residuals, to_coords
 
 
 def _campaign() -> pd.DataFrame:
@@ -36,14 +45,14 @@ def _campaign() -> pd.DataFrame:
 
 def test_configurations_diagnosed_apart_and_read_back_give_the_campaigns_document(tmp_path):
     segments = _campaign()
-    whole, details = disc.diagnose_campaign(segments, "fanout", settings=FAST, return_details=True)
-    context = disc.campaign_fit_context(segments)
+    whole, details = diagnose_with_details(segments, "fanout", settings=FAST)
+    context = campaign_fit_context(segments)
     outcomes = []
     # written in reverse order: the document follows the segments table, not the jobs
     for name in ["absent", "a2", "a1", "few", "a0"]:
         rows = np.flatnonzero(segments["configuration"] == name)
         result = (
-            disc.diagnose_configuration_segments(segments, name, context, settings=FAST)
+            diagnose_configuration_segments(segments, name, context, settings=FAST)
             if rows.size
             else "no kept segment"
         )
@@ -56,22 +65,22 @@ def test_configurations_diagnosed_apart_and_read_back_give_the_campaigns_documen
         )
         write_configuration_diagnosis(tmp_path / f"{name}.npz", outcome)
         outcomes.append(read_configuration_diagnosis(tmp_path / f"{name}.npz"))
-    diagnoses, skipped = disc.configuration_outcomes(outcomes)
+    diagnoses, skipped = configuration_outcomes(outcomes)
     # a configuration with no segment (all its runs excluded) is listed, last, not dropped
     assert list(skipped) == ["few", "absent"]
-    document = disc.campaign_document(
-        "fanout", disc.FitContext(outcomes[0].reference_velocity_in_s), diagnoses, skipped
+    document = campaign_document(
+        "fanout", FitContext(outcomes[0].reference_velocity_in_s), diagnoses, skipped
     )
     assert document["skipped_configurations"].pop("absent") == "no kept segment"
     assert json.dumps(document, sort_keys=False) == json.dumps(whole, sort_keys=False)
     assert document["across_configurations"]["applicable"]
-    pd.testing.assert_frame_equal(disc.residual_table(diagnoses), disc.residual_table(details))
+    pd.testing.assert_frame_equal(residual_table(diagnoses), residual_table(details))
 
 
 def test_the_interim_file_keeps_every_array_exactly(tmp_path):
     segments = synthetic_segments("dahl", DAHL, seed=3, n_runs=3)
-    context = disc.campaign_fit_context(segments)
-    diagnosis = disc.diagnose_configuration_segments(segments, "c", context, settings=FAST)
+    context = campaign_fit_context(segments)
+    diagnosis = diagnose_configuration_segments(segments, "c", context, settings=FAST)
     write_configuration_diagnosis(tmp_path / "c.npz", DiagnosedConfiguration("c", 0, 1.0, diagnosis))
     back = read_configuration_diagnosis(tmp_path / "c.npz").diagnosis
     for model, fit in diagnosis.fits.items():
@@ -94,18 +103,18 @@ def test_paper_fits_start_from_the_diagnosis_fits_no_worse_than_their_own():
     from workflow.models.paper import averaged_fit_params
 
     segments = synthetic_segments("dahl", DAHL, seed=5, n_runs=4)
-    settings = disc.FitSettings()
-    diagnosis = disc.diagnose_configuration_segments(
-        segments, "c", disc.campaign_fit_context(segments), settings=settings
+    settings = FitSettings()
+    diagnosis = diagnose_configuration_segments(
+        segments, "c", campaign_fit_context(segments), settings=settings
     )
     assert (
         averaged_fit_params("dahl", segments, "acceleration", settings.seed) == diagnosis.fits["dahl"].params
     )
     own = averaged_fit_params("lugre", segments, "acceleration", settings.seed)
     data = diagnosis.data
-    context = disc.campaign_fit_context(segments)
-    own_cost = disc.model_residuals(
-        disc.FitResult("lugre", disc.to_coords(disc.MODELS["lugre"], own), own, np.nan),
+    context = campaign_fit_context(segments)
+    own_cost = model_residuals(
+        FitResult("lugre", to_coords(MODELS["lugre"], own), own, np.nan),
         data,
         diagnosis.scatter,
         context,

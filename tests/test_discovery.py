@@ -8,11 +8,49 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.discovery import diagnosis as disc
+from tests.support.discovery import diagnose_with_details
+from workflow.discovery.campaign import campaign_verdict, diagnose_campaign
+from workflow.discovery.configuration import bound_flags
+from workflow.discovery.decision import CAUSE_MODELS, CLEAR_GAIN, decide
+from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate, folds_of, heldout_standard_error
+from workflow.discovery.microslip import iwan_as_cells
+from workflow.discovery.misfit import (
+    EXPLAINS_LIMIT,
+    binned_discrepancy,
+    explains_data,
+    run_order_trend,
+    stiffness_signature,
+)
+from workflow.discovery.wording import discrepancy_sentence, format_percent
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
-from workflow.models.averaged import CurveGrid
+from workflow.models.averaged import MODELS, CurveGrid
+from workflow.models.averaged_fit import (
+    JOINT_SHARE_MAX,
+    FitContext,
+    FitSettings,
+    _local_fit,
+    _Problem,
+    apply_run_offsets,
+    calibration_segments,
+    centred_run_offsets,
+    damping_curve_slope,
+    fit_model,
+    model_residuals,
+    parameter_box,
+    run_groups,
+    run_offsets,
+)
+from workflow.models.configuration_data import (
+    TOL_LN_ZETA,
+    TOL_REL_F,
+    ConfigurationData,
+    Scatter,
+    estimate_scatter,
+    prepare_configuration,
+    scatter_of,
+)
 
-FAST = disc.FitSettings(global_samples=128, local_starts=2, resamples=40)
+FAST = FitSettings(global_samples=128, local_starts=2, resamples=40)
 DAHL = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01, "slip_velocity_in_s": 1.5}
 
 
@@ -68,14 +106,14 @@ def _strict_json(document):
 
 def test_dahl_data_gives_none_with_unit_gain():
     segments = synthetic_segments("dahl", DAHL, seed=1)
-    document = disc.diagnose_campaign(segments, "synthetic", settings=FAST)
+    document = diagnose_campaign(segments, "synthetic", settings=FAST)
     _strict_json(document)
     conf = document["configurations"]["c"]
     assert document["cause"] == conf["cause"] == "none"
     assert conf["gain"]["ratio"] == 1.0
     assert conf["baseline"]["model"] in ("dahl", "lugre")
-    assert conf["baseline"]["error"]["metric"] == disc.HELD_OUT_METRIC
-    assert {r["cause"] for r in conf["ranking"]} == {"none", *disc.CAUSE_MODELS}
+    assert conf["baseline"]["error"]["metric"] == HELD_OUT_METRIC
+    assert {r["cause"] for r in conf["ranking"]} == {"none", *CAUSE_MODELS}
     assert "within the run-to-run scatter" in conf["discrepancy"]
     if conf["baseline"]["model"] == "dahl":
         fitted = conf["baseline"]["params"]
@@ -107,7 +145,7 @@ EXTENDED = {
 def test_hidden_extension_is_named_with_a_gain(cause):
     model, params = EXTENDED[cause]
     segments = synthetic_segments(model, params, seed=7)
-    document = disc.diagnose_campaign(segments, "synthetic", settings=FAST)
+    document = diagnose_campaign(segments, "synthetic", settings=FAST)
     conf = document["configurations"]["c"]
     assert conf["cause"] == cause, conf["evidence"]["decision_rule"]
     assert conf["extended_model"]["model"] == model
@@ -123,7 +161,7 @@ def test_hidden_extension_is_named_with_a_gain(cause):
 
 def test_envelopes_that_are_not_decays_give_unknown():
     segments = synthetic_segments("dahl", DAHL, seed=3, departure=0.3)
-    document = disc.diagnose_campaign(segments, "synthetic", settings=FAST)
+    document = diagnose_campaign(segments, "synthetic", settings=FAST)
     conf = document["configurations"]["c"]
     assert conf["cause"] == "unknown"
     assert conf["evidence"]["envelope_structure"]["significant"]
@@ -134,20 +172,20 @@ def test_single_run_uses_amplitude_blocks_and_still_decides():
     segments = synthetic_segments(
         "dahl_quadratic", {**DAHL, "quadratic_zeta_per_in_s": 1.5e-3}, seed=11, n_runs=1
     )
-    data = disc.prepare_configuration(segments, "c")
-    folds = disc.folds_of(data, 5)
+    data = prepare_configuration(segments, "c")
+    folds = folds_of(data, 5)
     assert sum(m.sum() for m in folds) == data.n
     for mask in folds:  # contiguous amplitude ranges
         v = data.velocity_in_s
         assert not np.any((v > v[mask].min()) & (v < v[mask].max()) & ~mask)
-    document = disc.diagnose_campaign(segments, "one-run", settings=FAST)
+    document = diagnose_campaign(segments, "one-run", settings=FAST)
     _strict_json(document)
     assert document["configurations"]["c"]["cause"] in ("quadratic_damping", "none")
 
 
 def test_folds_hold_out_whole_runs_interleaved():
-    data = disc.prepare_configuration(synthetic_segments("dahl", DAHL, seed=2, n_runs=7), "c")
-    folds = disc.folds_of(data, 5)
+    data = prepare_configuration(synthetic_segments("dahl", DAHL, seed=2, n_runs=7), "c")
+    folds = folds_of(data, 5)
     assert len(folds) == 5
     for k, mask in enumerate(folds):
         assert set(np.unique(data.run_index[mask])) == {r for r in range(7) if r % 5 == k}
@@ -157,7 +195,7 @@ def test_scatter_estimate_recovers_the_noise():
     rng = np.random.default_rng(5)
     v = np.geomspace(0.05, 5, 600)
     values = np.log(1e-3 * (1 + v) ** 0.5) + 0.03 * rng.standard_normal(v.size)
-    spread = disc.estimate_scatter(v, values)
+    spread = estimate_scatter(v, values)
     assert np.median(spread) == pytest.approx(0.03, rel=0.15)
 
 
@@ -170,8 +208,8 @@ def test_scatter_within_runs_excludes_differences_between_runs():
     runs = np.repeat(np.arange(8), 75)
     v = np.tile(np.geomspace(0.05, 5, 75), 8)
     values = np.log(1e-3 * (1 + v) ** 0.5) + 0.2 * runs / 7 + 0.03 * rng.standard_normal(v.size)
-    within = disc.estimate_scatter(v, values, runs=runs)
-    pooled = disc.estimate_scatter(v, values)
+    within = estimate_scatter(v, values, runs=runs)
+    pooled = estimate_scatter(v, values)
     assert np.median(within) == pytest.approx(0.03, rel=0.15)
     assert np.median(pooled) > 1.5 * 0.03
 
@@ -185,7 +223,7 @@ def _data_with_offset(offset, n_runs=6, seed=0):
     rng = np.random.default_rng(seed)
     v = np.tile(np.geomspace(0.1, 3, 30), n_runs)
     run = np.repeat(np.arange(n_runs), 30)
-    data = disc.ConfigurationData(
+    data = ConfigurationData(
         "c", v, np.full(v.size, 1e-3), np.full(v.size, 100.0), run, [f"r{i}" for i in range(n_runs)], None
     )
     res = {
@@ -198,35 +236,35 @@ def _data_with_offset(offset, n_runs=6, seed=0):
 
 def test_binned_discrepancy_flags_a_consistent_misfit_only():
     data, res = _data_with_offset(0.05)
-    rows = disc.binned_discrepancy(data, res)
+    rows = binned_discrepancy(data, res)
     flagged = [r for r in rows if r["significant"]]
     assert flagged and all(
         r["curve"] == "damping" and r["v_low_in_s"] == pytest.approx(TOP_BIN_LOW_IN_S) for r in flagged
     )
     data, res = _data_with_offset(0.0)
-    assert not any(r["significant"] for r in disc.binned_discrepancy(data, res))
+    assert not any(r["significant"] for r in binned_discrepancy(data, res))
     # significant but below the model accuracy: not a misfit
-    data, res = _data_with_offset(0.5 * disc.TOL_LN_ZETA)
-    assert not any(r["significant"] for r in disc.binned_discrepancy(data, res))
+    data, res = _data_with_offset(0.5 * TOL_LN_ZETA)
+    assert not any(r["significant"] for r in binned_discrepancy(data, res))
 
 
 def test_run_order_trend():
     data, res = _data_with_offset(0.0, n_runs=8)
     res["ln_zeta"] = res["ln_zeta"] + 0.02 * data.run_index
-    trend = disc.run_order_trend(data, res, n_tests=10)
+    trend = run_order_trend(data, res, n_tests=10)
     assert trend["significant"] and trend["change_over_sequence"] == pytest.approx(0.14, rel=0.1)
     data, res = _data_with_offset(0.0, n_runs=8)
-    assert not disc.run_order_trend(data, res, n_tests=10)["significant"]
+    assert not run_order_trend(data, res, n_tests=10)["significant"]
 
 
 def test_heldout_standard_error_of_equal_runs_is_zero_and_grows_with_their_spread():
     weights = np.full(6, 2.0)
-    assert disc.heldout_standard_error(np.full(6, 0.5), weights) == pytest.approx(0.0, abs=1e-15)
+    assert heldout_standard_error(np.full(6, 0.5), weights) == pytest.approx(0.0, abs=1e-15)
     spread = np.array([0.4, 0.6, 0.4, 0.6, 0.4, 0.6])
     # equal weights: the standard error of the mean of the runs' squares over their weight
     expected = np.std(spread / 2.0, ddof=1) / np.sqrt(6)
-    assert disc.heldout_standard_error(spread, weights) == pytest.approx(expected, rel=1e-12)
-    assert disc.heldout_standard_error(spread[:1], weights[:1]) == 0.0
+    assert heldout_standard_error(spread, weights) == pytest.approx(expected, rel=1e-12)
+    assert heldout_standard_error(spread[:1], weights[:1]) == 0.0
 
 
 def test_run_order_trend_sees_a_joint_change_through_random_linear_damping():
@@ -241,19 +279,17 @@ def test_run_order_trend_sees_a_joint_change_through_random_linear_damping():
     zeta_model = 1e-3 * (1 + 2 * v / 3)  # linear damping below, friction above
     linear_offset = 0.08 * rng.standard_normal(n_runs)[run] * 1e-3 / zeta_model
     joint_change = 0.02 * (run - 3.5) * (v > 0.5)
-    data = disc.ConfigurationData(
+    data = ConfigurationData(
         "c", v, zeta_model, np.full(v.size, 100.0), run, [f"r{i}" for i in range(n_runs)], None
     )
-    calibration = disc.calibration_segments(v, run, np.arange(n_runs))
+    calibration = calibration_segments(v, run, np.arange(n_runs))
     for drift, significant in ((joint_change, True), (0.0 * joint_change, False)):
         ln_zeta = linear_offset + drift + 0.005 * rng.standard_normal(v.size)
-        plain = disc.run_order_trend(data, {"ln_zeta": ln_zeta}, n_tests=2)
+        plain = run_order_trend(data, {"ln_zeta": ln_zeta}, n_tests=2)
         rel_f, s = np.zeros(v.size), np.full(v.size, 0.005)
-        offsets = disc.run_offsets(
-            rel_f, ln_zeta, zeta_model, s, s, disc.run_groups(run, n_runs, calibration)
-        )
-        own = disc.apply_run_offsets(rel_f, ln_zeta, zeta_model, *offsets, run)[1]
-        calibrated = disc.run_order_trend(
+        offsets = run_offsets(rel_f, ln_zeta, zeta_model, s, s, run_groups(run, n_runs, calibration))
+        own = apply_run_offsets(rel_f, ln_zeta, zeta_model, *offsets, run)[1]
+        calibrated = run_order_trend(
             data, {"ln_zeta": ln_zeta, "ln_zeta_calibrated": own, "calibration": calibration}, n_tests=2
         )
         assert calibrated["significant"] is significant
@@ -265,13 +301,13 @@ def test_damping_curve_slope_of_a_power_law_is_its_exponent():
     # central differences of a line in (ln V, ln zeta) are exact, at uneven spacing too
     v = np.concatenate([np.geomspace(0.05, 3, 40), np.sort(np.random.default_rng(1).uniform(0.1, 2, 25))])
     run = np.repeat([0, 1], [40, 25])
-    slope = disc.damping_curve_slope(v, np.log(2e-3 * v**0.7), run)
+    slope = damping_curve_slope(v, np.log(2e-3 * v**0.7), run)
     assert slope == pytest.approx(np.full(v.size, 0.7), rel=1e-9)
     # one segment in a run: no slope
-    assert disc.damping_curve_slope(v[:1], np.log(v[:1]), run[:1])[0] == 0.0
+    assert damping_curve_slope(v[:1], np.log(v[:1]), run[:1])[0] == 0.0
 
 
-def _runs_of_a_slipping_joint(drift: float, seed: int) -> tuple[disc.ConfigurationData, dict, dict]:
+def _runs_of_a_slipping_joint(drift: float, seed: int) -> tuple[ConfigurationData, dict, dict]:
     """Eight ring-downs of a joint whose damping rises over the top decade: each run's
     friction limit (slip velocity) is off by 3 % at random plus ``drift`` over the
     sequence, its linear damping by 5 % at random, 1 % scatter in ln zeta. Returns the
@@ -289,16 +325,16 @@ def _runs_of_a_slipping_joint(drift: float, seed: int) -> tuple[disc.Configurati
     zeta0 = 1e-3 * (1 + 0.05 * rng.standard_normal(n_runs))
     measured = zeta_of(np.exp(ln_slip)[run], zeta0[run]) * np.exp(0.01 * rng.standard_normal(v.size))
     model = zeta_of(3.0)
-    data = disc.ConfigurationData(
+    data = ConfigurationData(
         "c", v, measured, np.full(v.size, 100.0), run, [f"r{i}" for i in range(n_runs)], None
     )
     ln_zeta = np.log(measured) - np.log(model)
-    calibration = disc.calibration_segments(v, run, np.arange(n_runs))
+    calibration = calibration_segments(v, run, np.arange(n_runs))
     rel_f, s = np.zeros(v.size), np.full(v.size, 0.01)
-    offsets = disc.run_offsets(rel_f, ln_zeta, model, s, s, disc.run_groups(run, n_runs, calibration))
-    own = disc.apply_run_offsets(rel_f, ln_zeta, model, *offsets, run)[1]
+    offsets = run_offsets(rel_f, ln_zeta, model, s, s, run_groups(run, n_runs, calibration))
+    own = apply_run_offsets(rel_f, ln_zeta, model, *offsets, run)[1]
     plain = {"ln_zeta": ln_zeta, "ln_zeta_calibrated": own, "calibration": calibration}
-    shaped = {**plain, "ln_zeta_slope": disc.damping_curve_slope(v, np.log(model), run)}
+    shaped = {**plain, "ln_zeta_slope": damping_curve_slope(v, np.log(model), run)}
     return data, plain, shaped
 
 
@@ -312,13 +348,13 @@ def test_run_order_trend_measures_the_change_of_the_friction_limit():
     standard_error = 0.03 / np.sqrt(np.sum(positions**2))
     for seed in range(5):
         data, _, shaped = _runs_of_a_slipping_joint(-0.25, seed)
-        trend = disc.run_order_trend(data, shaped, n_tests=2)
+        trend = run_order_trend(data, shaped, n_tests=2)
         assert trend["significant"]
         assert trend["slope_per_run"] == pytest.approx(-0.25 / 7, abs=3 * standard_error)
         # a falling friction limit raises the damping where the joint slips
-        assert trend["change_over_sequence"] > disc.TOL_LN_ZETA
+        assert trend["change_over_sequence"] > TOL_LN_ZETA
         data, _, shaped = _runs_of_a_slipping_joint(0.0, seed)
-        assert not disc.run_order_trend(data, shaped, n_tests=2)["significant"]
+        assert not run_order_trend(data, shaped, n_tests=2)["significant"]
 
 
 def test_run_order_trend_reads_a_level_where_the_model_curve_is_flat():
@@ -326,8 +362,8 @@ def test_run_order_trend_reads_a_level_where_the_model_curve_is_flat():
     defines no shape, so the test reads the runs' mean residual, as without a slope."""
     data, plain, shaped = _runs_of_a_slipping_joint(-0.25, 0)
     flat = {**plain, "ln_zeta_slope": 1e-5 * np.random.default_rng(2).standard_normal(data.n)}
-    assert disc.run_order_trend(data, flat, n_tests=2) == disc.run_order_trend(data, plain, n_tests=2)
-    assert disc.run_order_trend(data, shaped, n_tests=2) != disc.run_order_trend(data, plain, n_tests=2)
+    assert run_order_trend(data, flat, n_tests=2) == run_order_trend(data, plain, n_tests=2)
+    assert run_order_trend(data, shaped, n_tests=2) != run_order_trend(data, plain, n_tests=2)
 
 
 def _cand(err, bic, sig=False):
@@ -335,29 +371,29 @@ def _cand(err, bic, sig=False):
 
 
 def test_decision_rule_branches():
-    assert disc.decide(1.0, 0.0, False, {"a": _cand(0.95, -5)})[0] == "none"
-    assert disc.decide(1.0, 0.0, False, {"a": _cand(0.5, -50)})[0] == "a"
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(1.1, -5)})[0] == "unknown"
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.9, 5)})[0] == "unknown"
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.9, -5, sig=True)})[0] == "unknown"
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.5, -5, sig=True)})[0] == "a"
+    assert decide(1.0, 0.0, False, {"a": _cand(0.95, -5)})[0] == "none"
+    assert decide(1.0, 0.0, False, {"a": _cand(0.5, -50)})[0] == "a"
+    assert decide(1.0, 0.0, True, {"a": _cand(1.1, -5)})[0] == "unknown"
+    assert decide(1.0, 0.0, True, {"a": _cand(0.9, 5)})[0] == "unknown"
+    assert decide(1.0, 0.0, True, {"a": _cand(0.9, -5, sig=True)})[0] == "unknown"
+    assert decide(1.0, 0.0, True, {"a": _cand(0.5, -5, sig=True)})[0] == "a"
     # without per-run evidence only equal held-out errors tie: the lower error wins
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.50, -5), "b": _cand(0.505, -30)})[0] == "a"
+    assert decide(1.0, 0.0, True, {"a": _cand(0.50, -5), "b": _cand(0.505, -30)})[0] == "a"
     # with it, b's squared error lies within one standard error of a's: the lower BIC wins
     runs = np.array([0.20, 0.30, 0.25, 0.23, 0.27])  # a's weighted squares per run, mean 0.25
     weights = np.ones(runs.size)
     squares = {"a": runs, "b": runs + 0.005}
-    se = disc.heldout_standard_error(runs, weights)
+    se = heldout_standard_error(runs, weights)
     assert 0.005 < se
     near = {"a": _cand(0.50, -5), "b": _cand(np.sqrt(0.255), -30)}
-    assert disc.decide(1.0, 0.0, True, near, unit_squares=squares, unit_weights=weights)[0] == "b"
+    assert decide(1.0, 0.0, True, near, unit_squares=squares, unit_weights=weights)[0] == "b"
     far = {"a": _cand(0.50, -5), "b": _cand(np.sqrt(0.25 + 2 * se), -30)}
     squares["b"] = runs + 2 * se
-    assert disc.decide(1.0, 0.0, True, far, unit_squares=squares, unit_weights=weights)[0] == "a"
-    assert disc.decide(1.0, 0.0, True, {"a": _cand(0.3, -5)}, envelope_structure=True)[0] == "unknown"
+    assert decide(1.0, 0.0, True, far, unit_squares=squares, unit_weights=weights)[0] == "a"
+    assert decide(1.0, 0.0, True, {"a": _cand(0.3, -5)}, envelope_structure=True)[0] == "unknown"
     # a candidate whose fit lacks its cause's signature is not eligible
     unsigned = {"a": _cand(0.40, -50) | {"shows_signature": False}, "b": _cand(0.45, -40)}
-    assert disc.decide(1.0, 0.0, True, unsigned)[0] == "b"
+    assert decide(1.0, 0.0, True, unsigned)[0] == "b"
 
 
 @pytest.mark.parametrize(
@@ -380,21 +416,19 @@ def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
     v = np.geomspace(0.07, 3.0, 60)
     setup, curves = vl.setup_configuration("x", 0.6, lab)
     zeta, frequency_hz = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "dahl", effect, size), v)
-    data = disc.ConfigurationData(
-        "x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0
-    )
+    data = ConfigurationData("x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0)
     # the campaigns' typical scatter as weights
-    scatter = disc.Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
-    context = disc.FitContext(2.0)
-    fit = disc.fit_model("dahl_stiffness", data, scatter, context, settings=FAST)
-    signature = disc.stiffness_signature(fit, data)
+    scatter = Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
+    context = FitContext(2.0)
+    fit = fit_model("dahl_stiffness", data, scatter, context, settings=FAST)
+    signature = stiffness_signature(fit, data)
     assert signature["shows_signature"] is shows, signature
     if not shows:
         # within what explains the data (so no misfit sets it apart), the stiffness term
         # taking back most of the friction's frequency loss
-        residuals = disc.model_residuals(fit, data, scatter, context)
+        residuals = model_residuals(fit, data, scatter, context)
         worst = max(np.max(np.abs(residuals["z_noise"])), np.max(np.abs(residuals["f_noise"])))
-        assert worst < disc.EXPLAINS_LIMIT
+        assert worst < EXPLAINS_LIMIT
         whole, friction = (
             signature["relative_frequency_change"],
             signature["friction_relative_frequency_change"],
@@ -414,30 +448,27 @@ def test_a_dahl_joint_cannot_absorb_a_velocity_squared_loss():
     lab = vl.LabSettings()
     v = np.geomspace(0.07, 3.0, 60)
     setup, curves = vl.setup_configuration("x", 0.6, lab)
-    scatter = disc.Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
-    context = disc.FitContext(2.0)
+    scatter = Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
+    context = FitContext(2.0)
     for effect, size in ((None, None), ("quadratic_damping", 0.002)):
         zeta, frequency_hz = vl.truth_curves(
             setup, vl.mode_table(setup, curves, lab, "dahl", effect, size), v
         )
-        data = disc.ConfigurationData(
+        data = ConfigurationData(
             "x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0
         )
-        fit = disc.fit_model("dahl", data, scatter, context, settings=FAST)
-        residuals = disc.model_residuals(fit, data, scatter, context)
+        fit = fit_model("dahl", data, scatter, context, settings=FAST)
+        residuals = model_residuals(fit, data, scatter, context)
         worst = max(np.max(np.abs(residuals["z_noise"])), np.max(np.abs(residuals["f_noise"])))
-        on_limit = any("physical limit" in flag for flag in disc.bound_flags("dahl", fit.coords, data))
-        assert on_limit is (effect is not None), disc.bound_flags("dahl", fit.coords, data)
-        assert bool(worst > disc.EXPLAINS_LIMIT) is (effect is not None), worst
+        on_limit = any("physical limit" in flag for flag in bound_flags("dahl", fit.coords, data))
+        assert on_limit is (effect is not None), bound_flags("dahl", fit.coords, data)
+        assert bool(worst > EXPLAINS_LIMIT) is (effect is not None), worst
 
 
 def test_campaign_verdict_rule():
-    assert disc.campaign_verdict(["none", "none"], [1, 1]) == "none"
-    assert (
-        disc.campaign_verdict(["none", "run_drift", "run_drift", "unknown"], [1, 0.5, 0.6, 0.9])
-        == "run_drift"
-    )
-    assert disc.campaign_verdict(["unknown", "run_drift"], [0.9, 0.5]) == "run_drift"
+    assert campaign_verdict(["none", "none"], [1, 1]) == "none"
+    assert campaign_verdict(["none", "run_drift", "run_drift", "unknown"], [1, 0.5, 0.6, 0.9]) == "run_drift"
+    assert campaign_verdict(["unknown", "run_drift"], [0.9, 0.5]) == "run_drift"
 
 
 def test_across_configurations_predicts_a_left_out_area():
@@ -451,7 +482,7 @@ def test_across_configurations_predicts_a_left_out_area():
         frames.append(
             synthetic_segments("dahl", params, seed=20 + i, n_runs=5, configuration=f"a{i}", area=area)
         )
-    document = disc.diagnose_campaign(pd.concat(frames, ignore_index=True), "areas", settings=FAST)
+    document = diagnose_campaign(pd.concat(frames, ignore_index=True), "areas", settings=FAST)
     _strict_json(document)
     across = document["across_configurations"]
     assert across["applicable"]
@@ -461,7 +492,7 @@ def test_across_configurations_predicts_a_left_out_area():
     # the middle area is interpolated: its prediction is close to its own fit
     assert across["configurations"]["a1"]["baseline_error"] < 10.0
     two = pd.concat(frames[:2], ignore_index=True)
-    assert not disc.diagnose_campaign(two, "two", settings=FAST)["across_configurations"]["applicable"]
+    assert not diagnose_campaign(two, "two", settings=FAST)["across_configurations"]["applicable"]
 
 
 # ------------------------------------------------------- runs that differ (issue 14)
@@ -515,12 +546,12 @@ def test_run_offsets_recover_each_runs_frequency_and_linear_damping():
     rel_f = (1 + delta_f[run]) - 1
     ln_zeta = np.log(1 + delta_zeta0[run] / zeta_model)
     s = np.ones(run.size)
-    got_f, got_z = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, disc.run_groups(run, n_runs))
+    got_f, got_z = run_offsets(rel_f, ln_zeta, zeta_model, s, s, run_groups(run, n_runs))
     np.testing.assert_allclose(got_f, delta_f, atol=1e-12)
     x = np.abs(delta_zeta0[run] / zeta_model)
     # ln(1 + x) ~ x: the linear solution is off by the order of x^2 / 2 relative
     np.testing.assert_allclose(got_z, delta_zeta0, rtol=np.max(x), atol=1e-7)
-    rel, ln = disc.apply_run_offsets(rel_f, ln_zeta, zeta_model, got_f, got_z, run)
+    rel, ln = apply_run_offsets(rel_f, ln_zeta, zeta_model, got_f, got_z, run)
     assert np.max(np.abs(rel)) < 1e-12
     assert np.max(np.abs(ln)) < np.max(x) ** 2
 
@@ -533,10 +564,10 @@ def test_centred_run_offsets_are_each_runs_offset_less_the_mean_of_the_runs_used
     rel_f, ln_zeta = rng.normal(0, 1e-3, (2, 3, run.size))  # a batch of 3 parameter sets
     zeta_model = np.full(run.size, 2e-3)
     s = rng.uniform(0.5, 2.0, run.size)
-    groups = disc.run_groups(run, n_runs, use)
+    groups = run_groups(run, n_runs, use)
     np.testing.assert_array_equal(groups.present, [True, True, False, True])
-    raw_f, raw_z = disc.run_offsets(rel_f, ln_zeta, zeta_model, s, s, groups)
-    got_f, got_z = disc.centred_run_offsets(rel_f, ln_zeta, zeta_model, s, s, groups)
+    raw_f, raw_z = run_offsets(rel_f, ln_zeta, zeta_model, s, s, groups)
+    got_f, got_z = centred_run_offsets(rel_f, ln_zeta, zeta_model, s, s, groups)
     for raw, got in ((raw_f, got_f), (raw_z, got_z)):
         expected = raw - np.mean(raw[:, groups.present], axis=-1, keepdims=True)
         np.testing.assert_array_equal(got[:, groups.present], expected[:, groups.present])
@@ -548,12 +579,12 @@ def test_centred_run_offsets_are_each_runs_offset_less_the_mean_of_the_runs_used
 
 def test_a_held_out_run_is_calibrated_only_on_its_unscored_lowest_segments():
     segments = varied_segments("dahl", DAHL, seed=4, n_runs=6)
-    data = disc.prepare_configuration(segments, "c")
-    scatter = disc.scatter_of(data)
-    context = disc.FitContext(3.0)
-    fit = disc.fit_model("dahl", data, scatter, context, settings=FAST)
-    cv = disc.cross_validate("dahl", data, scatter, context, fit, settings=FAST)
-    calibration = disc.calibration_segments(data.velocity_in_s, data.run_index, np.arange(data.n_runs))
+    data = prepare_configuration(segments, "c")
+    scatter = scatter_of(data)
+    context = FitContext(3.0)
+    fit = fit_model("dahl", data, scatter, context, settings=FAST)
+    cv = cross_validate("dahl", data, scatter, context, fit, settings=FAST)
+    calibration = calibration_segments(data.velocity_in_s, data.run_index, np.arange(data.n_runs))
     np.testing.assert_array_equal(cv["scored"], ~calibration)
     assert np.all(cv["squared_zeta"][calibration] == 0) and np.all(cv["squared_frequency"][calibration] == 0)
     for r in range(data.n_runs):
@@ -563,18 +594,18 @@ def test_a_held_out_run_is_calibrated_only_on_its_unscored_lowest_segments():
     # the held-out run's offsets do not move when the amplitudes being scored change
     held = data.run_index == 2
     offsets_from = ~held | calibration
-    before = disc.model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
+    before = model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
     scored_part = held & ~calibration
     data.frequency_hz[scored_part] *= 1.01
     data.zeta[scored_part] *= 3.0
-    after = disc.model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
+    after = model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
     assert after["delta_f"][2] == before["delta_f"][2]
     assert after["delta_zeta0"][2] == before["delta_zeta0"][2]
 
 
 def test_verdict_is_the_evaluation_of_all_the_data_and_confidence_sums_to_one():
     segments = varied_segments("dahl", DAHL, seed=5)
-    document, details = disc.diagnose_campaign(segments, "s", settings=FAST, return_details=True)
+    document, details = diagnose_with_details(segments, "s", settings=FAST)
     conf = document["configurations"]["c"]
     assert sum(conf["confidence"].values()) == pytest.approx(1.0)
     assert sum(document["confidence"].values()) == pytest.approx(1.0)
@@ -585,11 +616,11 @@ def test_verdict_is_the_evaluation_of_all_the_data_and_confidence_sums_to_one():
 @pytest.mark.parametrize("cause", ["none", "quadratic_damping", "run_drift", "microslip_power_law"])
 def test_random_spread_between_runs_is_not_a_cause_and_hides_none(cause):
     model, params = ("dahl", DAHL) if cause == "none" else EXTENDED[cause]
-    document = disc.diagnose_campaign(varied_segments(model, params, seed=7), "s", settings=FAST)
+    document = diagnose_campaign(varied_segments(model, params, seed=7), "s", settings=FAST)
     conf = document["configurations"]["c"]
     assert conf["cause"] == cause, conf["evidence"]["decision_rule"]
     if cause != "none":
-        assert conf["gain"]["ratio"] < disc.CLEAR_GAIN
+        assert conf["gain"]["ratio"] < CLEAR_GAIN
     spread = conf["evidence"]["run_offsets"]["relative_frequency_std"]
     assert spread == pytest.approx(4e-4, rel=0.5)  # 8 runs: the std of the draws itself varies ~25 %
 
@@ -602,7 +633,7 @@ def test_two_sensors_on_one_decay_give_one_verdict(cause):
     verdicts = []
     for scale, noise_seed in ((1.0, 100), (0.35, 200)):
         segments = varied_segments(model, params, seed=8, noise_seed=noise_seed, scale=scale)
-        document, details = disc.diagnose_campaign(segments, "s", settings=FAST, return_details=True)
+        document, details = diagnose_with_details(segments, "s", settings=FAST)
         ratios = [r["ratio"] for r in details["c"].resamples]
         verdicts.append((document["configurations"]["c"], np.quantile(ratios, [0.05, 0.95])))
     (a, band_a), (b, band_b) = verdicts
@@ -614,9 +645,9 @@ def test_two_sensors_on_one_decay_give_one_verdict(cause):
 def test_explains_data_fails_where_a_model_misses_by_more_than_two_scatters():
     data, res = _data_with_offset(0.0)
     res = {"z_noise": res["ln_zeta"] / 0.01, "f_noise": res["rel_f"] / 1e-5}
-    assert disc.explains_data(data, res)["explains_data"]
+    assert explains_data(data, res)["explains_data"]
     res["z_noise"] = res["z_noise"] + 3.0 * (data.velocity_in_s > TOP_BIN_LOW_IN_S)
-    verdict = disc.explains_data(data, res)
+    verdict = explains_data(data, res)
     assert not verdict["explains_data"]
     assert [b["curve"] for b in verdict["failing_bins"]] == ["damping"]
     assert verdict["failing_bins"][0]["v_low_in_s"] == pytest.approx(TOP_BIN_LOW_IN_S)
@@ -624,20 +655,20 @@ def test_explains_data_fails_where_a_model_misses_by_more_than_two_scatters():
 
 def test_parameters_on_the_edge_of_their_range_are_flagged():
     data, _ = _data_with_offset(0.0)
-    lo, hi = disc.parameter_box(disc.MODELS["iwan"], data)
+    lo, hi = parameter_box(MODELS["iwan"], data)
     coords = 0.5 * (lo + hi)
-    assert disc.bound_flags("iwan", coords, data) == []
+    assert bound_flags("iwan", coords, data) == []
     coords[4] = lo[4]  # chi
-    (flag,) = disc.bound_flags("iwan", coords, data)
+    (flag,) = bound_flags("iwan", coords, data)
     assert flag.startswith("chi = -0.95 at the lower edge")
     # the joint share's upper edge is physics, not a range the data left open
-    share = [p.name for p in disc.MODELS["iwan"].params].index("joint_stiffness_fraction")
+    share = [p.name for p in MODELS["iwan"].params].index("joint_stiffness_fraction")
     coords = 0.5 * (lo + hi)
     coords[share] = hi[share]
-    (flag,) = disc.bound_flags("iwan", coords, data)
-    assert flag.startswith(f"joint_stiffness_fraction = {disc.JOINT_SHARE_MAX:.3g} at its physical limit")
+    (flag,) = bound_flags("iwan", coords, data)
+    assert flag.startswith(f"joint_stiffness_fraction = {JOINT_SHARE_MAX:.3g} at its physical limit")
     coords[share] = lo[share]
-    (flag,) = disc.bound_flags("iwan", coords, data)
+    (flag,) = bound_flags("iwan", coords, data)
     assert flag.endswith("at the lower edge of its fit range: not identified by the data")
 
 
@@ -657,14 +688,14 @@ def test_run_drift_seen_only_in_the_order_of_the_recording_start_times():
             "record_start": [f"2026-03-05T14:{10 + 2 * r:02d}:00" for r in range(8)][::-1],
         }
     )
-    by_time = disc.diagnose_campaign(segments, "synthetic", settings=FAST, runs=runs)["configurations"]["c"]
+    by_time = diagnose_campaign(segments, "synthetic", settings=FAST, runs=runs)["configurations"]["c"]
     trend = by_time["evidence"]["run_order_trend"]
     assert by_time["cause"] == "run_drift"
     assert trend["order"] == RECORD_START_ORDER and trend["runs"] == recorded_order
     assert trend["significant"] and "(recording start times in the files)" in by_time["discrepancy"]
 
     runs.loc[0, "record_start"] = ""  # one run without a start time: file-name order, said so
-    by_name = disc.diagnose_campaign(segments, "synthetic", settings=FAST, runs=runs)["configurations"]["c"]
+    by_name = diagnose_campaign(segments, "synthetic", settings=FAST, runs=runs)["configurations"]["c"]
     trend = by_name["evidence"]["run_order_trend"]
     assert by_name["cause"] != "run_drift" and not trend["significant"]
     assert (
@@ -675,7 +706,7 @@ def test_run_drift_seen_only_in_the_order_of_the_recording_start_times():
 
 
 def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3):
-    tolerance = tolerance or (disc.TOL_LN_ZETA if curve == "damping" else disc.TOL_REL_F)
+    tolerance = tolerance or (TOL_LN_ZETA if curve == "damping" else TOL_REL_F)
     return {
         "curve": curve,
         "v_low_in_s": 1.0,
@@ -692,25 +723,25 @@ def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3):
 
 def test_discrepancy_sentence_is_true_of_its_numbers():
     # a tiny, precisely measured frequency misfit: clear but negligible, never "0.00 %"
-    text = disc.discrepancy_sentence("lugre", [_bin("frequency", -4.2e-5, -13.1, 1e-9)], None, 8)
+    text = discrepancy_sentence("lugre", [_bin("frequency", -4.2e-5, -13.1, 1e-9)], None, 8)
     assert "0.0042 % below the lugre fit" in text
     assert "statistically clear" in text and "physically negligible" in text and "0.42 of it" in text
     assert "not significant" not in text and "0.00 %" not in text
     assert "within the run-to-run scatter or the models' accuracy" in text  # not both: the misfit is clear
     # larger than the accuracy but not significant
-    text = disc.discrepancy_sentence("dahl", [_bin("damping", 0.05, 1.5, 0.2)], None, 8)
+    text = discrepancy_sentence("dahl", [_bin("damping", 0.05, 1.5, 0.2)], None, 8)
     assert "5.1 % above the dahl fit" in text
     assert "larger than the 2 % in damping" in text and "but not statistically significant" in text
     assert "statistically clear" not in text
     # neither
-    text = disc.discrepancy_sentence("dahl", [_bin("damping", -0.01, -0.8, 0.45)], None, 8)
+    text = discrepancy_sentence("dahl", [_bin("damping", -0.01, -0.8, 0.45)], None, 8)
     assert "1.0 % below" in text and "neither statistically significant" in text
     # the bin with the largest |t| is the one described
     bins = [_bin("damping", -0.01, -0.8, 0.45), _bin("frequency", 3e-5, 4.0, 1e-4)]
-    assert "0.0030 % above" in disc.discrepancy_sentence("dahl", bins, None, 8)
+    assert "0.0030 % above" in discrepancy_sentence("dahl", bins, None, 8)
     # a real misfit: its size with its sign, and a drift with the order it was measured in
     trend = {"significant": True, "change_over_sequence": -0.3, "t": -6.2, "order": RECORD_START_ORDER}
-    text = disc.discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
+    text = discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
     assert text.startswith("The measured damping differs from the lugre fit") and "by up to -26 %" in text
     assert "shifts with run order (recording start times in the files) by -26 %" in text
 
@@ -720,7 +751,7 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
     [(-0.0042, "-0.0042 %"), (31.4, "+31 %"), (0.5, "+0.50 %"), (2.04, "+2.0 %"), (0.0, "0 %")],
 )
 def test_percentages_keep_two_significant_digits(percent, text):
-    assert disc.format_percent(percent) == text
+    assert format_percent(percent) == text
 
 
 def _contact_patch_segments(seed, n_runs=8, noise_ln_zeta=0.01, noise_rel_f=2e-5):
@@ -762,8 +793,8 @@ def test_contact_patch_joint_is_explained_by_the_slip_thresholds_recovered_from_
     power-law Iwan names the cause but misses the curves; the thresholds recovered from
     the data explain them, and predict each run's noise-free curves."""
     segments, truth = _contact_patch_segments(seed=5)
-    document, details = disc.diagnose_campaign(
-        segments, "patches", settings=FAST, response_quantity="displacement", return_details=True
+    document, details = diagnose_with_details(
+        segments, "patches", settings=FAST, response_quantity="displacement"
     )
     conf = document["configurations"]["c"]
     assert conf["cause"] == "microslip_power_law", conf["evidence"]["decision_rule"]
@@ -773,7 +804,7 @@ def test_contact_patch_joint_is_explained_by_the_slip_thresholds_recovered_from_
     assert refinement["heldout_error"] < refinement["iwan_heldout_error"]
     assert conf["explains_data"] is True
     d = details["c"]
-    assert not disc.explains_data(d.data, d.residuals["iwan"])["explains_data"]
+    assert not explains_data(d.data, d.residuals["iwan"])["explains_data"]
     assert conf["gain"]["ratio"] == pytest.approx(
         refinement["heldout_error"] / conf["gain"]["baseline"], rel=1e-12
     )
@@ -801,7 +832,7 @@ def test_power_law_written_as_cells_keeps_the_stiffness_released_below_the_top_a
     """The refinement's start: Segalman's density t^chi integrated over each half-decade
     cell; below the top amplitude (macro-slip above it) the cells hold exactly the
     stiffness the power law releases there, beta (V_top / V_s)^(chi + 1) / (1 + macro)."""
-    model = disc.MODELS["iwan_cells_4"]
+    model = MODELS["iwan_cells_4"]
     iwan = {
         "f_lin_hz": 120.0,
         "zeta0": 8e-4,
@@ -811,7 +842,7 @@ def test_power_law_written_as_cells_keeps_the_stiffness_released_below_the_top_a
         "macro_ratio": 0.1,
         "anchor_velocity_in_s": 4.0,
     }
-    cells = disc.iwan_as_cells(iwan, model)
+    cells = iwan_as_cells(iwan, model)
     shares = np.array([cells[name] for name in model.cell_names])
     assert shares.sum() == pytest.approx(0.02 * (4.0 / 20.0) ** 0.5 / 1.1, rel=1e-12)
     # each cell t^(chi+1) between its edges; the lowest also holds everything below it
@@ -827,15 +858,15 @@ def test_a_local_fit_takes_residuals_and_jacobian_from_one_batch_and_lands_where
     from workflow.models.averaged import RESPONSE_ORDER
 
     segments = synthetic_segments("dahl", DAHL, seed=4)
-    data = disc.prepare_configuration(segments, "c", RESPONSE_ORDER["acceleration"])
-    context = disc.FitContext(float(np.quantile(data.velocity_in_s, 0.9)))
-    problem = disc._Problem(disc.MODELS["dahl"], data, disc.scatter_of(data), np.ones(data.n, bool), context)
-    start = np.full(len(disc.MODELS["dahl"].params), 0.4)
+    data = prepare_configuration(segments, "c", RESPONSE_ORDER["acceleration"])
+    context = FitContext(float(np.quantile(data.velocity_in_s, 0.9)))
+    problem = _Problem(MODELS["dahl"], data, scatter_of(data), np.ones(data.n, bool), context)
+    start = np.full(len(MODELS["dahl"].params), 0.4)
     batches = []
     evaluate = problem.residuals
     problem.residuals = lambda unit: batches.append(np.atleast_2d(unit).shape[0]) or evaluate(unit)
 
-    unit, cost = disc._local_fit(problem, start, max_nfev=60)
+    unit, cost = _local_fit(problem, start, max_nfev=60)
     together = list(batches)
     batches.clear()
     separate = optimize.least_squares(

@@ -10,15 +10,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.support.discovery import diagnose_with_details
 from tests.test_discovery import synthetic_segments
-from workflow.discovery import diagnosis as disc
+from workflow.discovery.campaign import RESIDUAL_COLUMNS, residual_table
 from workflow.io.units import SI
 from workflow.models.averaged import CurveGrid, model_curves
+from workflow.models.averaged_fit import FitSettings, apply_run_offsets
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save
 from workflow.outputs.readability import readability_problems
 
-FAST = disc.FitSettings(global_samples=64, local_starts=2)
+FAST = FitSettings(global_samples=64, local_starts=2)
 IWAN = {
     "f_lin_hz": 120.0,
     "zeta0": 8e-4,
@@ -39,14 +41,14 @@ def diagnosis():
             synthetic_segments("iwan", params, seed=10 + k, n_runs=4, configuration=name, area=area)
         )
     segments = pd.concat(frames, ignore_index=True)
-    document, details = disc.diagnose_campaign(segments, "figures", settings=FAST, return_details=True)
+    document, details = diagnose_with_details(segments, "figures", settings=FAST)
     return segments, document, details
 
 
 def test_residual_table_has_one_row_per_segment_role_and_curve(diagnosis):
     segments, document, details = diagnosis
-    table = disc.residual_table(details)
-    assert list(table.columns) == disc.RESIDUAL_COLUMNS
+    table = residual_table(details)
+    assert list(table.columns) == RESIDUAL_COLUMNS
     assert len(table) == len(segments) * 2 * 2
     assert set(table["role"]) == {"baseline", "extended"}
     assert set(table["curve"]) == {"zeta", "frequency_hz"}
@@ -60,7 +62,7 @@ def test_residual_table_has_one_row_per_segment_role_and_curve(diagnosis):
 def test_residual_table_predictions_are_the_fitted_curves(diagnosis):
     """``predicted`` equals the fitted model's curves at the measured amplitudes."""
     _, document, details = diagnosis
-    table = disc.residual_table(details)
+    table = residual_table(details)
     for name, entry in document["configurations"].items():
         for role, model in (
             ("baseline", entry["baseline"]["model"]),
@@ -84,7 +86,7 @@ def test_residual_table_predictions_are_the_fitted_curves(diagnosis):
             zeta, freq = grid(model, params)
             # each run's own frequency and linear damping on the shared curves
             res = details[name].residuals[model]
-            rel_f, ln_zeta = disc.apply_run_offsets(
+            rel_f, ln_zeta = apply_run_offsets(
                 data.frequency_hz / freq - 1,
                 np.log(data.zeta / zeta),
                 zeta,
@@ -107,13 +109,13 @@ def test_residual_table_predictions_are_the_fitted_curves(diagnosis):
 
 
 def test_residual_table_of_nothing_is_empty_with_columns():
-    table = disc.residual_table({})
-    assert table.empty and list(table.columns) == disc.RESIDUAL_COLUMNS
+    table = residual_table({})
+    assert table.empty and list(table.columns) == RESIDUAL_COLUMNS
 
 
 def test_figures_build_and_name_models(diagnosis, tmp_path):
     _, document, details = diagnosis
-    table = disc.residual_table(details)
+    table = residual_table(details)
     for name, entry in document["configurations"].items():
         fig = dfig.residuals_figure(table, name, document)
         assert entry["cause"] in fig._suptitle.get_text()

@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflow.discovery.diagnosis import diagnose_campaign
+from tests.support.discovery import diagnose_with_details
+from workflow.discovery.campaign import diagnose_campaign
 from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case
 
 
@@ -70,7 +71,7 @@ def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
     verdicts = []
     for noise_stream, gain in enumerate((1.0, SENSOR_GAIN)):
         _, out = generate_case(cause, BASE_SEED, tmp_path, sensor_gain=gain, noise_stream=noise_stream)
-        document, details = diagnose_campaign(campaign_segments(out), out.name, return_details=True)
+        document, details = diagnose_with_details(campaign_segments(out), out.name)
         ratios = [r["ratio"] for r in details["joint"].resamples]
         verdicts.append((document["configurations"]["joint"], np.quantile(ratios, [0.05, 0.95])))
     (a, band_a), (b, band_b) = verdicts

@@ -13,7 +13,7 @@ import pytest
 from helpers import REPO, checksums, run_snakemake
 from system_format_files import FIRST_RECORDING, convert_run, write_mixed_format_copy
 
-from workflow.discovery.diagnosis import diagnose_campaign
+from workflow.discovery.campaign import diagnose_campaign
 from workflow.io.campaign import list_runs, load_campaign, read_run
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.lab.hidden_effects import generate_case

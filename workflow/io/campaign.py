@@ -54,6 +54,7 @@ from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
 
 from workflow.io import units
+from workflow.io.record_rules import column_role, rates_agree, split_name_unit
 from workflow.io.validation import (
     FORBID_UNKNOWN_KEYS,
     MISSING_KEY_ERRORS,
@@ -65,6 +66,41 @@ from workflow.io.validation import (
 if TYPE_CHECKING:
     import yaml
 
+__all__ = [
+    "MIN_SAMPLES",
+    "TIME_STEP_REL_TOLERANCE",
+    "HEAD_ROWS",
+    "CAMPAIGN_FILE",
+    "CONFIGURATION_NAME",
+    "MAX_CAMPAIGN_YAML_BYTES",
+    "MAX_YAML_VALUES",
+    "SYSTEM_FORMAT_EXTENSIONS",
+    "CampaignFormatError",
+    "SINGLE_CHANNEL_NAME",
+    "ResponseSpec",
+    "ForceSpec",
+    "ConfigurationSpec",
+    "Campaign",
+    "campaign_to_dict",
+    "campaign_from_dict",
+    "load_campaign",
+    "frequency_problem",
+    "RunFile",
+    "ExcludedPath",
+    "scan_campaign",
+    "list_runs",
+    "DECIMAL_COMMA_HINT",
+    "CAREFUL_CHUNK_ROWS",
+    "FAST_CHUNK_CHARS",
+    "response_unit",
+    "ResponseChannel",
+    "RunRecord",
+    "HEAD_BYTES",
+    "declared_sample_rate_hz",
+    "read_run",
+]
+
+
 MIN_SAMPLES: int = 256
 """Fewest samples a run file must hold. Below this a record cannot hold even a few
 cycles of the mode plus the filter's settling time, and such short files are in
@@ -73,11 +109,6 @@ practice truncated exports ("fewer than a few hundred samples" in the contract).
 TIME_STEP_REL_TOLERANCE: float = 0.01
 """A time step may differ from the record's mean step by this fraction of it, plus
 the resolution with which the time column is printed (rounding of the last digit)."""
-
-SAMPLE_RATE_REL_TOLERANCE: float = 1e-3
-"""Sample rates from two sources (campaign.yaml, header, time column) agree when they
-differ by less than this fraction (plus the time column's print resolution over the
-record length)."""
 
 HEAD_ROWS: int = 11
 """Numeric rows whose majority decides the delimiter and the column count, so that a
@@ -819,7 +850,6 @@ _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 _KEY_VALUE = re.compile(r"\s*([^:]*[^:\s])\s*:\s*(.*?)\s*")
 _VALUE_WITH_UNIT = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*")
-_NAME_WITH_UNIT = re.compile(r"(.*?)\s*(?:\(([^)]*)\)|\[([^\]]*)\])\s*")
 _SPACES = " "  # marker: columns separated by runs of spaces
 _DELIMITER_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", _SPACES: "spaces"}
 # Characters a numeric block may hold; anything else sends it to the careful pass.
@@ -1015,26 +1045,6 @@ def _print_resolution(tokens: list[str]) -> float:
 # Run files: header
 
 
-def _split_name_unit(name: str) -> tuple[str, str | None]:
-    """``"Force (lbf)"`` -> ``("Force", "lbf")``; ``"Force"`` -> ``("Force", None)``."""
-    match = _NAME_WITH_UNIT.fullmatch(name.strip())
-    if match and match.group(1):
-        return match.group(1), (match.group(2) if match.group(2) is not None else match.group(3)).strip()
-    return name.strip(), None
-
-
-def _column_role(name: str) -> str | None:
-    """time, force or response from a column name (campaign-format.md rules)."""
-    base = _split_name_unit(name)[0].lower()
-    if base.startswith("time"):
-        return "time"
-    if "force" in base or "hammer" in base:
-        return "force"
-    if any(key in base for key in ("acc", "vel", "resp", "disp")):
-        return "response"
-    return None
-
-
 def _merge_unit_tokens(tokens: list[str]) -> list[str]:
     """Re-join whitespace tokens so that ``Time (s)`` stays one name."""
     merged: list[str] = []
@@ -1075,7 +1085,7 @@ def _names_of(line: str, delimiter: str, n_columns: int) -> list[str] | None:
     names = _split_names(line, delimiter, n_columns)
     if names is None:
         return None
-    roles = {_column_role(name) for name in names} - {None}
+    roles = {column_role(name) for name in names} - {None}
     if not roles:
         return None
     # Split otherwise than the numbers are, a title ("Ring-down acceleration record") can
@@ -1098,7 +1108,7 @@ def _is_key_value(line: str, delimiter: str, n_columns: int) -> bool:
     if n_columns < 2 or not _splits_as_data(line, delimiter, n_columns):
         return True
     cells = [_unquoted(cell) for cell in _split_row(line, delimiter)]
-    return len({_column_role(cell) for cell in cells} - {None}) < 2
+    return len({column_role(cell) for cell in cells} - {None}) < 2
 
 
 _KNOWN_UNIT_WORDS = {"s", "ms", "sec", "lbf", "N", "g", "m/s^2", "in/s^2", "m/s", "in/s", "m", "in"}
@@ -1117,7 +1127,7 @@ def _is_units_row(line: str, delimiter: str, n_columns: int) -> list[str] | None
 
 def _canonical_header_key(key: str) -> tuple[str, str | None]:
     """``"Sample rate (Hz)"`` -> ``("sample rate", "Hz")``."""
-    name, unit = _split_name_unit(key)
+    name, unit = split_name_unit(key)
     return re.sub(r"[\s_\-]+", " ", name.lower()).strip(), unit
 
 
@@ -1499,7 +1509,7 @@ def _find_columns(
                     )
                 names, names_line = above, above_number
         if names is None:
-            roles_in_line = {_column_role(t) for t in _merge_unit_tokens(last_line.split())} - {None}
+            roles_in_line = {column_role(t) for t in _merge_unit_tokens(last_line.split())} - {None}
             if len(roles_in_line) >= 2:
                 raise CampaignFormatError(
                     path,
@@ -1525,7 +1535,7 @@ def _find_columns(
     roles: dict[str, int] = {}
     column_units: dict[str, str | None] = {}
     for index, name in enumerate(names):
-        role = _column_role(name)
+        role = column_role(name)
         if role is None:
             continue  # columns with other names (extra channels) are not used
         if role in roles:
@@ -1535,7 +1545,7 @@ def _find_columns(
                 f"two {role} columns: {names[roles[role]]!r} and {name!r}",
             )
         roles[role] = index
-        unit = _split_name_unit(name)[1]
+        unit = split_name_unit(name)[1]
         if units_cells is not None:
             unit = units_cells[index]
         column_units[role] = unit
@@ -1545,7 +1555,7 @@ def _find_columns(
             names_line,
             f"no response column among {names} (a response column's name contains acc, vel, resp or disp)",
         )
-    response_name = _split_name_unit(names[roles["response"]])[0].lower()
+    response_name = split_name_unit(names[roles["response"]])[0].lower()
     for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
         if word in response_name and quantity != campaign.response.quantity:
             raise CampaignFormatError(
@@ -1592,7 +1602,7 @@ def _named_response_columns(
     references = campaign.response.references()
     key = "response.channels" if campaign.response.channels is not None else "response.channel"
     listing = ", ".join(f"[{i}] {name!r}" for i, name in enumerate(names)) if names else ""
-    bare = [_split_name_unit(name)[0].strip().lower() for name in names] if names else []
+    bare = [split_name_unit(name)[0].strip().lower() for name in names] if names else []
     responses = []
     for reference in references:
         if isinstance(reference, int):
@@ -1635,7 +1645,7 @@ def _named_response_columns(
         roles = {role: index for role, index in zip(order, others)}
     else:
         for index in others:
-            role = _column_role(names[index])
+            role = column_role(names[index])
             if role in ("time", "force"):
                 if role in roles:
                     raise CampaignFormatError(
@@ -1643,7 +1653,7 @@ def _named_response_columns(
                     )
                 roles[role] = index
                 column_units[role] = (
-                    units_cells[index] if units_cells is not None else _split_name_unit(names[index])[1]
+                    units_cells[index] if units_cells is not None else split_name_unit(names[index])[1]
                 )
         for index in responses:
             for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
@@ -1657,7 +1667,7 @@ def _named_response_columns(
     response_units = tuple(
         None
         if names is None
-        else (units_cells[i] if units_cells is not None else _split_name_unit(names[i])[1])
+        else (units_cells[i] if units_cells is not None else split_name_unit(names[i])[1])
         for i in responses
     )
     roles["response"] = responses[0]
@@ -1739,10 +1749,6 @@ def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: in
             f"(tolerance {100 * tolerance_s / mean_step_s:.3g} %)",
         )
     return 1.0 / mean_step_s
-
-
-def _rates_agree(a_hz: float, b_hz: float, extra_rel: float = 0.0) -> bool:
-    return abs(a_hz - b_hz) <= (SAMPLE_RATE_REL_TOLERANCE + extra_rel) * max(a_hz, b_hz)
 
 
 HEAD_BYTES: int = 65536
@@ -1923,7 +1929,7 @@ def read_run(
         )
     for i, (name_a, rate_a, line_a, slack_a) in enumerate(sources):
         for name_b, rate_b, line_b, slack_b in sources[i + 1 :]:
-            if not _rates_agree(rate_a, rate_b, slack_a + slack_b):
+            if not rates_agree(rate_a, rate_b, slack_a + slack_b):
                 raise CampaignFormatError(
                     shown,
                     line_b if line_b is not None else line_a,

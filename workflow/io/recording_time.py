@@ -15,6 +15,16 @@ from datetime import UTC, datetime
 
 import numpy as np
 
+__all__ = [
+    "FILE_NAME_ORDER",
+    "RECORD_START_ORDER",
+    "parse_clock_time",
+    "utc_from_datetime64",
+    "iso_text",
+    "run_order",
+]
+
+
 FILE_NAME_ORDER = "file-name order"
 """How the order of runs is named when it is the order of their file names."""
 
@@ -86,6 +96,13 @@ def run_order(run_names: Sequence[str], record_start: Mapping[str, str]) -> tupl
     order : str
         Which order that is, in words (:data:`RECORD_START_ORDER`, or
         :data:`FILE_NAME_ORDER`, a colon and the reason the start times could not be used).
+
+    Examples
+    --------
+    >>> run_order(["run02", "run01"], {"run01": "2026-05-12T14:03:10", "run02": "2026-05-12T13:58:02"})
+    (['run02', 'run01'], 'recording start times in the files')
+    >>> run_order(["run02", "run01"], {"run01": "2026-05-12T14:03:10"})
+    (['run01', 'run02'], 'file-name order: 1 of 2 runs carry no recording start time')
     """
     by_name = sorted(run_names)
     starts = {name: record_start.get(name) or "" for name in by_name}

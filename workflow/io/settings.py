@@ -20,6 +20,23 @@ if TYPE_CHECKING:
     from pydantic import ValidationError
 
 
+__all__ = [
+    "AnalysisSettings",
+    "DecaySettings",
+    "ModeSearchSettings",
+    "QualitySettings",
+    "DampingFitSettings",
+    "ModelSettings",
+    "DiscoverySettings",
+    "DemoSettings",
+    "WorkflowConfig",
+    "ConfigError",
+    "valid_keys",
+    "format_validation_error",
+    "validate_config",
+]
+
+
 def _even(order: int) -> int:
     if order % 2:
         raise ValueError(f"must be even (a band-pass has an even order), got {order}")

@@ -27,6 +27,20 @@ if TYPE_CHECKING:
 # imported where a Parquet table is read or written, not here: the run-analysis jobs
 # write their columns with write_columns and start without them.
 
+__all__ = [
+    "COLUMN_UNITS",
+    "atomic_write_bytes",
+    "write_json",
+    "write_columns",
+    "read_columns",
+    "concatenate_columns",
+    "with_si_columns",
+    "write_table",
+    "read_table",
+    "column_units",
+]
+
+
 #: Units of the columns that the output contract and the project's tables use.
 COLUMN_UNITS: dict[str, str] = {
     "t_s": "s",

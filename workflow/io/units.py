@@ -14,6 +14,27 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+__all__ = [
+    "METRE_IN",
+    "STANDARD_GRAVITY_IN_S2",
+    "NEWTON_LBF",
+    "RESPONSE_QUANTITIES",
+    "normalize_unit",
+    "known_units",
+    "factor_to_internal",
+    "to_internal",
+    "velocity_amplitude_in_s",
+    "INCH_M",
+    "LBF_N",
+    "UnitSystem",
+    "INCH_SECOND",
+    "SI",
+    "UNIT_SYSTEMS",
+    "SI_TWIN_COLUMNS",
+    "MODEL_PARAMETER_UNITS",
+]
+
+
 METRE_IN: float = 1.0 / 0.0254
 """Inches in one metre (the inch is defined as exactly 0.0254 m)."""
 
@@ -172,6 +193,13 @@ def velocity_amplitude_in_s(
     ------
     ValueError
         Unknown quantity/unit, or a frequency that is zero or negative.
+
+    Examples
+    --------
+    An acceleration amplitude of 1 g at 50 Hz:
+
+    >>> velocity_amplitude_in_s([1.0, 2.0], "acceleration", "g", 50.0).round(4).tolist()
+    [1.229, 2.4579]
     """
     if quantity not in RESPONSE_QUANTITIES:
         raise ValueError(

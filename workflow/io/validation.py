@@ -13,6 +13,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
+__all__ = [
+    "T",
+    "FORBID_UNKNOWN_KEYS",
+    "UNKNOWN_KEY_ERRORS",
+    "MISSING_KEY_ERRORS",
+    "After",
+    "validate",
+]
+
+
 T = TypeVar("T")
 
 FORBID_UNKNOWN_KEYS = {"extra": "forbid"}

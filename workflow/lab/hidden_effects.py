@@ -20,6 +20,18 @@ from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.virtual_lab import LabSettings, generate_campaign
 from workflow.measured.runs import analyse_campaign
 
+__all__ = [
+    "CASES",
+    "AREA_RANGE_IN2",
+    "MICROSLIP_AREA_RANGE_IN2",
+    "QUADRATIC_AREA_RANGE_IN2",
+    "RUNS",
+    "campaign_segments",
+    "draw_case",
+    "generate_case",
+]
+
+
 CASES = {
     # cause: (joint, effect, effect-size range or None)
     # bench/hit_rate.py --seeds 40 --no-variability (2026-11-22, before run-to-run
@@ -58,7 +70,7 @@ QUADRATIC_AREA_RANGE_IN2 = (0.4, 0.8)
 """Bearing areas of the quadratic-damping case: where the effect is in the data. Below
 slip, Dahl's damping is itself proportional to amplitude, so a Dahl (or LuGre) fit can
 absorb ``c2 v|v|`` as far as its joint share lets it (at most a tenth of the modal
-stiffness, :data:`workflow.discovery.diagnosis.JOINT_SHARE_MAX`); what is left is the
+stiffness, :data:`workflow.models.averaged_fit.JOINT_SHARE_MAX`); what is left is the
 frequency curve. Fitting the baseline models to the lab's noise-free truth curves
 (0.07-3 in/s, scatter 0.015 in ln zeta and 2e-5 in relative frequency, the campaigns'
 typical values) leaves a frequency misfit of at most 3.1-3.7 (size 0.002), 5.1-5.9 (0.004)

@@ -7,6 +7,13 @@ time, and every ``snakemake`` call would otherwise import the simulator's SciPy.
 
 from __future__ import annotations
 
+__all__ = [
+    "PAPER_CONFIGURATIONS",
+    "run_name",
+    "planned_run_files",
+]
+
+
 PAPER_CONFIGURATIONS = {"no_washer": 1.36, "large_washer": 0.66, "small_washer": 0.17}
 """Configuration name -> bearing area (in^2), paper order."""
 

@@ -35,7 +35,50 @@ import numpy as np
 import scipy.optimize
 
 from workflow.lab.layout import PAPER_CONFIGURATIONS, run_name
-from workflow.models import contact, ringdown, specimen
+from workflow.models import contact, friction, ringdown, specimen
+
+__all__ = [
+    "SAMPLE_RATE_HZ",
+    "N_SAMPLES",
+    "PRETRIGGER_SAMPLES",
+    "TRIGGER_LBF",
+    "ADC_BITS",
+    "ACCELERATION_RANGE_G",
+    "FORCE_RANGE_LBF",
+    "REFERENCE_VELOCITY_IN_S",
+    "EFFECT_CAUSES",
+    "DEFAULT_EFFECT_SIZES",
+    "EFFECT_SIZE_MEANING",
+    "SECOND_MODE_FREQUENCY_RATIO",
+    "INTEGRATORS",
+    "TIME_DOMAIN_EFFECTS",
+    "LabSettings",
+    "RunPhysics",
+    "draw_run_physics",
+    "half_sine_response",
+    "ModeTable",
+    "nonlinear_mode_response",
+    "JointSetup",
+    "setup_configuration",
+    "scale_slip_forces",
+    "joint_curves",
+    "run_dahl_coulomb",
+    "mode_table",
+    "truth_curves",
+    "quantise",
+    "boxcar_half_sine",
+    "half_sine_spectral_factor",
+    "dahl_mode_response_time_domain",
+    "patch_mode_response_time_domain",
+    "simulate_run",
+    "averaged_mode_response",
+    "time_domain_mode_response",
+    "format_run",
+    "truth_path",
+    "generate_campaign",
+    "generate_sensor_campaigns",
+]
+
 
 SAMPLE_RATE_HZ = 2560.0
 N_SAMPLES = 8192
@@ -287,7 +330,7 @@ def _patch_curves(setup: JointSetup, a):
 
 
 def _dahl_curves(a, sigma, coulomb):
-    d = contact.dahl_dissipation_per_cycle(a, sigma, coulomb)
+    d = friction.dahl_dissipation_per_cycle(a, sigma, coulomb)
     loss = sigma - contact.dahl_secant_stiffness(a, sigma, coulomb)
     return d, loss
 

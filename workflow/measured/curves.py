@@ -36,6 +36,22 @@ import numpy as np
 import pandas as pd
 from scipy import special
 
+__all__ = [
+    "H1_NAME",
+    "H2_NAME",
+    "NOT_APPLICABLE",
+    "HYPOTHESIS_COLUMNS",
+    "PolynomialFit",
+    "fit_damping_polynomial",
+    "evaluate",
+    "bootstrap_band",
+    "amplitude_hypothesis",
+    "common_amplitude_range",
+    "area_hypothesis",
+    "hypothesis_tests",
+]
+
+
 #: Names of the two hypotheses, as they appear in the ``hypothesis`` column.
 H1_NAME = "H1: damping rises with amplitude at low amplitude"
 H2_NAME = "H2: damping rises with bearing area"

@@ -18,6 +18,21 @@ from numpy.typing import ArrayLike, NDArray
 from workflow.io.campaign import RunRecord
 from workflow.io.settings import QualitySettings
 
+__all__ = [
+    "CheckResult",
+    "check_clipping",
+    "check_double_hit",
+    "check_excitation",
+    "check_trigger",
+    "check_record_length",
+    "check_mode_found",
+    "check_snr",
+    "QC_COLUMNS",
+    "quality_columns",
+    "quality_rows",
+    "analysis_rows",
+]
+
 
 class CheckResult(NamedTuple):
     """What a check measured (in the unit its quality row states) and its verdict."""

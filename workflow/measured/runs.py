@@ -34,6 +34,36 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
+__all__ = [
+    "analysis_window",
+    "mode_search_range",
+    "WINDOW_ADVICE",
+    "channel_responses",
+    "identify_mode",
+    "RUN_COLUMNS",
+    "SEGMENT_COLUMNS",
+    "empty_segments",
+    "analyse_run_with_quality",
+    "read_with_quality",
+    "labelled",
+    "failed_checks",
+    "read_and_check",
+    "RunAnalysis",
+    "analyse_run_file",
+    "identify_configuration_mode",
+    "find_every_mode",
+    "analyse_campaign",
+    "response_unit_label",
+    "nominal_modes_hz",
+    "with_nominal_mode",
+    "first_mode_and_channel",
+    "first_mode_rows",
+    "collect_tables",
+    "fit_damping_curves",
+    "fit_mode_damping_curves",
+]
+
+
 def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> tuple[int, int]:
     """Sample indices [start, stop) of the part of a run to analyse.
 

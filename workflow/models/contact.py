@@ -28,6 +28,23 @@ from workflow.models import specimen
 # ----------------------------------------------------------------- Jenkins
 
 
+__all__ = [
+    "jenkins_dissipation_per_cycle",
+    "jenkins_secant_stiffness",
+    "jenkins_force_update",
+    "dahl_secant_stiffness",
+    "JointParameters",
+    "bolt_preload_lbf",
+    "ContactPatches",
+    "contact_patches",
+    "strip_springs",
+    "JointModes",
+    "joint_first_mode",
+    "patch_describing_function",
+    "equivalent_damping",
+]
+
+
 def jenkins_dissipation_per_cycle(slip_amplitude_in, stiffness_lbf_in, slip_force_lbf):
     """Energy dissipated per cycle by a Jenkins element under harmonic slip, in*lbf.
 
@@ -78,32 +95,11 @@ def jenkins_force_update(force_lbf, slip_increment_in, stiffness_lbf_in, slip_fo
 # -------------------------------------------------------------------- Dahl
 
 
-def dahl_dissipation_per_cycle(amplitude, sigma, coulomb_force):
-    """Energy dissipated per displacement-driven cycle by the Dahl model.
-
-    ``D(A) = 4 Fc A - 4 Fc^2 / sigma * tanh(sigma A / Fc)``.  Derivation: on
-    the rising branch ``dF/dx = sigma (1 - F / Fc)``, so
-    ``F = Fc (1 - exp(-sigma x / Fc) / cosh(s))`` with ``s = sigma A / Fc``
-    (symmetric steady loop, tip force ``Fc tanh s``); the loop area is twice
-    the integral of that branch over ``[-A, A]``.
-
-    Parameters
-    ----------
-    amplitude : array_like
-        Displacement amplitude (units of the Dahl displacement).
-    sigma : float
-        Rest stiffness (force per displacement).
-    coulomb_force : float
-        Limiting Coulomb force ``Fc``.
-    """
-    a = np.abs(np.asarray(amplitude, dtype=float))
-    return 4.0 * coulomb_force * a - 4.0 * coulomb_force**2 / sigma * np.tanh(sigma * a / coulomb_force)
-
-
 def dahl_secant_stiffness(amplitude, sigma, coulomb_force):
     """First-harmonic in-phase stiffness of the Dahl model.
 
-    From the steady-loop branch above,
+    From the steady-loop branch of :func:`workflow.models.friction.dahl_dissipation_per_cycle`
+    (tip force ``Fc tanh s`` at amplitude ``A``),
     ``k_eq = 2 Fc I1(s) / (A cosh s)``, ``s = sigma A / Fc``
     (``I1`` the modified Bessel function); ``k_eq -> sigma`` as ``A -> 0``.
     Evaluated with the exponentially scaled Bessel function to avoid overflow.

@@ -136,6 +136,16 @@ def dahl_dissipation_per_cycle(
     -------
     numpy.ndarray
         Dissipated energy per cycle, lbf*in.
+
+    Examples
+    --------
+    Large slip approaches Coulomb's ``4 Fc A``; small slip the cubic ``(4/3) sigma^2 A^3 / Fc``:
+
+    >>> sigma, fc = 2133.4, 38.0
+    >>> round(float(dahl_dissipation_per_cycle(10.0, sigma, fc) / (4 * fc * 10.0)), 4)
+    0.9982
+    >>> round(float(dahl_dissipation_per_cycle(1e-7, sigma, fc) / (4 / 3 * sigma**2 * 1e-21 / fc)), 9)
+    1.0
     """
     a = np.asarray(amplitude_in, dtype=float)
     sigma = np.asarray(sigma_lbf_in, dtype=float)

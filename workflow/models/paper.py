@@ -16,6 +16,23 @@ from workflow.io.settings import DecaySettings, ModelSettings
 if TYPE_CHECKING:  # pandas is imported where tables are built: figures 7-8 draw without it
     import pandas as pd
 
+__all__ = [
+    "PAPER_DAHL",
+    "PAPER_LUGRE",
+    "SPECIMEN_FREQUENCY_TOLERANCE",
+    "MIN_SEGMENTS_TO_FIT",
+    "ModalCoordinate",
+    "choose_modal_coordinate",
+    "run_start_velocities",
+    "averaged_fit_params",
+    "averaged_start",
+    "fit_configuration",
+    "configuration_models_document",
+    "fit_table",
+    "model_curve_frames",
+]
+
+
 #: Paper figure 7 (Dahl) and figure 8 (LuGre) parameter values, in the paper's units.
 PAPER_DAHL = {"sigma": (2 * np.pi) ** 2, "fc": 38.0}
 PAPER_LUGRE = {
@@ -86,17 +103,16 @@ def averaged_fit_params(
 ) -> dict[str, float]:
     """The averaged model's fit to one configuration's segments, for a configuration the
     diagnosis did not fit (too few distinct amplitudes to validate models)."""
-    from workflow.discovery import diagnosis as discovery
     from workflow.models import averaged as describing
+    from workflow.models.averaged_fit import FitContext, FitSettings, fit_model
+    from workflow.models.configuration_data import prepare_configuration, scatter_of
 
-    data = discovery.prepare_configuration(
+    data = prepare_configuration(
         segments, str(segments["configuration"].iloc[0]), describing.RESPONSE_ORDER[response_quantity]
     )
     velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
-    context = discovery.FitContext(float(np.quantile(velocity, 0.9)))
-    fit = discovery.fit_model(
-        model, data, discovery.scatter_of(data), context, settings=discovery.FitSettings(seed=seed)
-    )
+    context = FitContext(float(np.quantile(velocity, 0.9)))
+    fit = fit_model(model, data, scatter_of(data), context, settings=FitSettings(seed=seed))
     return fit.params
 
 

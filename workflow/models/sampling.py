@@ -1,6 +1,6 @@
 """Scrambled Sobol points in the unit box, for the global stage of the fits.
 
-The fits (:func:`workflow.discovery.diagnosis.fit_model`,
+The fits (:func:`workflow.models.averaged_fit.fit_model`,
 :func:`workflow.models.fitting.fit_friction_model`) evaluate a model on a few hundred
 parameter sets spread over their box and refine the best ones locally. The points are
 the first points of a Sobol sequence (Joe and Kuo's direction numbers, Bratley and Fox's
@@ -15,6 +15,16 @@ second of CPU.
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = [
+    "BITS",
+    "DIRECTION_POLYNOMIALS",
+    "MAX_DIMENSIONS",
+    "direction_numbers",
+    "sobol_integers",
+    "scrambled_sobol_points",
+]
+
 
 BITS = 30
 """Bits of every coordinate (SciPy's default): resolution ``2^-30``, up to ``2^30`` points."""

@@ -42,6 +42,23 @@ from functools import cached_property
 import numpy as np
 import scipy.linalg
 
+__all__ = [
+    "G_IN_S2",
+    "STEEL_E_PSI",
+    "STEEL_DENSITY_LBF_S2_IN4",
+    "MINDLIN_TANGENTIAL_TO_NORMAL",
+    "DEFAULT_CONTACT_STIFFNESS_LBF_IN3",
+    "SpecimenGeometry",
+    "Interface",
+    "InterfaceSprings",
+    "SpecimenModel",
+    "default_interface_springs",
+    "LinearMode",
+    "FirstMode",
+    "first_mode",
+]
+
+
 G_IN_S2 = 386.0886
 """Standard gravity, in/s^2."""
 

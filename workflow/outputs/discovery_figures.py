@@ -5,8 +5,8 @@
 * :func:`candidates_figure`: held-out error of every candidate per configuration.
 * :func:`heldout_figure`: the across-configurations prediction of a left-out area.
 
-All take what :func:`workflow.discovery.diagnosis.diagnose_campaign` and
-:func:`workflow.discovery.diagnosis.residual_table` return; nothing is refitted here.
+All take what :func:`workflow.discovery.campaign.campaign_document` and
+:func:`workflow.discovery.campaign.residual_table` return; nothing is refitted here.
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ def residuals_figure(
     Parameters
     ----------
     residuals : DataFrame
-        :func:`workflow.discovery.diagnosis.residual_table` (all configurations or this one).
+        :func:`workflow.discovery.campaign.residual_table` (all configurations or this one).
     configuration : str
     document : mapping
         The campaign's diagnosis document (or this configuration's entry): names the

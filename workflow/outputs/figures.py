@@ -16,6 +16,35 @@ from typing import TYPE_CHECKING
 
 import matplotlib
 
+__all__ = [
+    "STYLE",
+    "DAMPING_LABEL",
+    "FREQUENCY_LABEL",
+    "save",
+    "PlainLogFormatter",
+    "plain_log_axis",
+    "velocity_label",
+    "velocity",
+    "amplitude_axis",
+    "legend_beside",
+    "lay_out",
+    "misfit_ranges",
+    "misfit_sentence",
+    "curve_at",
+    "run_colours",
+    "time_history",
+    "damping_vs_amplitude",
+    "damping_misfit",
+    "frequency_misfit",
+    "frequency_vs_amplitude",
+    "area_fits",
+    "PARAMETER_SYMBOLS",
+    "parameter_text",
+    "friction_loops",
+    "model_comparison",
+]
+
+
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402

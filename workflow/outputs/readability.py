@@ -15,6 +15,15 @@ from matplotlib.backend_bases import RendererBase
 from matplotlib.text import Text
 from matplotlib.transforms import Bbox
 
+__all__ = [
+    "OVERLAP_TOLERANCE_PX",
+    "drawn_texts",
+    "overlapping_texts",
+    "notation_problems",
+    "readability_problems",
+]
+
+
 OVERLAP_TOLERANCE_PX = 1.0
 """Extents are shrunk by this much before comparing: glyph boxes that only touch are
 legible (matplotlib pads each box by a fraction of a pixel)."""

@@ -27,6 +27,51 @@ import pandas as pd
 from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, UnitSystem
 
+__all__ = [
+    "CAUSE_WORDS",
+    "CLEAR_MARGIN",
+    "CLEAR_CONFIDENCE",
+    "FLAT_CHANGE",
+    "CAUSE_NAMES",
+    "MODEL_NAMES",
+    "ERROR_UNIT",
+    "CSS",
+    "fmt",
+    "ratio",
+    "esc",
+    "model_name",
+    "cause_name",
+    "candidate_name",
+    "tag",
+    "page",
+    "html_table",
+    "amplitude_range",
+    "candidate_margin",
+    "signature_sentences",
+    "explains_sentences",
+    "threshold_sentences",
+    "margin_words",
+    "gain_words",
+    "measured_trends",
+    "trend_sentence",
+    "campaign_headline",
+    "hypothesis_summary",
+    "excluded_runs",
+    "verdict_html",
+    "hypotheses_html",
+    "runs_in_recorded_order",
+    "runs_html",
+    "damping_fits_html",
+    "model_fits_html",
+    "candidates_html",
+    "rejected_segments_html",
+    "rst_escape",
+    "verdict_rst",
+    "landing_rst",
+    "quality_html",
+]
+
+
 #: What each cause of the output contract means, in plain words.
 CAUSE_WORDS: dict[str, str] = {
     "none": "none — the paper's friction model explains the data within the run-to-run scatter",

@@ -10,6 +10,12 @@ import pandas as pd
 
 from workflow.outputs.report import cause_name
 
+__all__ = [
+    "REASONS_SHOWN",
+    "run_summary",
+]
+
+
 REASONS_SHOWN = 3
 """Excluded runs whose reason is printed; the rest are counted (runs.csv has them all)."""
 

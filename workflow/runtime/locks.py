@@ -26,6 +26,11 @@ try:
 except ImportError:  # pragma: no cover - Windows: no flock, stale locks stay manual
     fcntl = None
 
+__all__ = [
+    "ALIVE_FILE",
+    "clear_stale_snakemake_locks",
+]
+
 ALIVE_FILE: str = "lapjoint.alive"
 
 _held: IO[str] | None = None

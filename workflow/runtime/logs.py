@@ -11,6 +11,15 @@ import time
 from pathlib import Path
 from types import TracebackType
 
+__all__ = [
+    "COST_LINE",
+    "ScriptStop",
+    "peak_resident_mb",
+    "setup_script_logging",
+    "exit_without_teardown",
+]
+
+
 COST_LINE = "cost: start-up {start_up:.3f} s CPU, work {work:.3f} s CPU, peak memory {peak_mb:.0f} MB"
 """Last line of every script's log (bench/bench_workflow.py reads it): CPU seconds spent
 before logging was set up (interpreter, Snakemake's preamble, imports) and after it

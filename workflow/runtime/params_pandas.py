@@ -16,6 +16,12 @@ from __future__ import annotations
 import sys
 from typing import Any
 
+__all__ = [
+    "serialize_param",
+    "store_params_without_importing_pandas",
+    "defer_pandas_import",
+]
+
 
 def serialize_param(persistence, value: Any) -> str | object:
     """``Persistence._serialize_param_pandas`` with pandas looked up, not imported."""

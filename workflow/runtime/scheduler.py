@@ -14,6 +14,10 @@ from __future__ import annotations
 
 import threading
 
+__all__ = [
+    "cancel_scheduler_timers",
+]
+
 
 def cancel_scheduler_timers() -> int:
     """Cancel the Snakemake job scheduler's pending wake-up timers.

@@ -19,6 +19,11 @@ if TYPE_CHECKING:
     from workflow.io.campaign import Campaign, RunRecord
 
 
+__all__ = [
+    "read_system_run",
+]
+
+
 def read_system_run(full_path: Path, relative: str, shown: str, campaign: Campaign) -> RunRecord:
     """Read one run file written by an acquisition system.
 

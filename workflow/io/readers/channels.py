@@ -35,11 +35,20 @@ from workflow.io.campaign import (
     CampaignFormatError,
     ResponseChannel,
     RunRecord,
-    _column_role,
-    _rates_agree,
     response_unit,
 )
+from workflow.io.record_rules import column_role, rates_agree
 from workflow.io.recording_time import iso_text
+
+__all__ = [
+    "Channel",
+    "FileChannels",
+    "unit_label",
+    "channel_role",
+    "describe_channels",
+    "assemble_record",
+]
+
 
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
@@ -122,7 +131,7 @@ def channel_role(channel: Channel) -> str | None:
     name = channel.name if channel.role_name is None else channel.role_name
     if name.strip().lower() == "t":
         return "time"
-    return _column_role(name)
+    return column_role(name)
 
 
 def describe_channels(channels: list[Channel]) -> str:
@@ -372,7 +381,7 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         )
     for i, (name_a, rate_a) in enumerate(sources):
         for name_b, rate_b in sources[i + 1 :]:
-            if not _rates_agree(rate_a, rate_b):
+            if not rates_agree(rate_a, rate_b):
                 raise CampaignFormatError(
                     shown,
                     None,

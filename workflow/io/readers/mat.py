@@ -29,6 +29,12 @@ from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import parse_clock_time
 
+__all__ = [
+    "read_mat_channels",
+    "channels_from_variables",
+]
+
+
 _RATE_NAMES_HZ = {"fs", "sample_rate", "sample_rate_hz", "samplerate", "sampling_rate", "sampling_frequency"}
 _INTERVAL_NAMES_S = {"dt", "sample_interval", "sample_interval_s", "sampling_interval"}
 _MAT73_SIGNATURE = b"MATLAB 7.3"

@@ -19,6 +19,10 @@ from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import utc_from_datetime64
 
+__all__ = [
+    "read_tdms_channels",
+]
+
 
 class _WarningRecords(logging.Handler):
     """Keeps the messages of the warnings logged while a file is read."""

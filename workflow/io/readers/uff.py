@@ -21,6 +21,12 @@ from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels, unit_label
 from workflow.io.recording_time import parse_clock_time
 
+__all__ = [
+    "TIME_RESPONSE_FUNCTION",
+    "read_uff_channels",
+]
+
+
 TIME_RESPONSE_FUNCTION: int = 1
 """Dataset 58 function type of a time response."""
 

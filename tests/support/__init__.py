@@ -1,0 +1,1 @@
+"""Test harness shared by several test files (not part of the library)."""

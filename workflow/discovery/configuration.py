@@ -1,0 +1,349 @@
+"""One configuration's diagnosis: baselines, candidates, verdict, confidence and its document."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from workflow.discovery.decision import (
+    BASELINE_MODELS,
+    CAUSE_MODELS,
+    CLEAR_GAIN,
+    RESIDUAL_GAIN,
+    ModelEvidence,
+    cause_fractions,
+    evaluate_decision,
+    extended_model_of,
+    resample_decisions,
+)
+from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate
+from workflow.discovery.microslip import refine_microslip, threshold_cells, threshold_distribution
+from workflow.discovery.misfit import envelope_structure, explains_data, stiffness_signature
+from workflow.discovery.wording import discrepancy_sentence
+from workflow.io.settings import AnalysisSettings
+from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
+from workflow.models.averaged_fit import (
+    FitContext,
+    FitResult,
+    FitSettings,
+    at_bounds,
+    fit_model,
+    model_residuals,
+)
+from workflow.models.configuration_data import (
+    TOL_LN_ZETA,
+    TOL_REL_F,
+    ConfigurationData,
+    Scatter,
+    prepare_configuration,
+    scatter_of,
+)
+
+__all__ = [
+    "NESTED_DAHL",
+    "json_safe",
+    "ConfigurationDiagnosis",
+    "bound_flags",
+    "diagnose_configuration",
+    "record_starts",
+    "diagnose_configuration_segments",
+]
+
+log = logging.getLogger(__name__)
+
+
+NESTED_DAHL = {
+    "lugre": lambda d: {
+        "stiction_ratio": 1e-3,
+        "micro_damping_ratio": 0.0,
+        "stribeck_velocity_in_s": float(np.median(d.velocity_in_s)),
+    },
+    "dahl_quadratic": lambda d: {
+        "quadratic_zeta_per_in_s": 2e-3 * float(np.min(d.zeta)) / float(np.max(d.velocity_in_s))
+    },
+    "dahl_stiffness": lambda d: {"stiffness_shift": 0.0, "stiffness_exponent": 2.0},
+    "dahl_drift": lambda d: {"drift": 0.0},
+}
+"""Extension parameters that reduce each model to Dahl (the nested start)."""
+
+
+def _finite(x):
+    """JSON-safe float (None for non-finite)."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def json_safe(obj):
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return _finite(obj)
+    return obj
+
+
+@dataclass
+class ConfigurationDiagnosis:
+    """Everything computed for one configuration (the document plus the fits)."""
+
+    document: dict
+    fits: dict[str, FitResult]
+    data: ConfigurationData
+    scatter: Scatter
+    residuals: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    resamples: list[dict] = field(default_factory=list)
+    """Cause and gain ratio on each bootstrap resample (:func:`resample_decisions`)."""
+    evidence: dict[str, ModelEvidence] = field(default_factory=dict)
+    """What the decision was taken on (:func:`evaluate_decision`), per model; not kept in
+    the interim files."""
+
+
+def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: ConfigurationData) -> list[str]:
+    """Parameters of a fit that sit on an edge of their fit range (not identified there)."""
+    model = MODELS[model] if isinstance(model, str) else model
+    flags = []
+    for spec, edge, c in zip(model.params, at_bounds(model, coords, data), coords):
+        if edge:
+            value = float(np.exp(c)) if spec.scale == "log" else float(c)
+            if spec.name == "joint_stiffness_fraction" and edge > 0:
+                flags.append(
+                    f"{spec.name} = {value:.3g} at its physical limit: the data ask for a joint "
+                    "carrying more of the modal stiffness than a lap joint's contact does "
+                    "(docs/discovery.md, fit ranges)"
+                )
+                continue
+            side = "lower" if edge < 0 else "upper"
+            flags.append(
+                f"{spec.name} = {value:.3g} at the {side} edge of its fit range: not identified by the data"
+            )
+    return flags
+
+
+def diagnose_configuration(
+    data: ConfigurationData,
+    context: FitContext,
+    *,
+    settings: FitSettings = FitSettings(),
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+) -> ConfigurationDiagnosis:
+    """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
+    scatter = scatter_of(data)
+    fits: dict[str, FitResult] = {}
+    cv: dict[str, dict] = {}
+    for name in BASELINE_MODELS + tuple(CAUSE_MODELS.values()):
+        if name == "dahl_drift" and data.n_runs < 3:
+            continue
+        nested = None
+        if name != "dahl" and name in NESTED_DAHL and "dahl" in fits:
+            nested = {**fits["dahl"].params, **NESTED_DAHL[name](data)}
+        started = time.perf_counter()
+        fits[name] = fit_model(name, data, scatter, context, settings=settings, nested_start=nested)
+        cv[name] = cross_validate(name, data, scatter, context, fits[name], settings=settings)
+        log.info(
+            "%s %s: fitted and cross-validated in %.1f s (held-out error %.3g)",
+            data.name,
+            name,
+            time.perf_counter() - started,
+            cv[name]["error"],
+        )
+    residuals = {m: model_residuals(f, data, scatter, context) for m, f in fits.items()}
+    evidence = {m: ModelEvidence(residuals[m], cv[m], len(MODELS[m].params)) for m in fits}
+    stiffness_model = CAUSE_MODELS["stiffness_nonlinearity"]
+    signature = stiffness_signature(fits[stiffness_model], data)
+    evidence[stiffness_model].shows_signature = signature["shows_signature"]
+    envelope = envelope_structure(data, segment_cycles=segment_cycles)
+    envelope_significant = bool(envelope and envelope["significant"])
+    result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    extended_models, refinement = {}, None
+    if (
+        result["cause"] == "microslip_power_law"
+        and not explains_data(data, residuals["iwan"])["explains_data"]
+    ):
+        started = time.perf_counter()
+        name = f"iwan_cells_{threshold_cells(data)}"
+        fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
+        residuals[name] = model_residuals(fits[name], data, scatter, context)
+        evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params))
+        # the same decision (the candidates are unchanged), now with the refinement's error and BIC
+        result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+        errors, bic = result["errors"], result["bic"]
+        adopted = errors[name]["error"] < errors["iwan"]["error"] and bic[name] < bic["iwan"]
+        if adopted:
+            extended_models = {"microslip_power_law": name}
+            result["extended_models"].update(extended_models)
+        refinement = {
+            "model": name,
+            "adopted": bool(adopted),
+            "rule": "adopted as the extended model when it lowers both the held-out error and the BIC of iwan",
+            "heldout_error": errors[name]["error"],
+            "bic": bic[name],
+            "iwan_heldout_error": errors["iwan"]["error"],
+            "iwan_bic": bic["iwan"],
+            "cells": threshold_distribution(fits[name], data, scatter, context),
+            "standard_error": "Gauss-Newton, scaled by the fit cost and residuals over effective observations",
+        }
+        log.info(
+            "%s %s (slip thresholds from the data): fitted and cross-validated in %.1f s "
+            "(held-out error %.3g, iwan %.3g; %s)",
+            data.name,
+            name,
+            time.perf_counter() - started,
+            errors[name]["error"],
+            errors["iwan"]["error"],
+            "adopted" if adopted else "not adopted",
+        )
+    resamples = resample_decisions(
+        data,
+        evidence,
+        envelope_significant=envelope_significant,
+        n_resamples=settings.resamples,
+        seed=settings.seed,
+        n_folds=settings.folds,
+        extended_models=extended_models,
+    )
+    cause, reason, base = result["cause"], result["reason"], result["baseline"]
+    errors, bins, trend, candidates = result["errors"], result["bins"], result["trend"], result["candidates"]
+    candidates["stiffness_nonlinearity"]["signature"] = signature
+    for entry in candidates.values():
+        m = entry["model"]
+        entry["in_sample_rms"] = float(np.sqrt(fits[m].cost))
+        entry["params"] = fits[m].params
+        entry["flags"] = bound_flags(m, fits[m].coords, data)
+    ranking = [{"cause": "none", "score": errors[base]["error"]}]
+    ranking += [{"cause": c, "score": v["heldout_error"]} for c, v in candidates.items()]
+    ranking.sort(key=lambda r: r["score"])
+    ext_model = extended_model_of(result)
+    ext_err = errors[ext_model]["error"]
+    explained = explains_data(data, residuals[ext_model])
+    sentence = discrepancy_sentence(base, bins, trend, data.n_runs)
+    if envelope_significant:
+        sentence = (
+            f"The ring-downs are not single-mode decays: even at each run's highest "
+            f"amplitudes the envelope departs from an exponential within a segment by "
+            f"{100 * envelope['departure_ratio']:.0f} % of its decay across the segment "
+            f"(median over runs; limit {100 * envelope['limit']:.0f} %), which no {base} "
+            f"fit or candidate can follow; {data.n_dropped} segments had zeta <= 0. " + sentence
+        )
+    run_spread = {}
+    if data.n_runs >= 2:
+        run_spread = {
+            "relative_frequency_std": float(np.std(residuals[base]["delta_f"], ddof=1)),
+            "zeta0_std": float(np.std(residuals[base]["delta_zeta0"], ddof=1)),
+        }
+    document = {
+        "baseline": {
+            "model": base,
+            "params": fits[base].params,
+            "error": {"metric": HELD_OUT_METRIC, "value": errors[base]["error"]},
+            "flags": bound_flags(base, fits[base].coords, data),
+        },
+        "discrepancy": sentence,
+        "cause": cause,
+        "evidence": {
+            "decision_rule": reason,
+            "n_runs": data.n_runs,
+            "n_segments": data.n,
+            "n_segments_dropped": data.n_dropped,
+            "effective_observations": result["n_eff"],
+            "scatter": {
+                "ln_zeta_median": float(np.median(scatter.noise_ln_zeta)),
+                "relative_frequency_median": float(np.median(scatter.noise_rel_f)),
+                "model_tolerance_ln_zeta": TOL_LN_ZETA,
+                "model_tolerance_relative_frequency": TOL_REL_F,
+            },
+            "run_offsets": run_spread,
+            "baselines": {
+                m: {
+                    "heldout_error": errors[m]["error"],
+                    "heldout_error_zeta": errors[m]["error_zeta"],
+                    "heldout_error_frequency": errors[m]["error_frequency"],
+                    "in_sample_rms": float(np.sqrt(fits[m].cost)),
+                    "bic": result["bic"][m],
+                }
+                for m in BASELINE_MODELS
+            },
+            "baseline_misfit_significant": result["baseline_fails"],
+            "binned_residuals": bins,
+            "run_order_trend": trend,
+            "envelope_structure": envelope,
+            "candidates": candidates,
+            "clear_gain_threshold": CLEAR_GAIN,
+            "residual_gain_threshold": RESIDUAL_GAIN,
+            "explains_data": explained,
+            "threshold_distribution": refinement,
+            "resamples": len(resamples),
+        },
+        "ranking": ranking,
+        "extended_model": {
+            "model": ext_model,
+            "params": fits[ext_model].params,
+            "removes_misfit": cause != "unknown" and explained["explains_data"],
+            "flags": bound_flags(ext_model, fits[ext_model].coords, data),
+        },
+        "gain": {
+            "metric": HELD_OUT_METRIC,
+            "baseline": errors[base]["error"],
+            "extended": ext_err,
+            "ratio": 1.0 if cause == "none" else ext_err / errors[base]["error"],
+        },
+        "explains_data": explained["explains_data"],
+        "confidence": cause_fractions([r["cause"] for r in resamples]),
+    }
+    return ConfigurationDiagnosis(json_safe(document), fits, data, scatter, residuals, resamples, evidence)
+
+
+def record_starts(runs: pd.DataFrame | None, name: str) -> dict[str, str]:
+    """Run name -> ISO 8601 recording start of configuration ``name``'s runs, from the runs
+    table (results/tables/runs.parquet; empty where a file states none, or no table)."""
+    if runs is None or "record_start" not in runs:
+        return {}
+    rows = runs[runs["configuration"].astype(str) == name]
+    return dict(zip(rows["run"].astype(str), rows["record_start"].fillna("").astype(str)))
+
+
+def diagnose_configuration_segments(
+    segments: pd.DataFrame,
+    name: str,
+    context: FitContext,
+    *,
+    response_quantity: str = "acceleration",
+    settings: FitSettings | None = None,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    record_start: Mapping[str, str] | None = None,
+) -> ConfigurationDiagnosis | str:
+    """:func:`diagnose_configuration` of configuration ``name`` of the segments table, or
+    why it is skipped (too few usable segments or amplitudes to fit and validate models).
+
+    Parameters
+    ----------
+    segments : DataFrame
+        The campaign's kept segments (results/tables/segments.parquet).
+    name : str
+    context : FitContext
+        The campaign's (:func:`campaign_fit_context`).
+    response_quantity : str
+        The configuration's recorded quantity (campaign.yaml ``response.quantity``).
+    settings : FitSettings, optional
+    segment_cycles : float
+        Log-decrement segment length, cycles.
+    record_start : mapping, optional
+        Run name -> recording start (:func:`record_starts`): the run order.
+    """
+    data = prepare_configuration(segments, name, RESPONSE_ORDER[response_quantity], record_start)
+    if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
+        return f"only {data.n} usable segments: too few to fit and validate models"
+    return diagnose_configuration(
+        data, context, settings=settings or FitSettings(), segment_cycles=segment_cycles
+    )

@@ -1,0 +1,344 @@
+"""Misfit tests: where a fitted model is wrong, and whether that is more than the scatter.
+
+Per half decade of amplitude and per curve, each run's mean residual, then a t test over
+runs (Bonferroni-corrected, familywise :data:`ALPHA`) that also asks the misfit to exceed
+the models' accuracy; a trend of the runs' damping with run order; whether the segments
+are single-mode decays at all; whether a model explains the data; and the stiffness
+candidate's signature.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from scipy import special
+
+from workflow.discovery.heldout import amplitude_bin, amplitude_weights
+from workflow.io.settings import AnalysisSettings
+from workflow.models.averaged import model_curves
+from workflow.models.averaged_fit import FitResult
+from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, robust_trend
+
+__all__ = [
+    "ALPHA",
+    "binned_discrepancy",
+    "run_order_trend",
+    "ENVELOPE_DEPARTURE_LIMIT",
+    "envelope_structure",
+    "EXPLAINS_LIMIT",
+    "explains_data",
+    "stiffness_signature",
+]
+
+
+ALPHA = 0.01
+"""Familywise false-alarm probability of the discrepancy tests: half of it is shared by
+the amplitude bins (Bonferroni over bins and curves), half goes to the run-order test."""
+
+
+def _lag1_effective(r: np.ndarray) -> float:
+    """Effective sample size of a serially correlated sequence (AR(1))."""
+    n = r.size
+    if n < 4:
+        return float(n)
+    c = r - r.mean()
+    rho = float(np.sum(c[1:] * c[:-1]) / max(np.sum(c * c), 1e-300))
+    rho = min(max(rho, 0.0), 0.95)
+    return max(1.0, n * (1.0 - rho) / (1.0 + rho))
+
+
+def binned_discrepancy(
+    data: ConfigurationData, residuals: Mapping[str, np.ndarray], *, alpha: float = ALPHA
+) -> list[dict]:
+    """Mean residual per half decade of amplitude and per curve, with its significance.
+
+    For each bin and curve, each run's mean residual in the bin is one
+    observation; the mean over runs, its standard error over runs and a t test
+    (``n_runs - 1`` degrees of freedom) follow. With one run, the segments are the
+    observations and the standard error uses their AR(1) effective number. A bin
+    counts as a real misfit when ``p < p_limit = alpha / (2 n)``, ``n`` the number of
+    bins x curves tested (Bonferroni with half of ``alpha``; the run-order test has the
+    other half), and ``|mean|`` exceeds the model accuracy (``TOL_LN_ZETA`` or
+    ``TOL_REL_F``).
+
+    Returns
+    -------
+    list of dict
+        One per (bin, curve): ``curve`` ("damping"/"frequency"), ``v_low_in_s``,
+        ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``standard_error``, ``t``,
+        ``p``, ``p_limit`` (``alpha / n_tests``), ``n_runs``, ``n_segments``,
+        ``tolerance``, ``significant``.
+    """
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
+    rows = []
+    for curve, key, tol in (("damping", "ln_zeta", TOL_LN_ZETA), ("frequency", "rel_f", TOL_REL_F)):
+        r = residuals[key]
+        for b in np.unique(code):
+            in_bin = code == b
+            if data.n_runs >= 2:
+                counts = np.bincount(data.run_index[in_bin], minlength=data.n_runs)
+                runs = np.flatnonzero(counts)
+                if runs.size < 3:
+                    continue
+                sums = np.bincount(data.run_index[in_bin], weights=r[in_bin], minlength=data.n_runs)
+                means = sums[runs] / counts[runs]
+                m = float(means.mean())
+                se = float(means.std(ddof=1) / np.sqrt(means.size))
+                dof = means.size - 1
+            else:
+                runs = np.zeros(1, dtype=int)
+                seg = r[in_bin][np.argsort(data.velocity_in_s[in_bin])]
+                if seg.size < 4:
+                    continue
+                m = float(seg.mean())
+                n_eff = _lag1_effective(seg)
+                se = float(seg.std(ddof=1) / np.sqrt(n_eff))
+                dof = max(n_eff - 1.0, 1.0)
+            t = m / max(se, 1e-300)
+            rows.append(
+                {
+                    "curve": curve,
+                    "v_low_in_s": float(data.anchor_velocity_in_s * 10 ** (b / 2.0)),
+                    "v_high_in_s": float(data.anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)),
+                    "mean": m,
+                    "standard_error": se,
+                    "t": float(t),
+                    "p": float(2.0 * special.stdtr(dof, -abs(t))),
+                    "n_runs": int(runs.size),
+                    "n_segments": int(in_bin.sum()),
+                    "tolerance": tol,
+                    "significant": False,
+                }
+            )
+    n_tests = 2 * max(len(rows), 1)  # the other half of alpha goes to the run-order test
+    for row in rows:
+        row["p_limit"] = alpha / n_tests
+        row["significant"] = bool(row["p"] < row["p_limit"] and abs(row["mean"]) > row["tolerance"])
+    return rows
+
+
+def run_order_trend(
+    data: ConfigurationData,
+    residuals: Mapping[str, np.ndarray],
+    *,
+    n_tests: int,
+    alpha: float = ALPHA,
+    run_position: np.ndarray | None = None,
+) -> dict | None:
+    """Linear trend with run order of the runs' shift of the damping curve.
+
+    Each run's residual is the shared model's, with the run's own frequency and linear
+    damping set by its lowest-amplitude segments (``ln_zeta_calibrated`` and
+    ``calibration`` when present, as for a held-out run; else ``ln_zeta_shared``, else
+    ``ln_zeta``). Of that residual the test takes the amount of the shape a change of the
+    joint's friction limit leaves (``-ln_zeta_slope``, :func:`damping_curve_slope`; a
+    constant shape without it, or where the model's damping changes by less than its
+    accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares
+    projection over the run's other segments with every quarter decade of amplitude
+    weighted equally (:func:`amplitude_weights`): the run's relative change of friction
+    limit against the shared model. Projecting on the shape weighs each amplitude by how
+    much a change of the joint shows there, where a plain mean would dilute the change at
+    the top of the range with the stuck joint's segments below. The calibration takes out the random
+    spread of the runs' linear damping; a random spread of the joint left over only widens
+    the scatter of the runs' projections, which the t test counts, while a steady change
+    with run order tilts them. Offsets fitted to all of a run's segments would absorb a
+    trend.
+
+    Parameters
+    ----------
+    n_tests : int
+        The test is significant at ``p < alpha / n_tests``.
+    run_position : ndarray, optional
+        Position in run order of each of the ``data.n_runs`` runs (default ``0 .. n-1``;
+        a resample of runs passes the drawn runs' positions).
+
+    Returns None with fewer than 4 runs with scored segments; else ``slope_per_run`` (of
+    the projection, per run: ``ln Fc``, or ``ln zeta`` without a slope),
+    ``change_over_sequence`` (the change of ``ln zeta`` the trend makes from the first run
+    to the last, at the scored amplitude where it is largest), ``t``, ``p``,
+    ``significant`` (``p < alpha / n_tests`` and the change over the sequence larger than
+    the model accuracy), ``order`` (which run order, ``data.run_order``) and ``runs`` (the
+    run names in that order).
+    """
+    x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
+    r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
+    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
+    if "calibration" in residuals:
+        w = w * ~residuals["calibration"]
+    shape = np.ones(data.n)
+    if "ln_zeta_slope" in residuals and np.any(w > 0):
+        curve_slope = residuals["ln_zeta_slope"]
+        # a curve flatter than the models' accuracy over the scored amplitudes defines no
+        # shape (its slope is rounding): a change of the damping is then read as a level
+        span = float(np.ptp(np.log(data.velocity_in_s[w > 0])))
+        if float(np.max(np.abs(curve_slope[w > 0]))) * span >= TOL_LN_ZETA:
+            shape = -curve_slope
+    counts = np.bincount(data.run_index, weights=w * shape * shape, minlength=data.n_runs)
+    means = np.bincount(data.run_index, weights=w * shape * r, minlength=data.n_runs) / np.maximum(
+        counts, 1e-300
+    )
+    keep = counts > 0
+    x, y = x[keep], means[keep]
+    if x.size < 4 or np.unique(x).size < 3:  # runs with scored segments
+        return None
+    dx = x - x.mean()
+    slope = float(np.sum(dx * (y - y.mean())) / np.sum(dx * dx))
+    dof = x.size - 2
+    stderr = float(np.sqrt(np.sum((y - y.mean() - slope * dx) ** 2) / dof / np.sum(dx * dx)))
+    t = slope / max(stderr, 1e-300)
+    p = float(2.0 * special.stdtr(dof, -abs(t)))
+    scored_shape = shape[w > 0]
+    largest = float(scored_shape[np.argmax(np.abs(scored_shape))]) if scored_shape.size else 0.0
+    change = slope * float(np.ptp(x)) * largest
+    return {
+        "slope_per_run": slope,
+        "change_over_sequence": change,
+        "t": float(t),
+        "p": p,
+        "significant": bool(p < alpha / n_tests and abs(change) > TOL_LN_ZETA),
+        "order": data.run_order,
+        "runs": list(data.run_names),
+    }
+
+
+ENVELOPE_DEPARTURE_LIMIT = 0.05
+"""Largest acceptable departure of a segment's ln-envelope from a straight line (RMS of
+the line fit, ``fit_rms``), as a fraction of the decay of ln-envelope across the segment
+(``2 pi N zeta`` for ``N`` cycles), in each run's highest-amplitude third."""
+
+
+def envelope_structure(
+    data: ConfigurationData, *, segment_cycles: float = AnalysisSettings.segment_cycles
+) -> dict | None:
+    """Whether the log-decrement segments measure a decay at all.
+
+    Every model of the vocabulary is a single mode whose damping changes slowly with
+    amplitude: over a segment of ``N`` cycles its ln-envelope is a straight line that
+    falls by ``2 pi N zeta``, up to additive noise (largest at the run's low end) and
+    a curvature far smaller than that fall. In each run's highest-amplitude third
+    (best signal-to-noise) the departure ``fit_rms`` must therefore be a small
+    fraction of the fall. A disturbance proportional to the signal (a second mode
+    beating in the band, an amplitude modulation) keeps it large at every amplitude:
+    then the segments' damping and frequency are dominated by that disturbance and
+    no single-mode model applies.
+
+    Parameters
+    ----------
+    data : ConfigurationData
+    segment_cycles : float
+        Segment length of the log decrement, cycles (config ``analysis.segment_cycles``).
+
+    Returns
+    -------
+    dict or None
+        ``departure_ratio`` (median over runs of each run's median of
+        ``fit_rms / (2 pi N zeta_trend)`` in its top third), ``runs_over_limit``,
+        ``limit``, ``significant`` (ratio above the limit in at least half the runs).
+        None when the table has no ``fit_rms``.
+    """
+    if data.fit_rms is None:
+        return None
+    x = np.log10(data.velocity_in_s)
+    zeta_trend = np.exp(robust_trend(x, np.log(data.zeta), 3))
+    ratio = data.fit_rms / (2.0 * np.pi * segment_cycles * zeta_trend)
+    per_run = []
+    for j in range(data.n_runs):
+        m = np.flatnonzero(data.run_index == j)
+        if m.size < 3:
+            continue
+        top = m[np.argsort(data.velocity_in_s[m])[::-1][: max(2, m.size // 3)]]
+        per_run.append(float(np.median(ratio[top])))
+    if not per_run:
+        return None
+    per_run = np.array(per_run)
+    over = int(np.sum(per_run > ENVELOPE_DEPARTURE_LIMIT))
+    return {
+        "departure_ratio": float(np.median(per_run)),
+        "runs_over_limit": over,
+        "runs_tested": int(per_run.size),
+        "limit": ENVELOPE_DEPARTURE_LIMIT,
+        "segment_cycles": float(segment_cycles),
+        "median_fit_rms": float(np.median(data.fit_rms)),
+        "significant": bool(over >= max(1, int(np.ceil(per_run.size / 2)))),
+    }
+
+
+EXPLAINS_LIMIT = 2.0
+"""``explains_data`` (output contract): the model's mean residual in every half decade
+of amplitude, in units of the measured scatter, stays within this limit on both curves."""
+
+
+def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) -> dict:
+    """Whether a model explains the data: binned residuals within ±2 measured scatter.
+
+    Per half decade of amplitude (counted down from the anchor) and per curve, the mean
+    of the residuals over the measured scatter (``z_noise``, ``f_noise``: each run with
+    its own offsets). The model explains the data when every such mean is within
+    :data:`EXPLAINS_LIMIT`.
+
+    Returns
+    -------
+    dict
+        ``explains_data`` (bool), ``limit``, ``worst`` (the largest bin: curve, range,
+        mean) and ``failing_bins`` (every bin outside the limit, in amplitude order).
+    """
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
+    bins = []
+    for curve, key in (("damping", "z_noise"), ("frequency", "f_noise")):
+        r = residuals[key]
+        for b in np.unique(code):
+            in_bin = code == b
+            bins.append(
+                {
+                    "curve": curve,
+                    "v_low_in_s": float(data.anchor_velocity_in_s * 10 ** (b / 2.0)),
+                    "v_high_in_s": float(data.anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)),
+                    "mean_over_scatter": float(np.mean(r[in_bin])),
+                    "n_segments": int(in_bin.sum()),
+                }
+            )
+    failing = [b for b in bins if abs(b["mean_over_scatter"]) > EXPLAINS_LIMIT]
+    failing.sort(key=lambda b: (b["curve"], b["v_low_in_s"]))
+    return {
+        "explains_data": not failing,
+        "limit": EXPLAINS_LIMIT,
+        "worst": max(bins, key=lambda b: abs(b["mean_over_scatter"]), default=None),
+        "failing_bins": failing,
+    }
+
+
+def stiffness_signature(fit: FitResult, data: ConfigurationData) -> dict:
+    """Whether a ``dahl_stiffness`` fit shows the stiffness-nonlinearity signature.
+
+    The output contract's signature: the frequency shifts with amplitude more than the
+    friction that fits the damping explains. Over the measured amplitudes the relative
+    change of the fitted model's damped frequency is compared with that of its friction
+    alone (the same fit with the stiffness term switched off); the signature is there
+    when the whole change is larger in magnitude.
+
+    Why: Dahl's pre-sliding damping grows in proportion to amplitude, its softening
+    with its square, so a stiff Dahl joint deep in pre-sliding, with a stiffness term
+    that cancels its softening, reproduces a velocity-squared loss (damping in
+    proportion to amplitude, frequency put) as closely as ``dahl_quadratic`` does. Such
+    a fit's stiffness term works against the friction's frequency change; that of an
+    amplitude-dependent stiffness the data show adds to it or outgrows it.
+
+    Returns
+    -------
+    dict
+        ``relative_frequency_change`` (model, lowest to highest amplitude),
+        ``friction_relative_frequency_change`` (stiffness term off) and
+        ``shows_signature`` (bool).
+    """
+    velocity = np.array([float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s))])
+    changes = []
+    for params in (fit.params, {**fit.params, "stiffness_shift": 0.0}):
+        _, frequency_hz = model_curves(fit.model, params, velocity, response_order=data.response_order)
+        changes.append(float(frequency_hz[1] / frequency_hz[0] - 1.0))
+    whole, friction = changes
+    return {
+        "relative_frequency_change": whole,
+        "friction_relative_frequency_change": friction,
+        "shows_signature": bool(abs(whole) > abs(friction)),
+    }

@@ -1,0 +1,259 @@
+"""The measured curves of one configuration and their uncertainties: what the averaged-model
+fits (:mod:`workflow.models.averaged_fit`) take.
+
+Input: the rows of ``results/tables/segments.parquet`` of one configuration
+(``configuration``, ``run``, ``velocity_amplitude_in_s``, ``zeta``, ``frequency_hz``,
+``bearing_area_in2``). The scatter is a smooth trend (robust cubic in ``log10 V``) through
+each curve and the robust spread of the segments around it, per amplitude bin, combined
+in quadrature with the averaged models' accuracy (:data:`TOL_LN_ZETA`, :data:`TOL_REL_F`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from workflow.io.recording_time import FILE_NAME_ORDER, run_order
+
+__all__ = [
+    "TOL_LN_ZETA",
+    "TOL_REL_F",
+    "ConfigurationData",
+    "prepare_configuration",
+    "Scatter",
+    "robust_trend",
+    "estimate_scatter",
+    "scatter_of",
+]
+
+
+TOL_LN_ZETA = 0.02
+"""Accuracy of the averaged models in ``ln zeta`` (about 2 %: the largest deviation
+from direct integration of the Dahl oscillator through the slip transition, where a
+10-cycle segment averages over the curvature of the damping curve)."""
+
+
+TOL_REL_F = 1.0e-4
+"""Accuracy of the averaged models in relative frequency (direct integration: a few
+1e-5 away from the transition, 3.6e-4 at its steepest point)."""
+
+
+@dataclass
+class ConfigurationData:
+    """The measured curves of one configuration.
+
+    Attributes
+    ----------
+    name : str
+    velocity_in_s, zeta, frequency_hz : ndarray
+        Per segment: velocity amplitude (in/s), damping ratio, damped frequency (Hz).
+    run_index : ndarray of int
+        0-based run of each segment in run order (``run_names``).
+    run_names : list of str
+        The runs in run order: by recording start when the files give one, else by name.
+    run_order : str
+        Which order ``run_names`` is, in words (:func:`workflow.io.recording_time.run_order`).
+    bearing_area_in2 : float or None
+    response_order : int
+        0, 1, 2: the record was displacement, velocity, acceleration.
+    n_dropped : int
+        Segments dropped because ``zeta <= 0`` or a value was not finite.
+    fit_rms, response_amplitude : ndarray or None
+        Per segment (when the table has them): RMS residual of the ln-envelope line
+        of the log decrement, and the envelope amplitude in the record's unit.
+    anchor_velocity_in_s : float
+        Amplitude the bins are counted from (default: the largest measured).
+    """
+
+    name: str
+    velocity_in_s: np.ndarray
+    zeta: np.ndarray
+    frequency_hz: np.ndarray
+    run_index: np.ndarray
+    run_names: list[str]
+    bearing_area_in2: float | None
+    response_order: int = 2
+    n_dropped: int = 0
+    fit_rms: np.ndarray | None = None
+    response_amplitude: np.ndarray | None = None
+    anchor_velocity_in_s: float = 0.0
+    """Top of the measured amplitudes (default: the largest), in/s: amplitude bins are
+    counted down from it, so that they do not depend on the sensor's position."""
+    run_order: str = FILE_NAME_ORDER
+
+    def __post_init__(self) -> None:
+        if not self.anchor_velocity_in_s > 0:
+            self.anchor_velocity_in_s = float(np.max(self.velocity_in_s)) if self.velocity_in_s.size else 1.0
+
+    @property
+    def n_runs(self) -> int:
+        return len(self.run_names)
+
+    @property
+    def n(self) -> int:
+        return int(self.velocity_in_s.size)
+
+    @property
+    def f_ref(self) -> float:
+        """Reference frequency (median), Hz: relative frequency residuals use it."""
+        return float(np.median(self.frequency_hz))
+
+
+def prepare_configuration(
+    frame: pd.DataFrame, name: str, response_order: int = 2, record_start: Mapping[str, str] | None = None
+) -> ConfigurationData:
+    """Arrays of one configuration from the segments table.
+
+    Rows with non-finite values or ``zeta <= 0`` (a growing envelope) cannot enter a
+    fit in ``ln zeta`` and are dropped (counted in ``n_dropped``). ``record_start``
+    (run name -> ISO 8601 recording start, the runs table's ``record_start``) orders
+    the runs when every run has one (:func:`workflow.io.recording_time.run_order`).
+
+    Examples
+    --------
+    A growing envelope (``zeta <= 0``) cannot enter a fit in ``ln zeta`` and is dropped:
+
+    >>> frame = pd.DataFrame(
+    ...     {
+    ...         "configuration": ["a", "a", "a", "a", "b"],
+    ...         "run": ["r1", "r1", "r2", "r2", "r1"],
+    ...         "velocity_amplitude_in_s": [1.0, 0.5, 1.2, 0.6, 1.0],
+    ...         "zeta": [0.003, 0.002, 0.003, -0.001, 0.002],
+    ...         "frequency_hz": [99.0, 99.5, 99.1, 99.6, 98.0],
+    ...         "bearing_area_in2": 0.5,
+    ...     }
+    ... )
+    >>> data = prepare_configuration(frame, "a")
+    >>> data.n, data.n_dropped, data.run_names, data.run_index.tolist(), data.anchor_velocity_in_s
+    (3, 1, ['r1', 'r2'], [0, 0, 1], 1.2)
+    """
+    rows = frame[frame["configuration"] == name]
+    v = rows["velocity_amplitude_in_s"].to_numpy(float)
+    z = rows["zeta"].to_numpy(float)
+    f = rows["frequency_hz"].to_numpy(float)
+    ok = np.isfinite(v) & np.isfinite(z) & np.isfinite(f) & (v > 0) & (z > 0) & (f > 0)
+    runs = rows["run"].astype(str).to_numpy()
+    run_names, order = run_order(sorted(set(runs[ok])), record_start or {})
+    index = {r: i for i, r in enumerate(run_names)}
+    area = None
+    if "bearing_area_in2" in rows and len(rows):
+        a = rows["bearing_area_in2"].to_numpy(float)
+        a = a[np.isfinite(a)]
+        area = float(a[0]) if a.size else None
+    extra = {}
+    if {"fit_rms", "response_amplitude"} <= set(rows.columns):
+        rms = rows["fit_rms"].to_numpy(float)[ok]
+        amp = rows["response_amplitude"].to_numpy(float)[ok]
+        if np.all(np.isfinite(rms) & (rms > 0) & np.isfinite(amp) & (amp > 0)):
+            extra = {"fit_rms": rms, "response_amplitude": amp}
+    return ConfigurationData(
+        name=name,
+        velocity_in_s=v[ok],
+        zeta=z[ok],
+        frequency_hz=f[ok],
+        run_index=np.array([index[r] for r in runs[ok]], dtype=int),
+        run_names=run_names,
+        bearing_area_in2=area,
+        response_order=response_order,
+        n_dropped=int((~ok).sum()),
+        run_order=order,
+        **extra,
+    )
+
+
+@dataclass
+class Scatter:
+    """Per-segment standard uncertainties of the two curves.
+
+    Attributes
+    ----------
+    ln_zeta, rel_f : ndarray
+        Total standard uncertainty (scatter and model accuracy in quadrature) of
+        ``ln zeta`` and of ``f / f_model - 1``.
+    noise_ln_zeta, noise_rel_f : ndarray
+        The scatter part alone (robust, around the smooth trend).
+    """
+
+    ln_zeta: np.ndarray
+    rel_f: np.ndarray
+    noise_ln_zeta: np.ndarray
+    noise_rel_f: np.ndarray
+
+
+def robust_trend(x: np.ndarray, y: np.ndarray, degree: int, groups: np.ndarray | None = None) -> np.ndarray:
+    """Robust (soft-L1) polynomial trend of ``y`` in ``x``; returns fitted values.
+
+    With ``groups`` (integer labels), each group gets its own constant level on top
+    of the common polynomial.
+    """
+    degree = int(min(degree, max(np.unique(np.round(x, 6)).size - 1, 0)))
+    xc = (x - x.mean()) / (x.std() + 1e-12)
+    design = np.vander(xc, degree + 1)
+    if groups is not None and np.unique(groups).size > 1:
+        labels = np.unique(groups)
+        # one level per group beyond the first (the polynomial's constant is the first's)
+        design = np.hstack([design, (groups[:, None] == labels[None, 1:]).astype(float)])
+    coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+    scale = 1.4826 * np.median(np.abs(y - design @ coef)) + 1e-15
+    from scipy import optimize  # here: the campaign's diagnose job fits nothing
+
+    fit = optimize.least_squares(lambda c: (design @ c - y) / scale, coef, loss="soft_l1")
+    return design @ fit.x
+
+
+def estimate_scatter(
+    velocity_in_s: np.ndarray,
+    values: np.ndarray,
+    *,
+    degree: int = 3,
+    min_bin: int = 12,
+    runs: np.ndarray | None = None,
+) -> np.ndarray:
+    """Robust scatter of a curve around its smooth trend, per segment.
+
+    Parameters
+    ----------
+    velocity_in_s : ndarray
+        Amplitudes, in/s.
+    values : ndarray
+        The curve (``ln zeta``, or relative frequency).
+    degree : int
+        Degree of the trend polynomial in ``log10 V``.
+    min_bin : int
+        Fewest segments per amplitude bin; bins are consecutive in amplitude with
+        about ``max(min_bin, n / 8)`` segments.
+    runs : ndarray of int, optional
+        Run of each segment: each run then gets its own level of the trend, so the
+        scatter is that of the segments within a ring-down. Differences between runs
+        are left to the models and to the run-level tests (a drift with run order is
+        a cause, not noise; pooled, it inflated the scatter that normalises every
+        error and so hid itself).
+
+    Returns
+    -------
+    ndarray
+        1.4826 * median absolute deviation of the residuals in each bin,
+        interpolated in ``log10 V`` to every segment (constant beyond the ends).
+    """
+    x = np.log10(velocity_in_s)
+    resid = values - robust_trend(x, values, degree, groups=runs)
+    order = np.argsort(x)
+    per_bin = max(min_bin, x.size // 8)
+    n_bins = max(1, x.size // per_bin)
+    centres, spreads = [], []
+    for chunk in np.array_split(order, n_bins):
+        r = resid[chunk]
+        centres.append(float(np.median(x[chunk])))
+        spreads.append(1.4826 * float(np.median(np.abs(r - np.median(r)))))
+    spreads = np.maximum(np.array(spreads), 1e-12)
+    return np.interp(x, np.array(centres), spreads)
+
+
+def scatter_of(data: ConfigurationData) -> Scatter:
+    """:class:`Scatter` of a configuration's two curves."""
+    noise_z = estimate_scatter(data.velocity_in_s, np.log(data.zeta), runs=data.run_index)
+    noise_f = estimate_scatter(data.velocity_in_s, data.frequency_hz / data.f_ref - 1.0, runs=data.run_index)
+    return Scatter(np.hypot(noise_z, TOL_LN_ZETA), np.hypot(noise_f, TOL_REL_F), noise_z, noise_f)
