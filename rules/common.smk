@@ -94,17 +94,35 @@ def campaign_inventory():
     return runs, excluded
 
 
-def response_channels():
-    """The response channels' names in the tables (campaign.yaml's ``response``)."""
+def channels_and_modes():
+    """The response channels' names in the tables (campaign.yaml's ``response``), and
+    whether the campaign may have several modes (``modes_hz`` listing several, or auto)."""
     from workflow.io.campaign import SINGLE_CHANNEL_NAME, load_campaign
 
     if USES_DEMO:
-        return (SINGLE_CHANNEL_NAME,)
-    return load_campaign(CAMPAIGN).response.channel_names()
+        return (SINGLE_CHANNEL_NAME,), False
+    campaign = load_campaign(CAMPAIGN)
+    return campaign.response.channel_names(), campaign.auto_modes or len(campaign.mode_requests()) > 1
 
 
 RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
-RESPONSE_CHANNELS = response_channels()
+RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes()
+
+
+def channel_index(channel_key):
+    """The 0-based index of the response channel a ``c00``, ``c01``, ... key names."""
+    return int(channel_key[1:])
+
+
+def mode_channel_diagnoses():
+    """rule diagnose_modes's outputs: every configuration's channels, the first only when
+    the campaign may have more than one mode (its first mode is diagnose_configuration's)."""
+    first = 0 if SEVERAL_MODES else 1
+    return [
+        f"results/interim/diagnosis_modes/{name}/c{index:02d}"
+        for name in CONFIGURATIONS
+        for index in range(first, len(RESPONSE_CHANNELS))
+    ]
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:
@@ -120,6 +138,7 @@ wildcard_constraints:
     configuration="|".join(re.escape(name) for name in CONFIGURATIONS),
     number=r"\d\d",
     group=r"runs\d+",
+    channel_key=r"c\d\d",
 
 
 def configuration_run_files(wildcards):

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from workflow.discovery.campaign import campaign_document, configuration_outcomes, residual_table
 from workflow.discovery.diagnosis_files import read_configuration_diagnosis
+from workflow.discovery.modes import mode_document, with_modes
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json, write_table
 from workflow.io.units import UNIT_SYSTEMS
@@ -17,14 +18,44 @@ from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
 campaign = read_campaign(snakemake.input.campaign_settings)
-outcomes = [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
-diagnoses, skipped = configuration_outcomes(outcomes)
-context = FitContext(outcomes[0].reference_velocity_in_s)
-document = campaign_document(campaign.name, context, diagnoses, skipped)
+
+
+def document_of(outcomes):
+    """The campaign's document from its configurations' outcomes (one mode and channel)."""
+    diagnoses, skipped = configuration_outcomes(outcomes)
+    context = FitContext(outcomes[0].reference_velocity_in_s)
+    return diagnoses, campaign_document(campaign.name, context, diagnoses, skipped)
+
+
+# the first mode on the first channel: the residuals, the figures, the paper's models
+diagnoses, first = document_of(
+    [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
+)
 units = UNIT_SYSTEMS[snakemake.params.units]
 write_table(residual_table(diagnoses), snakemake.output.residuals, unit_system=units)
+# every other (mode, channel): rule diagnose_modes's files, <configuration>/c<channel>/<mode>.npz
+outcomes: dict[tuple[int, int], list] = {(0, 0): None}
+for folder in map(Path, snakemake.input.modes_channels):
+    for path in sorted(folder.glob("*.npz")):
+        outcomes.setdefault((int(path.stem), int(folder.name[1:])), []).append(
+            read_configuration_diagnosis(path)
+        )
+documents = {key: first if key == (0, 0) else document_of(found)[1] for key, found in outcomes.items()}
+modes_hz = sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique()) or [float("nan")]
+channels = snakemake.params.channels
+document = with_modes(
+    [
+        mode_document(
+            float(mode_hz),
+            {channels[c]: documents[(m, c)] for c in range(len(channels)) if (m, c) in documents},
+        )
+        for m, mode_hz in enumerate(modes_hz)
+    ]
+)
 write_json(snakemake.output.diagnosis, document)
 log.info("campaign verdict: %s", document["cause"])
+for entry in document["modes"][1:]:
+    log.info("mode %.6g Hz: %s", entry["mode_hz"], entry["cause"])
 for name, entry in document["configurations"].items():
     log.info(
         "%s: %s (gain ratio %s) - %s", name, entry["cause"], entry["gain"]["ratio"], entry["discrepancy"]
