@@ -196,7 +196,31 @@ def high_rate_hit(root: Path) -> Path:
     return campaign
 
 
+def mat_hit(root: Path) -> Path:
+    """The same hit as :func:`high_rate_hit` stored as one MAT file: time and the three
+    sensors' accelerations (g) as plain variables, ``modes_hz: auto`` and
+    ``response.channels`` naming the three (issue 32's done-when campaign)."""
+    import numpy as np
+    import scipy.io
+
+    sensors = high_rate_hit(root / "sources")
+    columns = {
+        sensor: np.loadtxt(sensors / sensor / "run01.txt", skiprows=4, usecols=2) for sensor in SENSOR_GAINS
+    }
+    campaign = root / "mat_hit"
+    (campaign / "hit").mkdir(parents=True)
+    time_s = np.arange(HIGH_RATE_SAMPLES) / HIGH_RATE_HZ
+    scipy.io.savemat(campaign / "hit" / "run01.mat", {"t": time_s, **columns})
+    (campaign / "campaign.yaml").write_text(
+        "name: one-hit-three-sensors\nmodes_hz: auto\n"
+        f"response: {{quantity: acceleration, unit: g, channels: [{', '.join(SENSOR_GAINS)}]}}\n"
+        'configurations:\n  hit: {files: "hit/*.mat"}\n'
+    )
+    return campaign
+
+
 SCALE_CAMPAIGNS = {
+    "mat_hit": "one hit, three sensors at 12.8 kHz for 5 s in one MAT file, modes_hz: auto",
     "high_rate": "one hit, three sensors at 12.8 kHz for 5 s (three one-run configurations)",
     "runs300": "300 runs (10 x 30)",
     "long": "30 runs of 32768 samples (4 x longer records)",
@@ -209,7 +233,9 @@ def scale_campaigns(root: Path, names: list[str]) -> dict[str, Path]:
 
     campaigns = {}
     for name in names:
-        if name == "high_rate":
+        if name == "mat_hit":
+            campaigns[name] = mat_hit(root)
+        elif name == "high_rate":
             campaigns[name] = high_rate_hit(root)
         elif name == "runs300":
             campaigns[name] = root / "runs300"

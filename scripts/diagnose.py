@@ -41,21 +41,24 @@ for folder in map(Path, snakemake.input.modes_channels):
             read_configuration_diagnosis(path)
         )
 documents = {key: first if key == (0, 0) else document_of(found)[1] for key, found in outcomes.items()}
-modes_hz = sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique()) or [float("nan")]
+# no mode found anywhere: one entry, of no frequency, with the configurations skipped
+modes_hz = [
+    float(hz) for hz in sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique())
+]
 channels = snakemake.params.channels
 document = with_modes(
     [
         mode_document(
-            float(mode_hz),
+            mode_hz,
             {channels[c]: documents[(m, c)] for c in range(len(channels)) if (m, c) in documents},
         )
-        for m, mode_hz in enumerate(modes_hz)
+        for m, mode_hz in enumerate(modes_hz or [None])
     ]
 )
 write_json(snakemake.output.diagnosis, document)
 log.info("campaign verdict: %s", document["cause"])
 for entry in document["modes"][1:]:
-    log.info("mode %.6g Hz: %s", entry["mode_hz"], entry["cause"])
+    log.info("mode %s Hz: %s", entry["mode_hz"], entry["cause"])
 for name, entry in document["configurations"].items():
     log.info(
         "%s: %s (gain ratio %s) - %s", name, entry["cause"], entry["gain"]["ratio"], entry["discrepancy"]

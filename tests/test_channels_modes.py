@@ -485,3 +485,141 @@ def test_unesp_export_without_window_or_unit_names_the_dwell_line_and_asks_for_t
     record = read_run(folder, "c/run.mat", load_campaign(folder))
     assert record.response_unit == "m/s" and record.sample_rate_hz == 1024.0  # from the file
     assert_dwell_line_named_then_mode_found(folder, yaml_text)
+
+
+# --------------------------------------------------------------------------------------
+# diagnosis.json: modes and channels
+
+
+def entry(cause, confidence, ratio, model="dahl"):
+    """A configuration's entry of a one-channel document (the keys combine_channels reads)."""
+    return {
+        "cause": cause,
+        "confidence": confidence,
+        "gain": {"ratio": ratio},
+        "extended_model": {"model": model},
+    }
+
+
+def test_channels_combine_into_the_cause_most_name_with_the_mean_confidence():
+    from workflow.discovery.modes import combine_channels
+
+    entries = {
+        "acc1": entry("microslip_power_law", {"microslip_power_law": 0.9, "none": 0.1}, 0.4, "iwan"),
+        "acc2": entry("microslip_power_law", {"microslip_power_law": 0.6, "none": 0.4}, 0.7, "iwan_b"),
+        "acc3": entry("none", {"none": 0.8, "microslip_power_law": 0.2}, 1.0),
+    }
+    combined = combine_channels(entries)
+    assert combined["cause"] == "microslip_power_law"
+    # the rest from the channel most confident in that cause
+    assert combined["extended_model"] == {"model": "iwan"} and combined["gain"] == {"ratio": 0.4}
+    assert combined["confidence"] == pytest.approx({"microslip_power_law": 1.7 / 3, "none": 1.3 / 3})
+    assert sum(combined["confidence"].values()) == pytest.approx(1.0)
+    assert combined["channels"]["acc3"] == {
+        "cause": "none",
+        "confidence": entries["acc3"]["confidence"],
+        "gain": {"ratio": 1.0},
+    }
+    assert "2 of 3 channels" in combined["channel_combination"]
+    # one channel: its entry as it is
+    assert combine_channels({"acc1": entries["acc1"]}) is entries["acc1"]
+
+
+def test_modes_document_repeats_the_first_mode_at_the_top():
+    from workflow.discovery.modes import mode_document, with_modes
+
+    def document(cause, confidence, ratio):
+        return {
+            "campaign": "c",
+            "cause": cause,
+            "confidence": confidence,
+            "configurations": {"hit": entry(cause, confidence, ratio)},
+            "skipped_configurations": {},
+        }
+
+    first = document("microslip_power_law", {"microslip_power_law": 1.0}, 0.2)
+    one = mode_document(80.5, {"response": first})
+    assert one == {"mode_hz": 80.5, **first}
+    second = mode_document(
+        297.7,
+        {
+            "a": document("none", {"none": 1.0}, 1.0),
+            "b": document("quadratic_damping", {"quadratic_damping": 0.5, "none": 0.5}, 0.8),
+            "c": document("none", {"none": 0.9, "quadratic_damping": 0.1}, 1.0),
+        },
+    )
+    assert second["cause"] == "none" and second["configurations"]["hit"]["cause"] == "none"
+    assert second["confidence"] == pytest.approx({"none": 0.8, "quadratic_damping": 0.2})
+    whole = with_modes([one, second])
+    assert {key: value for key, value in whole.items() if key != "modes"} == first
+    assert [mode["mode_hz"] for mode in whole["modes"]] == [80.5, 297.7]
+
+
+# --------------------------------------------------------------------------------------
+# The workflow on a hit seen by two sensors, every mode found
+
+
+def two_sensor_campaign(root: Path) -> Path:
+    """Three lab hits, each seen by two accelerometers (acc2 at half acc1's mode-1 shape),
+    written as one ASCII file per hit with the two response columns by name (units in the
+    names, none in campaign.yaml) and ``modes_hz: auto``."""
+    from workflow.lab import virtual_lab as vl
+
+    vl.generate_sensor_campaigns(
+        root / "sensors",
+        {"acc1": 1.0, "acc2": 0.5},
+        seed=4,
+        runs_per_configuration=3,
+        configurations={"c": None},
+    )
+    campaign = root / "campaign"
+    (campaign / "c").mkdir(parents=True)
+    for run in ("run01", "run02", "run03"):
+        one, two = (
+            np.loadtxt(root / "sensors" / s / "c" / f"{run}.txt", skiprows=4) for s in ("acc1", "acc2")
+        )
+        columns = np.column_stack([one[:, :3], two[:, 2]])
+        rows = "\n".join("\t".join(f"{value:.10g}" for value in row) for row in columns)
+        (campaign / "c" / f"{run}.txt").write_text(
+            f"Pre-trigger: 25 samples\nTime (s)\tForce (lbf)\tacc1 (g)\tacc2 (g)\n{rows}\n"
+        )
+    (campaign / "campaign.yaml").write_text(
+        "name: two-sensors\nmodes_hz: auto\nresponse: {quantity: acceleration, channels: [acc1, acc2]}\n"
+        'force: {unit: lbf}\nconfigurations:\n  c: {files: "c/*.txt"}\n'
+    )
+    return campaign
+
+
+def test_workflow_analyses_every_mode_on_every_channel(tmp_path):
+    import json
+
+    import pandas as pd
+    from helpers import CHEAP, run_snakemake
+
+    campaign = two_sensor_campaign(tmp_path)
+    work = tmp_path / "work"
+    done = run_snakemake(work, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    modes = pd.read_parquet(work / "results/tables/modes.parquet")
+    found_hz = sorted(modes["nominal_mode_hz"])
+    assert len(found_hz) >= 2  # the lab's beam rings in its first modes
+    assert found_hz[0] == pytest.approx(126.0, rel=0.03)  # the lab's first mode
+    segments = pd.read_parquet(work / "results/tables/segments.parquet")
+    pairs = set(zip(segments["mode_hz"], segments["channel"]))
+    assert pairs == {(mode_hz, channel) for mode_hz in found_hz for channel in ("acc1", "acc2")}
+    # acc2 sees mode 1 at half acc1's amplitude: the same decay at half the envelope
+    first = segments[segments["mode_hz"] == found_hz[0]].groupby("channel")["response_amplitude"].max()
+    assert first["acc2"] / first["acc1"] == pytest.approx(0.5, rel=0.05)
+    for name in ("damping_fits", "hypotheses", "quality", "damping_curves"):
+        table = pd.read_parquet(work / f"results/tables/{name}.parquet")
+        assert {"mode_hz", "channel"} <= set(table.columns), name
+    fits = pd.read_parquet(work / "results/tables/damping_fits.parquet")
+    assert set(zip(fits["mode_hz"], fits["channel"])) == pairs
+    document = json.loads((work / "results/diagnosis.json").read_text())
+    assert [mode["mode_hz"] for mode in document["modes"]] == pytest.approx(found_hz)
+    for mode in document["modes"]:
+        configuration = mode["configurations"]["c"]
+        assert set(configuration["channels"]) == {"acc1", "acc2"}
+        assert configuration["cause"] in {c["cause"] for c in configuration["channels"].values()}
+    top = {key: value for key, value in document.items() if key != "modes"}
+    assert top == {key: value for key, value in document["modes"][0].items() if key != "mode_hz"}

@@ -87,10 +87,11 @@ def combine_channels(entries: Mapping[str, dict]) -> dict:
     return combined
 
 
-def mode_document(mode_hz: float, documents: Mapping[str, dict]) -> dict:
+def mode_document(mode_hz: float | None, documents: Mapping[str, dict]) -> dict:
     """The ``modes`` entry of one mode from the campaign documents of its channels
     (channel -> :func:`~workflow.discovery.campaign.campaign_document`), in campaign.yaml's
-    channel order; with one channel that document with ``mode_hz``."""
+    channel order; with one channel that document with ``mode_hz`` (None when no
+    configuration has a mode: every configuration is then skipped)."""
     first = next(iter(documents.values()))
     if len(documents) == 1:
         return {"mode_hz": mode_hz, **first}
