@@ -185,6 +185,12 @@ def backbone_figures():
     return [f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS]
 
 
+def modes_channels_figures():
+    """The figure of every mode and channel, for a campaign that may have several."""
+    several = SEVERAL_MODES or len(RESPONSE_CHANNELS) > 1
+    return ["results/figures/modes_channels.png"] if several else []
+
+
 def measured_outputs():
     """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
@@ -198,6 +204,7 @@ def measured_outputs():
         *damping_figures(),
         "results/figures/fig13_area_fits.png",
         *backbone_figures(),
+        *modes_channels_figures(),
     ]
 
 

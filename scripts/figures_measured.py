@@ -100,3 +100,15 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     )
     figures.save(figure, path)
     log.info("%s: backbone of %d segments plotted", configuration, len(mine))
+
+# every mode on every channel (campaigns with several)
+all_segments = read_table(snakemake.input.segments)
+for path in snakemake.output.modes_channels:
+    figure = figures.modes_and_channels(
+        all_segments,
+        title=f"{campaign.name}: damping and frequency of every mode, per channel",
+        channels=snakemake.params.channels,
+        units=units,
+    )
+    figures.save(figure, path)
+    log.info("every mode and channel: %d segments plotted", len(all_segments))

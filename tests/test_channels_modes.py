@@ -623,3 +623,36 @@ def test_workflow_analyses_every_mode_on_every_channel(tmp_path):
         assert configuration["cause"] in {c["cause"] for c in configuration["channels"].values()}
     top = {key: value for key, value in document.items() if key != "modes"}
     assert top == {key: value for key, value in document["modes"][0].items() if key != "mode_hz"}
+
+
+def test_verdict_page_has_a_section_per_mode_with_each_channel_escaped():
+    from workflow.outputs.report import modes_section
+
+    channel = "<b>acc1</b> & co"
+    configuration = {
+        "cause": "none",
+        "confidence": {"none": 1.0},
+        "gain": {"ratio": 1.0},
+        "channels": {channel: {"cause": "none", "confidence": {"none": 1.0}, "gain": {"ratio": 1.0}}},
+    }
+    document = {
+        "modes": [
+            {
+                "mode_hz": 80.5,
+                "cause": "none",
+                "confidence": {"none": 1.0},
+                "configurations": {"hit": configuration},
+            },
+            {
+                "mode_hz": 297.7,
+                "cause": "none",
+                "confidence": {"none": 1.0},
+                "configurations": {"hit": configuration},
+            },
+        ]
+    }
+    html = "".join(modes_section(document))
+    assert "mode 80.5 Hz" in html and "mode 297.7 Hz" in html
+    assert "&lt;b&gt;acc1&lt;/b&gt; &amp; co" in html and channel not in html
+    one = {"modes": [{"mode_hz": 80.5, "cause": "none", "configurations": {"hit": {"cause": "none"}}}]}
+    assert modes_section(one) == []
