@@ -132,7 +132,7 @@ def run_order_trend(
     damping set by its lowest-amplitude segments (``ln_zeta_calibrated`` and
     ``calibration`` when present, as for a held-out run; else ``ln_zeta_shared``, else
     ``ln_zeta``). Of that residual the test takes the amount of the shape a change of the
-    joint's friction limit leaves (``-ln_zeta_slope``, :func:`damping_curve_slope`; a
+    joint's friction limit leaves (``-ln_zeta_slope``, :func:`~workflow.models.averaged_fit.damping_curve_slope`; a
     constant shape without it, or where the model's damping changes by less than its
     accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares
     projection over the run's other segments with every quarter decade of amplitude
