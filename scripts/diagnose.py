@@ -12,6 +12,7 @@ from workflow.discovery.modes import mode_document, with_modes
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json, write_table
 from workflow.io.units import UNIT_SYSTEMS
+from workflow.measured.runs import with_mode_and_channel
 from workflow.models.averaged_fit import FitContext
 from workflow.outputs import discovery_figures, figures
 from workflow.runtime.logs import setup_script_logging
@@ -32,7 +33,13 @@ diagnoses, first = document_of(
     [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
 )
 units = UNIT_SYSTEMS[snakemake.params.units]
-write_table(residual_table(diagnoses), snakemake.output.residuals, unit_system=units)
+# no mode found anywhere: one entry, of no frequency, with the configurations skipped
+modes_hz = [
+    float(hz) for hz in sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique())
+]
+channels = snakemake.params.channels
+residuals = with_mode_and_channel(residual_table(diagnoses), modes_hz[0] if modes_hz else None, channels[0])
+write_table(residuals, snakemake.output.residuals, unit_system=units)
 # every other (mode, channel): rule diagnose_modes's files, <configuration>/c<channel>/<mode>.npz
 outcomes: dict[tuple[int, int], list] = {(0, 0): None}
 for folder in map(Path, snakemake.input.modes_channels):
@@ -41,11 +48,6 @@ for folder in map(Path, snakemake.input.modes_channels):
             read_configuration_diagnosis(path)
         )
 documents = {key: first if key == (0, 0) else document_of(found)[1] for key, found in outcomes.items()}
-# no mode found anywhere: one entry, of no frequency, with the configurations skipped
-modes_hz = [
-    float(hz) for hz in sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique())
-]
-channels = snakemake.params.channels
 document = with_modes(
     [
         mode_document(

@@ -57,6 +57,7 @@ __all__ = [
     "nominal_modes_hz",
     "with_nominal_mode",
     "first_mode_and_channel",
+    "with_mode_and_channel",
     "first_mode_rows",
     "collect_tables",
     "fit_damping_curves",
@@ -672,6 +673,16 @@ def first_mode_and_channel(table: pd.DataFrame, channel: str) -> pd.DataFrame:
     return table
 
 
+def with_mode_and_channel(table: pd.DataFrame, mode_hz: float | None, channel: str) -> pd.DataFrame:
+    """The table of one mode and channel with ``mode_hz`` and ``channel`` columns right
+    after ``configuration`` (or first): the tables every campaign's outputs share."""
+    table = table.copy()
+    at = table.columns.get_loc("configuration") + 1 if "configuration" in table else 0
+    table.insert(at, "mode_hz", np.nan if mode_hz is None else float(mode_hz))
+    table.insert(at + 1, "channel", channel)
+    return table
+
+
 def first_mode_rows(modes: pd.DataFrame) -> pd.DataFrame:
     """The modes table's rows of the first mode (and of configurations where none was found)."""
     first_hz = modes["nominal_mode_hz"].min()
@@ -783,11 +794,7 @@ def fit_damping_curves(
             part, areas_in2, settings, grid_points=grid_points, area_amplitudes=area_amplitudes
         )
         for name, table in tables.items():
-            table = table.copy()
-            at = 1 if "configuration" in table else 0
-            table.insert(at, "mode_hz", float(mode_hz))
-            table.insert(at + 1, "channel", str(channel))
-            parts.setdefault(name, []).append(table)
+            parts.setdefault(name, []).append(with_mode_and_channel(table, mode_hz, str(channel)))
     return {name: pd.concat(tables, ignore_index=True) for name, tables in parts.items()}
 
 
