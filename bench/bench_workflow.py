@@ -9,7 +9,8 @@ first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run w
 nothing to do, and a run after changing ``analysis.segment_cycles``. ``--scale``
 adds, each repeated as often and cold: one impact hit recorded by three sensors at
 12.8 kHz for 5 s (64000 samples a channel, analysed as three one-run
-configurations), a 300-run campaign (10 configurations x 30 runs) for the growth with
+configurations; ``mat_hit``: the same hit as one MAT file of time and three
+accelerations with ``modes_hz: auto``, every mode on every channel), a 300-run campaign (10 configurations x 30 runs) for the growth with
 runs, and the demo's 30 runs with records 4 times as long (32768 samples) for the
 growth with record length; ``--only`` runs just the named ones of these (cold, no demo).
 Per rule: wall time from Snakemake's

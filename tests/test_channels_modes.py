@@ -656,3 +656,23 @@ def test_verdict_page_has_a_section_per_mode_with_each_channel_escaped():
     assert "&lt;b&gt;acc1&lt;/b&gt; &amp; co" in html and channel not in html
     one = {"modes": [{"mode_hz": 80.5, "cause": "none", "configurations": {"hit": {"cause": "none"}}}]}
     assert modes_section(one) == []
+
+
+def test_listed_modes_are_found_each_in_its_band_and_auto_finds_both(tmp_path):
+    sensors = three_sensors()
+    writer = lambda p: write_plain_mat(p, t=np.arange(N) * DT_S, **sensors)  # noqa: E731
+    listed = yaml_with(
+        "{quantity: acceleration, unit: g, channels: [acc1, acc2, acc3]}",
+        "modes_hz: [80, 300]\nbands_hz: [[70, 90], [280, 310]]\n",
+    )
+    folder = write_campaign(tmp_path, listed, "run.mat", writer)
+    found = identify(folder)
+    assert [mode.band_hz for mode in found.modes] == [(70.0, 90.0), (280.0, 310.0)]
+    # a 1.6 s record: 0.625 Hz bins; the peak is refined to a fraction of one
+    assert [mode.mode_hz for mode in found.modes] == pytest.approx([80.5, 297.7], abs=0.3)
+    (folder / "campaign.yaml").write_text(
+        listed.replace("modes_hz: [80, 300]\nbands_hz: [[70, 90], [280, 310]]\n", "modes_hz: auto\n")
+    )
+    found = identify(folder)
+    assert [mode.mode_hz for mode in found.modes] == pytest.approx([80.5, 297.7], abs=0.3)
+    assert found.left_out == ()
