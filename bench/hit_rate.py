@@ -1,19 +1,28 @@
-"""Hit rate of the model discovery over hidden-effect campaigns and seeds.
+"""Hit rate and calibration of the model discovery over hidden-effect campaigns and seeds.
 
-For every cause of the vocabulary, ``--seeds`` campaigns from the virtual lab (effect
-size and bearing area drawn per seed, see workflow/lab/hidden_effects.py) go through the
-measured-data chain and the diagnosis; the script prints the confusion table (rows:
-hidden cause, columns: verdict, as rates), the hit rate per cause, the gain ratios, and
-the runtime. Runs differ from run to run as in a real lab (the lab's default
-``LabSettings``); ``--no-variability`` makes every run of a campaign the same beam, and
-``--time-domain`` integrates the joint in time instead of the averaged model (the
-causes it can hide: none, microslip_power_law, run_drift, unknown).
+For every case of the vocabulary (the six causes and the two combinations: micro-slip
+with a velocity-squared loss, micro-slip with a hardening cubic spring), ``--seeds``
+campaigns from the virtual lab (effect size and bearing area drawn per seed, see
+workflow/lab/hidden_effects.py) go through the measured-data chain and the diagnosis; the
+script prints the confusion table (rows: hidden cause, columns: verdict, as rates), the
+hit rate per cause (right: the verdict's set of causes is the truth's; also how often its
+first cause is one of the truth's), the gain ratios, a reliability table (each verdict's
+confidence, binned, against the fraction of those verdicts that were right) with the
+Brier score, and the runtime per campaign. Runs differ from run to run as in a real lab
+(the lab's default ``LabSettings``); ``--no-variability`` makes every run of a campaign
+the same beam, ``--time-domain`` integrates every joint in time instead of the averaged
+model (the causes it can hide: none, microslip_power_law, run_drift, unknown and the two
+combinations, which are always integrated in time), and ``--random-placement`` records
+each campaign with a sensor placed at random on the beam (mode 1 at x0.05 to x8 of the
+reference accelerometer against the same noise floor, log-uniform; the other modes at
+their own shape values there).
 
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
 
 ``--keep DIR`` stores what each campaign's decision was taken on (the data, every model's
 residuals and held-out residuals); ``--redecide DIR`` takes those decisions again with
-today's decision rule in seconds, without refitting: the fits do not depend on the rule.
+today's decision rule in seconds, without refitting: the fits do not depend on the rule
+(the confidence, from resampled decisions, is not re-decided).
 """
 
 from __future__ import annotations
@@ -34,8 +43,15 @@ sys.path.insert(0, str(ROOT))
 from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
 from workflow.discovery.decision import evaluate_decision  # noqa: E402
 from workflow.discovery.misfit import EXPLAINS_LIMIT  # noqa: E402
-from workflow.lab.hidden_effects import CASES, campaign_segments, generate_case  # noqa: E402
-from workflow.lab.virtual_lab import TIME_DOMAIN_EFFECTS, LabSettings  # noqa: E402
+from workflow.lab.hidden_effects import (  # noqa: E402
+    CASES,
+    campaign_segments,
+    case_causes,
+    draw_mode1_gain,
+    generate_case,
+    time_domain_can_hide,
+)
+from workflow.lab.virtual_lab import LabSettings  # noqa: E402
 
 VERDICTS = [
     "none",
@@ -54,21 +70,50 @@ def lab_settings(variability: bool) -> LabSettings:
     return LabSettings(frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
 
 
+def verdict_causes(configuration: dict) -> list[str]:
+    """The configuration's causes: ``causes`` (the output contract), else its one ``cause``."""
+    return list(configuration.get("causes") or [configuration["cause"]])
+
+
+def verdict_confidence(configuration: dict) -> float | None:
+    """The confidence of the configuration's verdict: its share of the resamples.
+
+    ``confidence`` holds one entry per verdict; a combination's entry is keyed by its
+    causes joined with ``+`` (or by its first cause).
+    """
+    shares = configuration.get("confidence") or {}
+    causes = verdict_causes(configuration)
+    for key in ("+".join(causes), causes[0]):
+        if key in shares:
+            return float(shares[key])
+    return None
+
+
 def _one(args):
-    cause, seed, work, variability, integrator, keep = args
-    start = time.perf_counter()
+    cause, seed, work, variability, integrator, placement, keep = args
+    start, start_cpu = time.perf_counter(), time.process_time()
+    record = {"cause": cause, "seed": seed, "verdict": None, "causes": [], "confidence": None, "ratio": None}
     try:
+        gain = draw_mode1_gain(cause, seed) if placement else 1.0
         case, out = generate_case(
-            cause, seed, Path(work), settings=lab_settings(variability), integrator=integrator
+            cause,
+            seed,
+            Path(work),
+            settings=lab_settings(variability),
+            integrator=integrator,
+            mode1_gain=gain,
         )
+        generated = time.perf_counter()
         segments = campaign_segments(out)
         context, details, skipped = diagnose_configurations(segments)
         doc = campaign_document(out.name, context, details, skipped)
         conf = next(iter(doc["configurations"].values()), None)
-        ratio = conf["gain"]["ratio"] if conf else None
-        verdict = doc["cause"] if conf else "no data"
+        record["verdict"] = doc["cause"] if conf else "no data"
         if conf:  # the hidden cause's own candidate, whatever the verdict
-            own = conf["evidence"]["candidates"].get(cause, {}).get("ratio_to_baseline")
+            record.update(
+                causes=verdict_causes(conf), confidence=verdict_confidence(conf), ratio=conf["gain"]["ratio"]
+            )
+            own = conf["evidence"]["candidates"].get(case_causes(cause)[-1], {}).get("ratio_to_baseline")
             case = {
                 **case,
                 "true_candidate_ratio": own,
@@ -76,16 +121,20 @@ def _one(args):
                 "explains_data": conf["explains_data"],
                 "extended_model": conf["extended_model"]["model"],
             }
-            if integrator == "averaged" and (cause in TRUTH_CAUSES or cause == "run_drift"):
-                v = segments["velocity_amplitude_in_s"].to_numpy(float)
-                v = v[np.isfinite(v) & (v > 0)]
-                scatter = conf["evidence"]["scatter"]
-                measured = (
-                    case,
-                    (float(v.min()), float(v.max())),
-                    scatter["ln_zeta_median"],
-                    scatter["relative_frequency_median"],
-                )
+            v = segments["velocity_amplitude_in_s"].to_numpy(float)
+            v = v[np.isfinite(v) & (v > 0)]
+            scatter = conf["evidence"]["scatter"]
+            # the truth is against the reference accelerometer's velocity amplitude
+            ratio = case["sensors"][0]["mode1_ratio"]
+            measured = (
+                case,
+                (float(v.min()) / ratio, float(v.max()) / ratio),
+                scatter["ln_zeta_median"],
+                scatter["relative_frequency_median"],
+            )
+            if len(case_causes(cause)) > 1:
+                case["truth_added_term"] = round(added_term_on_truth(*measured), 1)
+            elif case["integrator"] == "averaged" and (cause in TRUTH_CAUSES or cause == "run_drift"):
                 if cause == "run_drift":
                     case["truth_drift_change"] = round(drift_change_on_truth(*measured), 2)
                 else:
@@ -93,9 +142,14 @@ def _one(args):
                     case["truth_baseline_misfit"] = round(max(worst_zeta, worst_f), 2)
         if keep and details:
             keep_evidence(Path(keep) / f"{cause}_{seed}.pkl", case, next(iter(details.values())))
+        record["generate_s"] = generated - start
     except Exception as error:  # report, do not hide
-        case, verdict, ratio = {}, f"error: {error}", None
-    return cause, seed, verdict, ratio, case, time.perf_counter() - start
+        case = {}
+        record["verdict"] = f"error: {error}"
+    record["case"] = case
+    record["seconds"] = time.perf_counter() - start
+    record["cpu_s"] = time.process_time() - start_cpu
+    return record
 
 
 def keep_evidence(path: Path, case: dict, diagnosis) -> None:
@@ -112,7 +166,7 @@ def keep_evidence(path: Path, case: dict, diagnosis) -> None:
         pickle.dump(stored, f)
 
 
-def redecide(path: Path) -> tuple:
+def redecide(path: Path) -> dict:
     """A stored campaign's verdict and gain ratio under today's decision rule (same fits)."""
     with open(path, "rb") as f:
         stored = pickle.load(f)
@@ -123,7 +177,16 @@ def redecide(path: Path) -> tuple:
     )
     # the candidate's own ratio: a micro-slip verdict's threshold refinement is not re-fitted
     ratio = result["candidates"].get(result["cause"], {}).get("ratio_to_baseline")
-    return cause, int(seed), result["cause"], ratio, stored["case"], time.perf_counter() - start
+    return {
+        "cause": cause,
+        "seed": int(seed),
+        "verdict": result["cause"],
+        "causes": list(result.get("causes") or [result["cause"]]),
+        "confidence": None,
+        "ratio": ratio,
+        "case": stored["case"],
+        "seconds": time.perf_counter() - start,
+    }
 
 
 TRUTH_CAUSES = ("microslip_power_law", "quadratic_damping", "stiffness_nonlinearity")
@@ -193,6 +256,31 @@ def drift_change_on_truth(
     return float(max(change_zeta, change_f))
 
 
+def added_term_on_truth(
+    case: dict, velocity_range_in_s: tuple[float, float], scatter_ln_zeta: float, scatter_rel_f: float
+) -> float:
+    """Is a combination's added term in the data? The truth with and without it.
+
+    The lab's nominal beam with the case's joint, with and without its added effect,
+    over the measured amplitude range: the largest change of ``ln zeta`` or of the
+    relative frequency, in measured scatters.
+    """
+    from workflow.lab import virtual_lab as vl
+
+    lab = vl.LabSettings()
+    v = np.geomspace(*velocity_range_in_s, 60)
+    setup, curves = vl.setup_configuration("x", case["bearing_area_in2"], lab)
+    alone, both = (
+        vl.truth_curves(
+            setup, vl.mode_table(setup, curves, lab, case["joint"], effect, case["effect_size"]), v
+        )
+        for effect in (None, case["effect"])
+    )
+    change_zeta = np.max(np.abs(np.log(both[0] / alone[0]))) / scatter_ln_zeta
+    change_f = np.max(np.abs(both[1] / alone[1] - 1.0)) / scatter_rel_f
+    return float(max(change_zeta, change_f))
+
+
 def visibility() -> None:
     """Where are the hidden effects visible? Baselines fitted to the lab's noise-free truth.
 
@@ -246,7 +334,13 @@ def main() -> None:
     parser.add_argument(
         "--time-domain",
         action="store_true",
-        help="integrate the joint in time (causes none, microslip_power_law, run_drift, unknown)",
+        help="integrate every joint in time (causes none, microslip_power_law, run_drift, unknown, "
+        "and the combinations)",
+    )
+    parser.add_argument(
+        "--random-placement",
+        action="store_true",
+        help="each campaign recorded by a sensor placed at random (mode 1 x0.05 to x8 of the accelerometer)",
     )
     parser.add_argument(
         "--visibility",
@@ -267,23 +361,23 @@ def main() -> None:
         start = time.perf_counter()
         stored = sorted(Path(args.redecide).glob("*.pkl"))
         results = [redecide(p) for p in stored]
-        args.causes = [c for c in CASES if any(r[0] == c for r in results)]
-        seeds = sorted({r[1] for r in results})
+        args.causes = [c for c in CASES if any(r["cause"] == c for r in results)]
+        seeds = sorted({r["seed"] for r in results})
         print(
             f"re-decided {len(results)} stored campaigns (seeds {seeds[0]}-{seeds[-1]}) from {args.redecide} "
             f"in {time.perf_counter() - start:.1f} s; gain ratios are the candidates' own\n"
         )
         report(results, args.causes)
         return
-    integrator = "time_domain" if args.time_domain else "averaged"
-    hideable = [c for c in CASES if not args.time_domain or CASES[c][1] in TIME_DOMAIN_EFFECTS]
+    integrator = "time_domain" if args.time_domain else None
+    hideable = [c for c in CASES if not args.time_domain or time_domain_can_hide(c)]
     if args.causes is None:
         args.causes = hideable
     elif set(args.causes) - set(hideable):
-        parser.error(f"the {integrator} path cannot hide {sorted(set(args.causes) - set(hideable))}")
+        parser.error(f"the time-domain path cannot hide {sorted(set(args.causes) - set(hideable))}")
     with tempfile.TemporaryDirectory() as work:
         tasks = [
-            (c, s, work, not args.no_variability, integrator, args.keep)
+            (c, s, work, not args.no_variability, integrator, args.random_placement, args.keep)
             for c in args.causes
             for s in range(args.first_seed, args.first_seed + args.seeds)
         ]
@@ -291,55 +385,150 @@ def main() -> None:
         with ProcessPoolExecutor(args.jobs) as pool:
             results = list(pool.map(_one, tasks))
         wall = time.perf_counter() - start
+    seconds = np.array([r["seconds"] for r in results])
+    cpu = np.array([r["cpu_s"] for r in results])
     print(
-        f"run-to-run variability {'off' if args.no_variability else 'on'}, {integrator} integrator; "
-        f"{len(results)} campaigns, {args.seeds} seeds per cause, wall {wall:.0f} s, "
-        f"mean {sum(r[5] for r in results) / len(results):.1f} s per campaign\n"
+        f"run-to-run variability {'off' if args.no_variability else 'on'}, "
+        f"{'time-domain' if args.time_domain else 'averaged (combinations: time-domain)'} integrator, "
+        f"sensor {'placed at random (mode 1 x0.05-x8)' if args.random_placement else 'at the accelerometer'}; "
+        f"{len(results)} campaigns, {args.seeds} seeds per cause, {args.jobs} jobs, wall {wall:.0f} s; "
+        f"per campaign (one process): wall median {np.median(seconds):.1f} s, max {seconds.max():.1f} s; "
+        f"CPU median {np.median(cpu):.1f} s, max {cpu.max():.1f} s, total {cpu.sum():.0f} s\n"
     )
     report(results, args.causes)
+    print("\nseconds per campaign (one process), median: wall to generate / wall in all / CPU in all")
+    for cause in args.causes:
+        rows = [r for r in results if r["cause"] == cause and "generate_s" in r]
+        if rows:
+            print(
+                f"  {cause:44s} {np.median([r['generate_s'] for r in rows]):5.1f} / "
+                f"{np.median([r['seconds'] for r in rows]):5.1f} / {np.median([r['cpu_s'] for r in rows]):5.1f}"
+            )
 
 
-def report(results: list[tuple], causes: list[str]) -> None:
-    """Confusion table, gain ratios, explains_data, hit rate where the effect is in the data, misses."""
-    header = "hidden cause".ljust(24) + "".join(v[:12].rjust(13) for v in VERDICTS) + "   other  hit"
+def is_right(record: dict) -> bool:
+    """The verdict's set of causes is the hidden one's."""
+    return set(record["causes"]) == set(case_causes(record["cause"]))
+
+
+def first_cause_right(record: dict) -> bool:
+    """The verdict's first cause is one of the hidden ones."""
+    return bool(record["causes"]) and record["causes"][0] in case_causes(record["cause"])
+
+
+SHORT_NAMES = {"microslip_power_law": "micro", "quadratic_damping": "quad", "stiffness_nonlinearity": "stiff"}
+
+
+def short_label(label: str) -> str:
+    """A verdict's column heading: a combination's causes shortened, e.g. ``micro+quad``."""
+    if "+" not in label:
+        return label[:12]
+    return "+".join(SHORT_NAMES.get(c, c) for c in label.split("+"))
+
+
+def verdict_label(record: dict) -> str:
+    return "+".join(record["causes"]) if record["causes"] else str(record["verdict"])
+
+
+RELIABILITY_BINS = (0.0, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.0)
+"""Confidence bin edges of the reliability table (the last bin holds 0.95-1.00)."""
+
+
+def reliability(results: list[dict]) -> tuple[list[tuple], float, int]:
+    """Per confidence bin: (low, high, count, mean confidence, fraction right); the Brier
+    score of the verdicts (mean of ``(confidence - right)^2``) and how many verdicts had
+    a confidence."""
+    rated = [(r["confidence"], is_right(r)) for r in results if r["confidence"] is not None]
+    rows = []
+    edges = RELIABILITY_BINS
+    for i, (low, high) in enumerate(zip(edges[:-1], edges[1:])):
+        last = i == len(edges) - 2
+        inside = [(p, ok) for p, ok in rated if low <= p < high or (last and p == high)]
+        if inside:
+            p, ok = np.array(inside, dtype=float).T
+            rows.append((low, high, len(inside), float(p.mean()), float(ok.mean())))
+        else:
+            rows.append((low, high, 0, float("nan"), float("nan")))
+    brier = float(np.mean([(p - ok) ** 2 for p, ok in rated])) if rated else float("nan")
+    return rows, brier, len(rated)
+
+
+def report(results: list[dict], causes: list[str]) -> None:
+    """Confusion table, hit rates, gain ratios, explains_data, reliability, visibility, misses."""
+    labels = VERDICTS + [c for c in causes if "+" in c]
+    width = max(len(c) for c in causes) + 2
+    header = (
+        "hidden cause".ljust(width)
+        + "".join(short_label(v).rjust(13) for v in labels)
+        + "   other  hit  first"
+    )
     print(header)
     for cause in causes:
-        rows = [r for r in results if r[0] == cause]
+        rows = [r for r in results if r["cause"] == cause]
         n = len(rows)
-        counts = [sum(r[2] == v for r in rows) / n for v in VERDICTS]
-        other = sum(r[2] not in VERDICTS for r in rows) / n
-        hit = sum(r[2] == cause for r in rows) / n
-        print(cause.ljust(24) + "".join(f"{c:13.2f}" for c in counts) + f"{other:8.2f}{hit:5.2f}")
+        counts = [sum(verdict_label(r) == v for r in rows) / n for v in labels]
+        other = sum(verdict_label(r) not in labels for r in rows) / n
+        hit = sum(is_right(r) for r in rows) / n
+        first = sum(first_cause_right(r) for r in rows) / n
+        print(
+            cause.ljust(width) + "".join(f"{c:13.2f}" for c in counts) + f"{other:8.2f}{hit:5.2f}{first:7.2f}"
+        )
     print("\ngain ratio (extended / baseline held-out error) when the cause was named:")
     for cause in causes:
-        ratios = [r[3] for r in results if r[0] == cause and r[2] == cause and r[3] is not None]
+        ratios = [
+            r["ratio"] for r in results if r["cause"] == cause and is_right(r) and r["ratio"] is not None
+        ]
         if ratios:
             print(
-                f"  {cause:24s} median {sorted(ratios)[len(ratios) // 2]:.3f}  "
+                f"  {cause:{width}s} median {sorted(ratios)[len(ratios) // 2]:.3f}  "
                 f"max {max(ratios):.3f}  (n={len(ratios)})"
             )
     print("\nexplains_data (the extended model within 2 scatters everywhere) when the cause was named:")
     for cause in causes:
-        named = [r for r in results if r[0] == cause and r[2] == cause]
+        named = [r for r in results if r["cause"] == cause and is_right(r)]
         if named:
-            explained = sum(bool(r[4].get("explains_data")) for r in named)
-            print(f"  {cause:24s} {explained / len(named):.2f}  (n={len(named)})")
+            explained = sum(bool(r["case"].get("explains_data")) for r in named)
+            print(f"  {cause:{width}s} {explained / len(named):.2f}  (n={len(named)})")
+    rows, brier, n_rated = reliability([r for r in results if r["cause"] in causes])
+    print(
+        f"\nreliability: the verdict's confidence against the fraction of verdicts right "
+        f"({n_rated} of {len(results)} verdicts carry a confidence)"
+    )
+    print("  confidence     n   mean conf   right")
+    for low, high, n, mean, right in rows:
+        print(f"  {low:.2f}-{high:.2f} {n:5d} {mean:11.3f} {right:7.3f}")
+    print(f"  Brier score (mean of (confidence - right)^2): {brier:.4f}")
     print(
         "\nwhere the effect is in the data (the best baseline fitted to the case's noise-free truth "
         f"misses it by more than {EXPLAINS_LIMIT:g} scatters somewhere; run drift: its first and last "
-        f"runs' noise-free curves differ by more than {EXPLAINS_LIMIT:g} scatters somewhere):"
+        f"runs' noise-free curves differ by more than {EXPLAINS_LIMIT:g} scatters somewhere; a "
+        f"combination: its added term changes the noise-free curves by more than {EXPLAINS_LIMIT:g} scatters):"
     )
     for cause in causes:
-        key = "truth_drift_change" if cause == "run_drift" else "truth_baseline_misfit"
-        rows = [r for r in results if r[0] == cause and key in r[4]]
-        visible = [r for r in rows if r[4][key] > EXPLAINS_LIMIT]
+        key = (
+            "truth_added_term"
+            if "+" in cause
+            else "truth_drift_change"
+            if cause == "run_drift"
+            else "truth_baseline_misfit"
+        )
+        rows = [r for r in results if r["cause"] == cause and key in r["case"]]
+        visible = [r for r in rows if r["case"][key] > EXPLAINS_LIMIT]
         if rows:
-            hit = sum(r[2] == cause for r in visible) / len(visible) if visible else float("nan")
-            print(f"  {cause:24s} in the data {len(visible)}/{len(rows)}, hit rate there {hit:.2f}")
+            hit = sum(is_right(r) for r in visible) / len(visible) if visible else float("nan")
+            smallest = min(r["case"][key] for r in rows)
+            print(
+                f"  {cause:{width}s} in the data {len(visible)}/{len(rows)} (smallest {smallest:g} scatters), "
+                f"hit rate there {hit:.2f}"
+            )
     print("\nmisses:")
     for r in results:
-        if r[2] != r[0]:
-            print(f"  {r[0]:24s} seed {r[1]:3d} -> {r[2]}  case {r[4]}")
+        if not is_right(r):
+            confidence = "n/a" if r["confidence"] is None else f"{r['confidence']:.2f}"
+            print(
+                f"  {r['cause']:{width}s} seed {r['seed']:3d} -> {verdict_label(r)} (confidence {confidence})"
+                f"  case {r['case']}"
+            )
 
 
 if __name__ == "__main__":

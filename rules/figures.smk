@@ -13,6 +13,7 @@ rule figures_measured:
         runs_table="results/tables/runs.parquet",
         modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
+        campaign_yaml=campaign_yaml,
     output:
         time_history=report(
             "results/figures/fig09_time_history.png",
@@ -71,7 +72,6 @@ rule figures_measured:
     params:
         units=SETTINGS.units,
         configurations=CONFIGURATIONS,
-        campaign=str(CAMPAIGN),
         decay=asdict(SETTINGS.analysis.decay()),
         channels=list(RESPONSE_CHANNELS),
     script:

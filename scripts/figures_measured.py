@@ -15,11 +15,12 @@ from workflow.io.units import UNIT_SYSTEMS
 from workflow.measured import decay
 from workflow.measured.runs import analysis_window, first_mode_and_channel, first_mode_rows
 from workflow.outputs import figures
+from workflow.outputs.escape import plot_text
 from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_measured")
 units = UNIT_SYSTEMS[snakemake.params.units]
-campaign_dir = Path(snakemake.params.campaign)
+campaign_dir = Path(snakemake.input.campaign_yaml).parent
 campaign = read_campaign(snakemake.input.campaign_settings)
 
 # figure 9
@@ -59,8 +60,8 @@ figure = figures.time_history(
     record.response,
     result.filtered,
     result.envelope,
-    response_label=f"{record.response_quantity} ({record.response_unit})",
-    title=f"{configuration} / {row['run']}: unfiltered and filtered response",
+    response_label=f"{plot_text(record.response_quantity)} ({plot_text(record.response_unit)})",
+    title=f"{plot_text(configuration)} / {plot_text(row['run'])}: unfiltered and filtered response",
     band_hz=band_hz,
     decay_start_s=result.start_index / record.sample_rate_hz,
 )
@@ -76,7 +77,8 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     mine = segments[segments["configuration"] == configuration]
     figure = figures.damping_vs_amplitude(
         mine,
-        title=f"{configuration}: local equivalent damping vs velocity amplitude ({mine['run'].nunique()} runs)",
+        title=f"{plot_text(configuration)}: local equivalent damping vs velocity amplitude "
+        f"({mine['run'].nunique()} runs)",
         curve=curves[curves["configuration"] == configuration],
         units=units,
     )
@@ -85,7 +87,7 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
 figure = figures.area_fits(
     curves,
     first_mode_and_channel(read_table(snakemake.input.area), first_channel),
-    title=f"{campaign.name}: damping vs velocity amplitude and bearing area",
+    title=f"{plot_text(campaign.name)}: damping vs velocity amplitude and bearing area",
     units=units,
 )
 figures.save(figure, snakemake.output.area)
@@ -95,7 +97,7 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     mine = segments[segments["configuration"] == configuration]
     figure = figures.frequency_vs_amplitude(
         mine,
-        title=f"{configuration}: backbone (frequency vs velocity amplitude)",
+        title=f"{plot_text(configuration)}: backbone (frequency vs velocity amplitude)",
         units=units,
     )
     figures.save(figure, path)

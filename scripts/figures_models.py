@@ -10,6 +10,7 @@ from workflow.io.units import UNIT_SYSTEMS
 from workflow.measured.runs import first_mode_and_channel, with_mode_and_channel
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
+from workflow.outputs.escape import plot_text
 from workflow.outputs.report import model_fits_html
 from workflow.runtime.logs import setup_script_logging
 
@@ -42,11 +43,11 @@ for configuration, dahl_path, lugre_path in zip(
     for model, path, label in (("dahl", dahl_path, "Dahl"), ("lugre", lugre_path, "LuGre")):
         fit = document["models"].get(model)
         if fit is None:
-            title = f"{configuration}: {label} not fitted ({document.get('skipped', 'no fit')})"
+            title = f"{plot_text(configuration)}: {label} not fitted ({plot_text(document.get('skipped', 'no fit'))})"
             figures.save(figures.model_comparison(mine, {}, title=title, units=units), path)
             continue
         title = (
-            f"{configuration}: measured vs fitted {label} simulation\n"
+            f"{plot_text(configuration)}: measured vs fitted {label} simulation\n"
             f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)"
         )
         models = {f"{label} + ζ0 (fitted)": curves[model]}

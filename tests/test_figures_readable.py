@@ -18,16 +18,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
-from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
+from helpers import CHEAP, REALDATA, needs_realdata, run_snakemake  # noqa: E402
 
-from workflow.io.units import INCH_M, LBF_N, SI  # noqa: E402
+from workflow.io.units import SI  # noqa: E402
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 snakemake = functools.partial(run_snakemake, timeout=1800)
-
-REALDATA = REPO.parent / "shared" / "realdata"
 
 
 # ------------------------------------------------------------------ the checker itself
@@ -184,18 +182,20 @@ def test_si_run_writes_model_parameters_and_residuals_in_si(one_configuration):
         <= set(fits["unit_si"])
         <= {"N/m", "N", "N s/m", "m/s", "1", "rad/s", "Hz"}
     )
-    for parameter, factor in (("sigma", LBF_N / INCH_M), ("fc", LBF_N), ("v0", INCH_M), ("zeta0", 1.0)):
+    # The definitions, not the module's factors: 1 in = 0.0254 m, 1 lbf = 0.45359237 kg x 9.80665 m/s^2.
+    inch_m, lbf_n = 0.0254, 0.45359237 * 9.80665
+    for parameter, factor in (("sigma", lbf_n / inch_m), ("fc", lbf_n), ("v0", inch_m), ("zeta0", 1.0)):
         rows = fits[fits["parameter"] == parameter]
         np.testing.assert_array_equal(rows["value_si"], rows["value"] * factor)
     residuals = pd.read_parquet(one_configuration / "results/tables/diagnosis_residuals.parquet")
     np.testing.assert_array_equal(
-        residuals["velocity_amplitude_m_s"], residuals["velocity_amplitude_in_s"] * INCH_M
+        residuals["velocity_amplitude_m_s"], residuals["velocity_amplitude_in_s"] * inch_m
     )
     verdict = (one_configuration / "results/report/verdict.html").read_text()
     assert "area (m²)" in verdict and " m/s" in verdict
 
 
-@pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason=f"no real data at {REALDATA}")
+@needs_realdata("unesp-bolted-beam")
 def test_unesp_figures_are_readable(tmp_path):
     campaign = REALDATA / "unesp-bolted-beam"
     targets = [

@@ -198,24 +198,36 @@ def test_candidate_margin():
     assert report.candidate_margin({"cause": "none", "ranking": []}) is None
 
 
-def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
-    """The landing page goes through Snakemake's Jinja then docutils: no markup error,
-    and underscores or bars in names stay text."""
+def landing_text(verdict: str, description: str = "") -> str:
+    """The text of the report's first page as Snakemake renders it: Jinja, then docutils
+    (a markup warning is an error)."""
     import jinja2
     from docutils.core import publish_parts
 
-    verdict = report.verdict_rst(document, runs=runs, hypotheses=hypotheses)
-    landing = report.landing_rst(verdict, 'Campaign ``{{ snakemake.config["campaign"] }}``.\n')
+    landing = report.landing_rst(verdict, description)
     links = "\n\n.. _verdict.html: javascript:void(0)\n.. _1 Verdict: javascript:void(0)\n"
 
     class Snakemake:
         config = {"campaign": "my/campaign"}
 
-    rendered = jinja2.Environment().from_string(landing + links).render(snakemake=Snakemake)
+    rendered = (
+        jinja2.Environment(trim_blocks=True, lstrip_blocks=True)
+        .from_string(landing + links)
+        .render(snakemake=Snakemake)
+    )
     body = publish_parts(rendered, writer="html", settings_overrides={"report_level": 2, "halt_level": 2})[
         "html_body"
     ]
-    text = html.unescape(body)
+    return html.unescape(body)
+
+
+def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
+    """The landing page goes through Snakemake's Jinja then docutils: no markup error,
+    and underscores or bars in names stay text."""
+    text = landing_text(
+        report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
+        'Config ``{{ snakemake.config["campaign"] }}``.\n',
+    )
     assert "System Message" not in text
     assert "no_washer" in text and "|t| = 9.4" in text
     assert "my/campaign" in text
@@ -501,8 +513,8 @@ def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
     assert "Run-order trend of the damping (file-name order, which may not be" in text
     close["evidence"]["run_order_trend"]["order"] = "file timestamps"
     assert "Run-order trend of the damping (file timestamps)" in report.verdict_html(document)
-    landing = report.verdict_rst(
-        document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
+    landing = landing_text(
+        report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004))
     )
     assert "only marginally ahead of the next best" in landing and "clearly" not in landing
     assert "chi = -0.95 at its lower bound" in landing
@@ -529,9 +541,12 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
 
 
 # ------------------------------------------------------------------ in a real browser
-needs_chromium = pytest.mark.skipif(
-    chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
-)
+def needs_chromium(test):
+    """Skipped without Chromium; a failure then with LAPJOINT_REQUIRE_CHROMIUM=1 (tests/conftest.py)."""
+    test = pytest.mark.skipif(
+        chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
+    )(test)
+    return pytest.mark.group("chromium")(test)
 
 
 @needs_chromium

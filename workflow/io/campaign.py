@@ -39,6 +39,7 @@ are run against them):
 from __future__ import annotations
 
 import datetime
+import errno
 import io
 import math
 import os
@@ -53,8 +54,22 @@ import numpy as np
 from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
 
-from workflow.io import units
-from workflow.io.record_rules import column_role, rates_agree, split_name_unit
+from workflow.io import limits, units
+from workflow.io.limits import (
+    MAX_QUOTED_PROBLEMS,
+    QUOTED_CHARACTERS,
+    magnitude_problem,
+    name_length_problem,
+    quoted,
+    shortened,
+)
+from workflow.io.record_rules import (
+    TIME_STEP_REL_TOLERANCE,
+    column_role,
+    first_bad_time_step,
+    rates_agree,
+    split_name_unit,
+)
 from workflow.io.validation import (
     FORBID_UNKNOWN_KEYS,
     MISSING_KEY_ERRORS,
@@ -68,7 +83,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MIN_SAMPLES",
-    "TIME_STEP_REL_TOLERANCE",
     "HEAD_ROWS",
     "CAMPAIGN_FILE",
     "CONFIGURATION_NAME",
@@ -105,10 +119,6 @@ MIN_SAMPLES: int = 256
 """Fewest samples a run file must hold. Below this a record cannot hold even a few
 cycles of the mode plus the filter's settling time, and such short files are in
 practice truncated exports ("fewer than a few hundred samples" in the contract)."""
-
-TIME_STEP_REL_TOLERANCE: float = 0.01
-"""A time step may differ from the record's mean step by this fraction of it, plus
-the resolution with which the time column is printed (rounding of the last digit)."""
 
 HEAD_ROWS: int = 11
 """Numeric rows whose majority decides the delimiter and the column count, so that a
@@ -184,11 +194,11 @@ def _relative_glob(files: str) -> str:
     if not files.strip():
         raise ValueError("files must be a non-empty glob")
     if Path(files).is_absolute() or files.startswith(("/", "\\", "~")) or re.match(r"[A-Za-z]:", files):
-        raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
+        raise ValueError(f"files glob {quoted(files)} must be relative to the campaign folder")
     if ".." in re.split(r"[/\\]", files):
-        raise ValueError(f"files glob {files!r} leaves the campaign folder ('..' is not allowed)")
+        raise ValueError(f"files glob {quoted(files)} leaves the campaign folder ('..' is not allowed)")
     if not Path(files).parts:
-        raise ValueError(f"files glob {files!r} names no file")
+        raise ValueError(f"files glob {quoted(files)} names no file")
     return files
 
 
@@ -203,6 +213,8 @@ def _channel_reference(channel: str | int | None) -> str | int | None:
         raise ValueError(f"channel index must be 0 or more, got {channel}")
     if isinstance(channel, str) and not channel.strip():
         raise ValueError("channel must be a non-empty name or a 0-based index")
+    if isinstance(channel, str) and (problem := name_length_problem("channel name", channel)):
+        raise ValueError(problem)
     return channel
 
 
@@ -215,7 +227,7 @@ def _channel_references(channels: tuple[str | int, ...] | None) -> tuple[str | i
         _channel_reference(channel)
     repeated = sorted({str(c) for c in channels if sum(str(d) == str(c) for d in channels) > 1})
     if repeated:
-        raise ValueError(f"channels lists {', '.join(map(repr, repeated))} more than once")
+        raise ValueError(f"channels lists {', '.join(map(quoted, repeated))} more than once")
     return channels
 
 
@@ -556,6 +568,15 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
     from pydantic import ValidationError
 
     path = Path(campaign_dir) / CAMPAIGN_FILE
+    outside = _link_problem(path, Path(campaign_dir).resolve())
+    if outside is not None:
+        raise CampaignFormatError(
+            path, None, f"{outside}; campaign.yaml must be a file inside the campaign folder"
+        )
+    if path.exists() and not path.is_file():
+        raise CampaignFormatError(
+            path, None, "not read: not a regular file (a directory, a device or a pipe)"
+        )
     if not path.is_file():
         raise CampaignFormatError(
             path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
@@ -622,25 +643,31 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         campaign = validate(Campaign, _with_default_globs(raw))
     except ValidationError as error:
         problems, first_line = [], None
-        for item in error.errors():
+        errors = error.errors()
+        for item in errors[:MAX_QUOTED_PROBLEMS]:
             loc = tuple(item["loc"])
             combined = re.match(r"(?:Value error, )?(mode_hz|band_hz|modes_hz|bands_hz): ", item["msg"])
             if not loc and combined:
                 # a check across keys (Campaign.__post_init__) names the key it is about
                 loc = (combined.group(1),)
                 item = {**item, "msg": item["msg"][combined.start(1) + len(combined.group(1)) + 2 :]}
-            key = ".".join(str(part) for part in loc) or "(top level)"
+            key = ".".join(shortened(str(part)) for part in loc) or "(top level)"
             if item["type"] in UNKNOWN_KEY_ERRORS:
                 message = f"unknown key (allowed here: {', '.join(_allowed_keys(loc))})"
             elif item["type"] in MISSING_KEY_ERRORS:
                 message = "required key is missing"
             else:
-                message = item["msg"]
+                message = shortened(item["msg"], 10 * QUOTED_CHARACTERS)
             problems.append(f"{key}: {message}")
             if first_line is None:
                 first_line = _node_line(root, loc)
+        if len(errors) > MAX_QUOTED_PROBLEMS:
+            problems.append(f"and {len(errors) - MAX_QUOTED_PROBLEMS} more problems")
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
     object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
+    long_name = name_length_problem("name", campaign.name)
+    if long_name is not None:
+        raise CampaignFormatError(path, _node_line(root, ("name",)), long_name)
     if campaign.sample_rate_hz is not None:
         problem = frequency_problem(campaign, campaign.sample_rate_hz)
     else:
@@ -733,17 +760,41 @@ class ExcludedPath:
         return {**asdict(self), "status": "excluded"}
 
 
-def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
-    """Why a path matched by a glob is not read as a run file, or None."""
-    resolved = path.resolve()
+def _link_problem(path: Path, root_resolved: Path) -> str | None:
+    """Why a path inside the campaign folder leads elsewhere (a symbolic link out of the
+    folder, or a loop of links), or None. The test is on the real path, all links resolved."""
+    try:
+        path.stat()
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            return "not read: a symbolic link loop (the link leads back to itself)"
+    try:
+        resolved = path.resolve()
+    except (OSError, RuntimeError):  # a loop further up the path
+        return "not read: a symbolic link loop (the link leads back to itself)"
     if not resolved.is_relative_to(root_resolved):
         return "not read: a symbolic link that leads outside the campaign folder (docs/input-safety.md)"
+    return None
+
+
+def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
+    """Why a path matched by a glob is not read as a run file, or None."""
+    link = _link_problem(path, root_resolved)
+    if link is not None:
+        return link
     if path.is_dir():
         return "not read: a directory, not a run file"
     if not path.is_file():
         return "not read: not a regular file (a broken link, a device or a pipe)"
     if not os.access(path, os.R_OK):
         return "not read: permission denied (the file cannot be opened for reading)"
+    size_bytes = path.stat().st_size
+    if size_bytes > limits.MAX_RUN_FILE_BYTES:
+        return (
+            f"not read: {size_bytes} bytes, larger than a run file may be "
+            f"({limits.MAX_RUN_FILE_BYTES} bytes; docs/input-safety.md): cut the record "
+            "to the ring-down or export fewer channels"
+        )
     return None
 
 
@@ -802,7 +853,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
             raise CampaignFormatError(
                 root / CAMPAIGN_FILE,
                 None,
-                f"configurations.{configuration}.files: {spec.files!r} is not a usable glob ({error})",
+                f"configurations.{configuration}.files: {quoted(spec.files)} is not a usable glob ({error})",
             ) from None
         if not matches:
             excluded.append(
@@ -810,7 +861,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                     configuration,
                     "",
                     spec.files,
-                    f"configurations.{configuration}.files: the glob {spec.files!r} matches no "
+                    f"configurations.{configuration}.files: the glob {quoted(spec.files)} matches no "
                     f"file in the campaign folder {root.as_posix()}",
                 )
             )
@@ -818,6 +869,16 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
         for match in matches:
             relative = match.relative_to(root).as_posix()
             reason = _unreadable_reason(match, root_resolved)
+            long_name = name_length_problem("run file name", match.name)
+            if long_name is not None:
+                # the name itself is not repeated in full anywhere
+                shown = shortened(relative)
+                excluded.append(
+                    ExcludedPath(
+                        configuration, shortened(match.stem), shown, f"{shown}: not read: {long_name}"
+                    )
+                )
+                continue
             if reason is not None:
                 excluded.append(
                     ExcludedPath(
@@ -830,7 +891,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                     root / CAMPAIGN_FILE,
                     None,
                     f"configurations.{configuration}.files matches two runs named "
-                    f"{match.stem!r}: {seen[match.stem]} and {relative}",
+                    f"{quoted(match.stem)}: {seen[match.stem]} and {relative}",
                 )
             seen[match.stem] = relative
             runs.append(RunFile(configuration, match.stem, relative))
@@ -934,11 +995,11 @@ def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) ->
         if cell == "":
             return f"empty cell in column {column}"
         if _NON_FINITE.fullmatch(cell):
-            return f"NaN/inf value {cell!r} in column {column}"
+            return f"NaN/inf value {quoted(cell)} in column {column}"
         if not _NUMBER.fullmatch(cell):
-            return f"non-numeric cell {cell!r} in column {column}"
+            return f"non-numeric cell {quoted(cell)} in column {column}"
         if not math.isfinite(float(cell)):
-            return f"value {cell!r} in column {column} overflows a float"
+            return f"value {quoted(cell)} in column {column} overflows a float"
     return None
 
 
@@ -1180,7 +1241,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
             if not parsed or unit not in _RATE_FACTORS_HZ or not 0 < float(parsed.group(1)) < math.inf:
                 raise CampaignFormatError(
-                    path, number, f"cannot read a positive sample rate in Hz from {line.strip()!r}"
+                    path, number, f"cannot read a positive sample rate in Hz from {quoted(line.strip())}"
                 )
             rate, rate_line = float(parsed.group(1)) * _RATE_FACTORS_HZ[unit], number
         elif name in _PRETRIGGER_KEYS and pre_line is None:
@@ -1196,7 +1257,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
                 raise CampaignFormatError(
                     path,
                     number,
-                    f"cannot read the pre-trigger from {line.strip()!r} "
+                    f"cannot read the pre-trigger from {quoted(line.strip())} "
                     "(expected a whole number of samples, e.g. 'Pre-trigger: 25 samples')",
                 )
     return _HeaderValues(rate, rate_line, pre_samples, pre_s, pre_line, entries)
@@ -1237,12 +1298,12 @@ def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
     canonical = units.normalize_unit(file_unit)
     if canonical not in units.known_units(quantity):
         raise ValueError(
-            f"{what}: unit {file_unit!r} in the file is not a unit of {quantity} "
+            f"{what}: unit {quoted(file_unit)} in the file is not a unit of {quantity} "
             f"(campaign.yaml response quantity); expected one of {', '.join(units.known_units(quantity))}"
         )
     if yaml_unit is not None and canonical != yaml_unit:
         raise ValueError(
-            f"{what}: unit {file_unit!r} in the file disagrees with campaign.yaml response unit "
+            f"{what}: unit {quoted(file_unit)} in the file disagrees with campaign.yaml response unit "
             f"{yaml_unit!r} ({quantity})"
         )
     return canonical
@@ -1398,9 +1459,9 @@ def _read_text(path: Path, shown: str) -> str:
         )
     nul = raw.find(b"\x00")
     if nul >= 0:
-        raise CampaignFormatError(
-            shown, raw.count(b"\n", 0, nul) + 1, "binary data (NUL byte): not a text export"
-        )
+        # lines end in LF, CRLF or a lone CR, as the text is read below
+        line_ends = raw.count(b"\n", 0, nul) + raw.count(b"\r", 0, nul) - raw.count(b"\r\n", 0, nul)
+        raise CampaignFormatError(shown, line_ends + 1, "binary data (NUL byte): not a text export")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -1434,7 +1495,7 @@ def _decimal_commas_to_points(text: str, shown: str) -> str:
             raise CampaignFormatError(
                 shown,
                 number,
-                f"campaign.yaml says decimal: ',' but {clash.group(0)!r} holds more than one separator; "
+                f"campaign.yaml says decimal: ',' but {quoted(clash.group(0))} holds more than one separator; "
                 "with decimal commas the columns must be separated by tabs, semicolons or spaces",
             )
     return "\n".join(lines)
@@ -1504,7 +1565,7 @@ def _find_columns(
                     raise CampaignFormatError(
                         path,
                         last_number,
-                        f"unexpected text {last_line.strip()!r} between the column names "
+                        f"unexpected text {quoted(last_line.strip())} between the column names "
                         f"(line {above_number}) and the numbers",
                     )
                 names, names_line = above, above_number
@@ -1532,6 +1593,10 @@ def _find_columns(
         roles = {role: i for i, role in enumerate(order)}
         return _Columns(roles, {}, (), None, (roles["response"],), (None,))
 
+    for name in names:
+        long_name = name_length_problem("column name", name)
+        if long_name is not None:
+            raise CampaignFormatError(path, names_line, long_name)
     roles: dict[str, int] = {}
     column_units: dict[str, str | None] = {}
     for index, name in enumerate(names):
@@ -1542,10 +1607,17 @@ def _find_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"two {role} columns: {names[roles[role]]!r} and {name!r}",
+                f"two {role} columns: {quoted(names[roles[role]])} and {quoted(name)}",
             )
         roles[role] = index
         unit = split_name_unit(name)[1]
+        if unit is None and any(bracket in name for bracket in "()[]"):
+            raise CampaignFormatError(
+                path,
+                names_line,
+                f"the unit of the {role} column {quoted(name)} cannot be read: write one unit in "
+                "parentheses or brackets after the name, e.g. 'Acceleration (m/s^2)' or 'Force [N]'",
+            )
         if units_cells is not None:
             unit = units_cells[index]
         column_units[role] = unit
@@ -1553,7 +1625,7 @@ def _find_columns(
         raise CampaignFormatError(
             path,
             names_line,
-            f"no response column among {names} (a response column's name contains acc, vel, resp or disp)",
+            f"no response column among {[shortened(name) for name in names][:MAX_QUOTED_PROBLEMS]} (a response column's name contains acc, vel, resp or disp)",
         )
     response_name = split_name_unit(names[roles["response"]])[0].lower()
     for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
@@ -1561,7 +1633,7 @@ def _find_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"response column {names[roles['response']]!r} is {quantity} but "
+                f"response column {quoted(names[roles['response']])} is {quantity} but "
                 f"campaign.yaml says response quantity {campaign.response.quantity}",
             )
     return _Columns(
@@ -1601,7 +1673,11 @@ def _named_response_columns(
     counts the columns from 0; the time and force columns keep the contract's rules."""
     references = campaign.response.references()
     key = "response.channels" if campaign.response.channels is not None else "response.channel"
-    listing = ", ".join(f"[{i}] {name!r}" for i, name in enumerate(names)) if names else ""
+    for name in names or ():
+        long_name = name_length_problem("column name", name)
+        if long_name is not None:
+            raise CampaignFormatError(path, names_line, long_name)
+    listing = ", ".join(f"[{i}] {quoted(name)}" for i, name in enumerate(names)) if names else ""
     bare = [split_name_unit(name)[0].strip().lower() for name in names] if names else []
     responses = []
     for reference in references:
@@ -1618,7 +1694,7 @@ def _named_response_columns(
             raise CampaignFormatError(
                 path,
                 first_line,
-                f"campaign.yaml {key}: {reference!r} names a column but the file has no line of column names",
+                f"campaign.yaml {key}: {quoted(reference)} names a column but the file has no line of column names",
             )
         matches = [i for i, name in enumerate(names) if name == reference]
         matches = matches or [i for i, name in enumerate(bare) if name == reference.strip().lower()]
@@ -1627,7 +1703,7 @@ def _named_response_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"campaign.yaml {key}: {reference!r} matches {found}; the columns: {listing}",
+                f"campaign.yaml {key}: {quoted(reference)} matches {found}; the columns: {listing}",
             )
         responses.append(matches[0])
     roles: dict[str, int] = {}
@@ -1649,7 +1725,9 @@ def _named_response_columns(
             if role in ("time", "force"):
                 if role in roles:
                     raise CampaignFormatError(
-                        path, names_line, f"two {role} columns: {names[roles[role]]!r} and {names[index]!r}"
+                        path,
+                        names_line,
+                        f"two {role} columns: {quoted(names[roles[role]])} and {quoted(names[index])}",
                     )
                 roles[role] = index
                 column_units[role] = (
@@ -1661,7 +1739,7 @@ def _named_response_columns(
                     raise CampaignFormatError(
                         path,
                         names_line,
-                        f"response column {names[index]!r} is {quantity} but campaign.yaml says "
+                        f"response column {quoted(names[index])} is {quantity} but campaign.yaml says "
                         f"response quantity {campaign.response.quantity}",
                     )
     response_units = tuple(
@@ -1680,7 +1758,9 @@ def _response_column_units(columns: _Columns, campaign: Campaign, path: str) -> 
     found = []
     for index, unit in zip(columns.responses, columns.response_units):
         what = (
-            f"response column {columns.names[index]!r}" if columns.names else f"response column {index + 1}"
+            f"response column {quoted(columns.names[index])}"
+            if columns.names
+            else f"response column {index + 1}"
         )
         try:
             found.append(response_unit(unit, campaign, what))
@@ -1704,7 +1784,7 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     if time_unit:
         time_factor_s = _TIME_UNIT_FACTORS_S.get(time_unit.strip().lower(), 0.0)
         if time_factor_s == 0.0:
-            raise CampaignFormatError(path, line, f"time column unit {time_unit!r}: expected s or ms")
+            raise CampaignFormatError(path, line, f"time column unit {quoted(time_unit)}: expected s or ms")
     force_factor_lbf = 1.0
     if "force" in columns.roles:
         file_unit = columns.units.get("force")
@@ -1712,12 +1792,14 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
         if file_unit:
             canonical = units.normalize_unit(file_unit)
             if canonical not in units.known_units("force"):
-                raise CampaignFormatError(path, line, f"force column unit {file_unit!r}: expected lbf or N")
+                raise CampaignFormatError(
+                    path, line, f"force column unit {quoted(file_unit)}: expected lbf or N"
+                )
             if yaml_unit is not None and canonical != yaml_unit:
                 raise CampaignFormatError(
                     path,
                     line,
-                    f"force column unit {file_unit!r} disagrees with campaign.yaml force unit {yaml_unit!r}",
+                    f"force column unit {quoted(file_unit)} disagrees with campaign.yaml force unit {yaml_unit!r}",
                 )
         # The column's own unit first; else campaign.yaml's; else the original lab's lbf.
         unit = units.normalize_unit(file_unit) if file_unit else (yaml_unit or "lbf")
@@ -1725,30 +1807,41 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     return time_factor_s, force_factor_lbf
 
 
+def _check_magnitude(
+    column: NDArray[np.float64], role: str, columns: _Columns, first_line: int, path: str
+) -> None:
+    """Refuse a force or response column the analysis cannot square (:mod:`workflow.io.limits`),
+    naming the line of the first such value."""
+    index = columns.roles[role]
+    name = f" {quoted(columns.names[index])}" if columns.names else ""
+    problem = magnitude_problem(column, f"{role} column {index + 1}{name}")
+    if problem is not None:
+        raise CampaignFormatError(path, first_line + problem[0], problem[1])
+
+
 def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str) -> float:
     """Sample rate (Hz) from a time column that must increase in uniform steps."""
     steps = np.diff(time_s)
-    backwards = np.flatnonzero(steps <= 0.0)
-    if backwards.size:
-        i = int(backwards[0])
-        raise CampaignFormatError(
-            path,
-            first_line + i + 1,
-            f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s",
-        )
-    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    tolerance_s = TIME_STEP_REL_TOLERANCE * mean_step_s + resolution_s
-    uneven = np.flatnonzero(np.abs(steps - mean_step_s) > tolerance_s)
-    if uneven.size:
-        i = int(uneven[0])
-        raise CampaignFormatError(
-            path,
-            first_line + i + 1,
-            f"time column not uniform: step {steps[i]:.6g} s differs from the mean step "
-            f"{mean_step_s:.6g} s by {100 * abs(steps[i] / mean_step_s - 1):.3g} % "
-            f"(tolerance {100 * tolerance_s / mean_step_s:.3g} %)",
-        )
-    return 1.0 / mean_step_s
+    bad = first_bad_time_step(steps, resolution_s)
+    if bad is not None:
+        i, typical_s = bad
+        if steps[i] <= 0.0:
+            problem = f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s"
+        elif i + 1 < steps.size and steps[i + 1] <= 0.0:
+            # a stamp ahead of its neighbours (a spike, two rows swapped): this line is the wrong one
+            problem = (
+                f"time column out of order: {time_s[i + 1]:.9g} s is followed by {time_s[i + 2]:.9g} s "
+                "on the next line"
+            )
+        else:
+            tolerance_s = TIME_STEP_REL_TOLERANCE * typical_s + resolution_s
+            problem = (
+                f"time column not uniform: step {steps[i]:.6g} s (from {time_s[i]:.9g} s on the line "
+                f"before) differs from the record's typical step {typical_s:.6g} s by "
+                f"{100 * abs(steps[i] / typical_s - 1):.3g} % (tolerance {100 * tolerance_s / typical_s:.3g} %)"
+            )
+        raise CampaignFormatError(path, first_line + i + 1, problem)
+    return (time_s.size - 1) / (time_s[-1] - time_s[0])
 
 
 HEAD_BYTES: int = 65536
@@ -1982,6 +2075,9 @@ def read_run(
             f"pre-trigger of {pretrigger_samples} samples is not shorter than the record ({n_rows} samples)",
         )
 
+    for role in ("force", "response"):
+        if role in columns.roles:
+            _check_magnitude(values[:, columns.roles[role]], role, columns, first_line, shown)
     force_lbf = None
     if "force" in columns.roles:
         force_lbf = values[:, columns.roles["force"]] * force_factor_lbf

@@ -17,8 +17,14 @@ joint's equation of motion in time (contact patches: :func:`patch_mode_response_
 Dahl: :func:`workflow.models.ringdown.simulate_ringdown`) instead of the averaged equations, so that the discovery is not tested only on the
 model it fits.
 
+Sensors (:class:`Sensor`) stand at points of the beam and see every mode at its own
+shape value there, each with its own noise; several sensors are columns of one run file
+(or variables of one MAT file). The contact patches may carry a second mechanism (a
+velocity-squared loss, a stiffness term) and may act on mode 2 as well.
+
 The campaign folder follows ``campaign-format.md``; the truth is written
-beside it as ``<campaign_dir>.truth.json``, never inside.
+beside it as ``<campaign_dir>.truth.json`` (mode 2's as ``<campaign_dir>.mode2.truth.json``),
+never inside.
 """
 
 from __future__ import annotations
@@ -94,12 +100,14 @@ EFFECT_CAUSES = {
     None: None,
     "quadratic_damping": "quadratic_damping",
     "stiffness_nonlinearity": "stiffness_nonlinearity",
+    "cubic_stiffness": "stiffness_nonlinearity",
     "run_drift": "run_drift",
     "second_mode": "unknown",
 }
 DEFAULT_EFFECT_SIZES = {
     "quadratic_damping": 0.003,
     "stiffness_nonlinearity": 0.01,
+    "cubic_stiffness": 0.005,
     "run_drift": 0.4,
     "second_mode": 0.5,
 }
@@ -107,15 +115,40 @@ EFFECT_SIZE_MEANING = {
     "quadratic_damping": "damping ratio added by c2 v|v| at the reference velocity amplitude",
     "stiffness_nonlinearity": "fractional frequency drop at the reference velocity amplitude "
     "(saturating contact-opening softening; asymptote twice that)",
+    "cubic_stiffness": "fractional frequency rise at the reference velocity amplitude from a "
+    "hardening cubic spring k3 xi^3 (softening: stiffness_nonlinearity, which stays bounded)",
     "run_drift": "fractional fall of the Dahl friction limit Fc from the first to the last run",
     "second_mode": "initial acceleration amplitude of a linear mode at 1.08 f1, relative to mode 1",
 }
+JOINT_EFFECTS = {
+    "dahl": tuple(effect for effect in EFFECT_CAUSES if effect),
+    "patches": ("quadratic_damping", "stiffness_nonlinearity", "cubic_stiffness"),
+}
+"""Effects each joint can carry. Added to the Dahl joint (the baseline) an effect is the
+one cause; added to the contact patches it is a second mechanism beside micro-slip, and
+the truth names both (:func:`true_causes`)."""
 SECOND_MODE_FREQUENCY_RATIO = 1.08
 INTEGRATORS = ("averaged", "time_domain")
-TIME_DOMAIN_EFFECTS = (None, "run_drift", "second_mode")
-"""Effects the time-domain path can add (to the Dahl joint): its integrators have the
-joints (contact patches, Dahl) and linear modal damping only (no velocity-squared loss,
-no dissipation-free softening)."""
+TIME_DOMAIN_EFFECTS = {
+    "patches": (None, "quadratic_damping", "cubic_stiffness"),
+    "dahl": (None, "run_drift", "second_mode"),
+}
+"""Effects the time-domain path can add, per joint: the patch integrator carries a
+velocity-squared loss ``c2 xi'|xi'|`` and a cubic spring ``k3 xi^3`` in the equation of
+motion; the Dahl integrator has the joint and linear modal damping only (no dissipation-free
+softening of the saturating kind on either)."""
+
+
+def true_causes(joint: str, effect: str | None) -> list[str]:
+    """The mechanisms a campaign of this joint and added effect holds, the joint's first.
+
+    ``patches`` is micro-slip; the Dahl joint is the baseline (``none`` unless an effect
+    is added).
+    """
+    causes = ["microslip_power_law"] if joint == "patches" else []
+    if effect is not None:
+        causes.append(EFFECT_CAUSES[effect])
+    return causes or ["none"]
 
 
 @dataclass(frozen=True)
@@ -316,9 +349,9 @@ class JointSetup:
         return self.joint_modes.mode
 
 
-def _amplitude_grid(mode: specimen.FirstMode, omega0, points):
+def _amplitude_grid(accelerometer_participation, omega0, points):
     """Modal amplitudes spanning 1e-5 .. 300 in/s at the accelerometer."""
-    phi = abs(mode.accelerometer_participation)
+    phi = abs(accelerometer_participation)
     return np.logspace(np.log10(1e-5 / (phi * omega0)), np.log10(300.0 / (phi * omega0)), points)
 
 
@@ -377,7 +410,7 @@ def _configuration_physics(area_in2: float, settings: LabSettings):
     campaigns generated in one process share them)."""
     jm = contact.joint_first_mode(area_in2, settings.joint)
     setup = JointSetup("", area_in2, jm, jm.omega_rad_s, 0.0, 0.0)
-    a = _amplitude_grid(jm.mode, setup.omega0_rad_s, settings.amplitude_points)
+    a = _amplitude_grid(jm.mode.accelerometer_participation, setup.omega0_rad_s, settings.amplitude_points)
     d, loss = _patch_curves(setup, a)
     sigma, coulomb = _fit_dahl(setup, settings.zeta0, d, loss, a)
     for array in (a, d, loss):
@@ -454,16 +487,43 @@ def joint_curves(
             a, setup.dahl_sigma, run_dahl_coulomb(setup, effect, effect_size, run_fraction, slip_force_factor)
         )
     w0 = setup.omega0_rad_s
-    a_ref = REFERENCE_VELOCITY_IN_S / (abs(setup.mode.accelerometer_participation) * w0)
+    a_ref = reference_modal_amplitude(setup)
+    quadratic, cubic = effect_coefficients(setup, effect, effect_size)
     if effect == "quadratic_damping":
         # c2 xi'|xi'| dissipates 8/3 c2 w^2 a^3 per cycle: zeta = 4 c2 a / (3 pi)
-        c2 = effect_size * 3 * np.pi / (4 * a_ref)
-        d = d + 8.0 / 3.0 * c2 * w0**2 * a**3
+        d = d + 8.0 / 3.0 * quadratic * w0**2 * a**3
     elif effect == "stiffness_nonlinearity":
         r2 = (a / a_ref) ** 2
         ratio = 1.0 - 2.0 * effect_size * r2 / (1.0 + r2)
         loss = loss + w0**2 * (1.0 - ratio**2)
+    elif effect == "cubic_stiffness":
+        # k3 xi^3's in-phase first harmonic is 3/4 k3 a^3: omega^2 gains 3/4 k3 a^2
+        loss = loss - 0.75 * cubic * a**2
     return d, loss
+
+
+def reference_modal_amplitude(setup: JointSetup) -> float:
+    """Mode 1's modal amplitude at the reference velocity amplitude at the accelerometer."""
+    return REFERENCE_VELOCITY_IN_S / (abs(setup.mode.accelerometer_participation) * setup.omega0_rad_s)
+
+
+def effect_coefficients(setup: JointSetup, effect, effect_size) -> tuple[float, float]:
+    """Modal coefficients ``(c2, k3)`` of an added ``c2 xi'|xi'|`` and ``k3 xi^3``.
+
+    ``c2`` (1/in) gives the damping ratio ``effect_size`` at the reference amplitude
+    (``zeta = 4 c2 a / (3 pi)``); ``k3`` (1/(in^2 s^2)) changes the frequency by the
+    fraction ``effect_size`` there (``omega^2 = omega0^2 + 3/4 k3 a^2``). Zero for the
+    effects that are neither.
+    """
+    w0 = setup.omega0_rad_s
+    a_ref = reference_modal_amplitude(setup)
+    quadratic = effect_size * 3 * np.pi / (4 * a_ref) if effect == "quadratic_damping" else 0.0
+    cubic = (
+        4.0 / 3.0 * w0**2 * ((1.0 + effect_size) ** 2 - 1.0) / a_ref**2
+        if effect == "cubic_stiffness"
+        else 0.0
+    )
+    return quadratic, cubic
 
 
 def run_dahl_coulomb(
@@ -488,12 +548,20 @@ def mode_table(
     )
     omega0 = setup.omega0_rad_s * run.frequency_factor
     zeta, omega = contact.equivalent_damping(a, omega0, run.zeta0, d, loss)
+    _, cubic = effect_coefficients(setup, effect, effect_size)
+    if cubic:
+        # Energy balance: a cubic spring's energy at amplitude a grows as
+        # (omega^2 + k3 a^2 / 4) a da, not omega^2 a da (omega^2 holds only 3/4 k3 a^2)
+        zeta = zeta * omega**2 / (omega**2 + 0.25 * cubic * a**2)
     return ModeTable.build(a, zeta, omega)
 
 
-def truth_curves(setup: JointSetup, table: ModeTable, velocity_in_s):
-    """True damping ratio and damped frequency vs accelerometer velocity amplitude."""
-    phi = abs(setup.mode.accelerometer_participation)
+def truth_curves(setup: JointSetup, table: ModeTable, velocity_in_s, participation=None):
+    """True damping ratio and damped frequency vs velocity amplitude at a sensor.
+
+    ``participation``: the mode's shape at the sensor (default mode 1 at the accelerometer).
+    """
+    phi = abs(setup.mode.accelerometer_participation if participation is None else participation)
     a_grid = np.exp(table.log_a[::-1])
     v_grid = phi * table.omega_rad_s[::-1] * a_grid
     a = np.exp(np.interp(np.log(velocity_in_s), np.log(v_grid), np.log(a_grid)))
@@ -609,9 +677,12 @@ energy amplitude ``sqrt(x^2 + (x'/omega0)^2)`` varies within a cycle by the join
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _patch_ringdown_kernel(s, k, fs, onset, stiffness, damping, e00, e01, e10, e11, v0, n_steps, h, acc):
+def _patch_ringdown_kernel(
+    s, k, fs, onset, stiffness, damping, quadratic, cubic, e00, e01, e10, e11, v0, n_steps, h, acc
+):
     """Kick-drift-kick ring-down of ``x'' + damping x' + stiffness x + R = 0`` from
-    ``x = 0, x' = v0``, ``R = sum s (f - k s x)`` with Jenkins forces ``f``; writes ``acc``.
+    ``x = 0, x' = v0``, ``R = sum s (f - k s x) + quadratic x'|x'| + cubic x^3`` with
+    Jenkins forces ``f``; writes ``acc``.
 
     Patches sorted by ``onset``. Once the amplitude has fallen below a patch's onset it
     never slips again: stuck, its ``s (f - k s x)`` is constant, so it is summed once
@@ -623,7 +694,7 @@ def _patch_ringdown_kernel(s, k, fs, onset, stiffness, damping, e00, e01, e10, e
     frozen = 0.0
     for j in range(n_steps):
         dx = x - x_prev
-        remainder = frozen
+        remainder = frozen + quadratic * eta * abs(eta) + cubic * x * x * x
         for i in range(n_active):
             trial = f[i] + k[i] * s[i] * dx
             f[i] = min(max(trial, -fs[i]), fs[i])
@@ -650,14 +721,16 @@ def patch_mode_response_time_domain(
     modal_peak,
     duration_s,
     oversampling=4,
+    quadratic=0.0,
+    cubic=0.0,
 ):
     """Modal acceleration of mode 1 with the contact patches, integrated in time.
 
-    ``xi'' + 2 zeta0 omega0 xi' + omega0^2 xi + sum s (f - k s xi) = 0`` (the stuck patch
-    stiffness is part of ``omega0``), every patch a Jenkins element (``f`` clipped at its
-    slip force). The linear oscillator's flow over a step is exact; the patches' nonlinear
-    remainder, zero while they stick, is applied as two half kicks per step (second
-    order, Strang). Starts at the pulse centre with the pulse's impulse at the stuck
+    ``xi'' + 2 zeta0 omega0 xi' + omega0^2 xi + sum s (f - k s xi) + c2 xi'|xi'| + k3 xi^3
+    = 0`` (the stuck patch stiffness is part of ``omega0``), every patch a Jenkins element
+    (``f`` clipped at its slip force). The linear oscillator's flow over a step is exact;
+    the nonlinear remainder (the patches' part zero while they stick) is applied as two
+    half kicks per step (second order, Strang). Starts at the pulse centre with the pulse's impulse at the stuck
     frequency; during the pulse the stuck linear oscillator. Patches whose slip onset lies
     above the initial amplitude never slip and are left out (their remainder is zero).
 
@@ -673,6 +746,9 @@ def patch_mode_response_time_domain(
     oversampling : int
         Steps per sample of ``t_s`` (4 at 2560 samples/s: 80 steps per period at 126 Hz;
         8 changes the damping by < 0.03 % and the frequency by < 1e-6, measured).
+    quadratic, cubic : float
+        ``c2`` (1/in) and ``k3`` (1/(in^2 s^2)) of an added velocity-squared loss and
+        cubic spring (:func:`effect_coefficients`); 0 for the joint alone.
 
     Returns
     -------
@@ -704,6 +780,8 @@ def patch_mode_response_time_domain(
         onset[order],
         stiffness,
         damping,
+        float(quadratic),
+        float(cubic),
         e00,
         e01,
         e10,
@@ -721,8 +799,106 @@ def patch_mode_response_time_domain(
 
 
 ModeResponse = Callable[[np.ndarray, float, float], np.ndarray]
-"""Mode-1 modal acceleration at times from the pulse start, given the peak modal force
-and the pulse duration."""
+"""A nonlinear mode's modal acceleration at times from the pulse start, given the peak
+modal force and the pulse duration."""
+
+
+# ---------------------------------------------------------------- sensors
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """An accelerometer on the beam, with its own noise."""
+
+    name: str = "Acceleration"
+    """Column (or MAT variable) name; contains ``acc``, the input contract's response role."""
+    position_in: float | None = None
+    """Distance from the beam's left end, in; None: the reference accelerometer's point
+    (``SpecimenGeometry.accelerometer_x_in``, the paper's)."""
+    noise_g: float | None = None
+    """Noise floor (standard deviation) in the sensor's unit, g; None:
+    ``LabSettings.acceleration_noise_g``."""
+
+
+@dataclass(frozen=True)
+class SensorView:
+    """What one sensor sees of one configuration's modes."""
+
+    mode1_participation: float
+    """Mode 1's mass-normalised shape at the sensor, in per unit modal coordinate."""
+    higher_participations: tuple[float, ...]
+    """The higher flexible modes' shapes at the sensor, same order as ``higher_modes``."""
+    position_in: float
+    noise_g: float
+
+    def participation(self, mode_index: int) -> float:
+        """Shape at the sensor of flexible mode ``mode_index`` (1 = mode 1)."""
+        return self.mode1_participation if mode_index == 1 else self.higher_participations[mode_index - 2]
+
+
+def sensor_view(mode: specimen.FirstMode, settings: LabSettings, sensor: Sensor) -> SensorView:
+    """The sensor's view of the modes: each mode at its own shape value at the sensor.
+
+    At the reference accelerometer the FE model's participations; elsewhere every mode's
+    deflection line interpolated linearly between FE nodes (1/8 in apart: the error is
+    ``h^2 |phi''| / 8``, under 1e-4 of mode 1's largest deflection).
+    """
+    noise = settings.acceleration_noise_g if sensor.noise_g is None else float(sensor.noise_g)
+    geometry = settings.joint.geometry
+    if sensor.position_in is None:
+        return SensorView(
+            mode.accelerometer_participation,
+            tuple(m.accelerometer_participation for m in mode.higher_modes),
+            geometry.accelerometer_x_in,
+            noise,
+        )
+    x = float(sensor.position_in)
+    if not 0.0 <= x <= geometry.total_length_in:
+        raise ValueError(
+            f"sensor {sensor.name!r} at {x} in is off the beam (0 to {geometry.total_length_in} in)"
+        )
+    return SensorView(
+        float(np.interp(x, mode.x_in, mode.shape_in)),
+        tuple(float(np.interp(x, mode.x_in, m.shape_in)) for m in mode.higher_modes),
+        x,
+        noise,
+    )
+
+
+def mode1_gain(mode: specimen.FirstMode, settings: LabSettings, sensor: Sensor) -> float:
+    """Mode 1 at the sensor relative to the reference accelerometer (signed)."""
+    return sensor_view(mode, settings, sensor).mode1_participation / mode.accelerometer_participation
+
+
+def positions_with_mode1_gain(mode: specimen.FirstMode, gain: float) -> np.ndarray:
+    """Points of the beam (in, increasing) where mode 1's ``|phi(x) / phi(x_accelerometer)|``
+    equals ``gain``; empty where the beam has none (above its free ends' ratio, 3.0 on
+    the paper's specimen)."""
+    ratio = np.abs(mode.shape_in / mode.accelerometer_participation) - gain
+    crossing = np.flatnonzero(np.sign(ratio[:-1]) * np.sign(ratio[1:]) <= 0)
+    crossing = crossing[ratio[crossing] != ratio[crossing + 1]]
+    x0, x1 = mode.x_in[crossing], mode.x_in[crossing + 1]
+    r0, r1 = ratio[crossing], ratio[crossing + 1]
+    return np.unique(x0 - r0 * (x1 - x0) / (r1 - r0))
+
+
+def _check_sensors(sensors) -> tuple[Sensor, ...]:
+    sensors = tuple(sensors)
+    if not sensors:
+        raise ValueError("at least one sensor is needed")
+    names = [s.name for s in sensors]
+    for name in names:
+        if "acc" not in name.lower() or any(c in name for c in "\t\n\r()[],:{}#\"'") or name != name.strip():
+            raise ValueError(
+                f"sensor name {name!r}: it must contain 'acc' (the response role of campaign-format.md) "
+                "and no tab, line break, bracket, comma, colon, brace, quote or '#'"
+            )
+    if len(set(names)) != len(names):
+        raise ValueError(f"sensor names must differ, got {names}")
+    return sensors
+
+
+# ------------------------------------------------------------------ runs
 
 
 def simulate_run(
@@ -733,10 +909,11 @@ def simulate_run(
     second_mode_ratio=0.0,
     *,
     run: RunPhysics | None = None,
-    noise_rng=None,
-    sensor_gain=1.0,
+    sensors: tuple[SensorView, ...] | None = None,
+    noise_rngs=None,
+    higher_responses: tuple[ModeResponse | None, ...] = (),
 ):
-    """One triggered record: (time s, force lbf, acceleration g) and run facts.
+    """One triggered record: (time s, force lbf, acceleration g per sensor) and run facts.
 
     Parameters
     ----------
@@ -748,14 +925,26 @@ def simulate_run(
     run : RunPhysics, optional
         This run's frequency (also of the linear modes, as a temperature change would)
         and damping; default the nominal ones.
-    noise_rng : numpy.random.Generator, optional
-        Accelerometer noise; default ``rng``.
-    sensor_gain : float
-        Mode 1 (and the added second mode) as seen by this sensor, relative to the
-        accelerometer's mode shape; the other modes as at the accelerometer.
+    sensors : tuple of SensorView, optional
+        Each sensor's view of the modes and its noise floor; default the reference
+        accelerometer alone.
+    noise_rngs : sequence of numpy.random.Generator, optional
+        Each sensor's own noise; default ``rng`` for a single sensor.
+    higher_responses : tuple
+        Per higher flexible mode (in order), its nonlinear modal acceleration when the
+        joint acts on it, else None (or missing): linear.
+
+    Returns
+    -------
+    time_s : ndarray, shape (n,)
+    force_lbf : ndarray, shape (n,)
+    acceleration_g : ndarray, shape (n_sensors, n)
+    facts : dict
     """
     run = run if run is not None else RunPhysics(zeta0=settings.zeta0)
-    noise_rng = noise_rng if noise_rng is not None else rng
+    if sensors is None:
+        sensors = (sensor_view(setup.mode, settings, Sensor()),)
+    noise_rngs = noise_rngs if noise_rngs is not None else [rng]
     dt = 1.0 / settings.sample_rate_hz
     lo, hi = settings.peak_force_lbf
     peak = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
@@ -770,9 +959,14 @@ def simulate_run(
     mode = setup.mode
     tau = t - t0
     phi_h = mode.hammer_participation
-    phi_a = sensor_gain * mode.accelerometer_participation
-    acc = phi_a * mode_response(tau, phi_h * peak, duration)
-    for m in mode.higher_modes:
+    # modal accelerations, shared by every sensor
+    mode1 = mode_response(tau, phi_h * peak, duration)
+    higher = []
+    for index, m in enumerate(mode.higher_modes):
+        response = higher_responses[index] if index < len(higher_responses) else None
+        if response is not None:
+            higher.append(response(tau, m.hammer_participation * peak, duration))
+            continue
         _, _, q = half_sine_response(
             tau,
             2 * np.pi * m.frequency_hz * run.frequency_factor,
@@ -780,34 +974,41 @@ def simulate_run(
             m.hammer_participation * peak,
             duration,
         )
-        acc += m.accelerometer_participation * q
+        higher.append(q)
+    second = None
     if second_mode_ratio:
-        _, _, q = half_sine_response(
+        # An extra (e.g. torsional) mode that the beam model lacks: excited like
+        # mode 1, seen at each sensor with the chosen amplitude relative to mode 1.
+        _, _, second = half_sine_response(
             tau,
             SECOND_MODE_FREQUENCY_RATIO * setup.omega0_rad_s * run.frequency_factor,
             run.zeta0,
             phi_h * peak,
             duration,
         )
-        # An extra (e.g. torsional) mode that the beam model lacks: excited like
-        # mode 1, seen at the accelerometer with the chosen relative amplitude.
-        acc += second_mode_ratio * phi_a * q
     # rigid-body bounce and pitch on the suspension
-    geo = settings.joint.geometry
-    lever_acc = geo.accelerometer_x_in - mode.centre_of_mass_in
-    lever_ham = geo.hammer_x_in - mode.centre_of_mass_in
-    for f_hz, gain in (
-        (settings.suspension_hz[0], 1.0 / mode.total_mass_lbf_s2_in),
-        (settings.suspension_hz[1], lever_acc * lever_ham / mode.pitch_inertia_lbf_s2_in),
-    ):
-        _, _, q = half_sine_response(tau, 2 * np.pi * f_hz, settings.suspension_zeta, gain * peak, duration)
-        acc += q
-    acc_g = acc / specimen.G_IN_S2 + settings.acceleration_noise_g * noise_rng.standard_normal(n)
+    lever_ham = settings.joint.geometry.hammer_x_in - mode.centre_of_mass_in
+
+    def suspension(f_hz, gain):
+        return half_sine_response(tau, 2 * np.pi * f_hz, settings.suspension_zeta, gain * peak, duration)[2]
+
+    bounce = suspension(settings.suspension_hz[0], 1.0 / mode.total_mass_lbf_s2_in)
     sl = slice(trigger - PRETRIGGER_SAMPLES, trigger - PRETRIGGER_SAMPLES + settings.samples_per_run)
+    accelerations = []
+    for view, noise_rng in zip(sensors, noise_rngs, strict=True):
+        acc = view.mode1_participation * mode1
+        for participation, q in zip(view.higher_participations, higher, strict=True):
+            acc += participation * q
+        if second is not None:
+            acc += second_mode_ratio * view.mode1_participation * second
+        acc += bounce
+        lever = view.position_in - mode.centre_of_mass_in
+        acc += suspension(settings.suspension_hz[1], lever * lever_ham / mode.pitch_inertia_lbf_s2_in)
+        acc_g = acc / specimen.G_IN_S2 + view.noise_g * noise_rng.standard_normal(n)
+        accelerations.append(quantise(acc_g[sl], ACCELERATION_RANGE_G))
     force_q = quantise(force[sl], FORCE_RANGE_LBF)
-    acc_q = quantise(acc_g[sl], ACCELERATION_RANGE_G)
     facts = {"peak_force_lbf": peak, "pulse_duration_s": duration}
-    return np.arange(settings.samples_per_run) * dt, force_q, acc_q, facts
+    return np.arange(settings.samples_per_run) * dt, force_q, np.array(accelerations), facts
 
 
 def averaged_mode_response(setup: JointSetup, table: ModeTable, run: RunPhysics) -> ModeResponse:
@@ -820,11 +1021,15 @@ def averaged_mode_response(setup: JointSetup, table: ModeTable, run: RunPhysics)
     return response
 
 
-def time_domain_mode_response(setup: JointSetup, joint: str, coulomb: float, run: RunPhysics) -> ModeResponse:
+def time_domain_mode_response(
+    setup: JointSetup, joint: str, coulomb: float, run: RunPhysics, effect=None, effect_size=None
+) -> ModeResponse:
     """Mode 1 with the run's joint (``patches`` or ``dahl`` with friction limit
-    ``coulomb``) integrated in time."""
+    ``coulomb``) integrated in time; with the patches, an added ``quadratic_damping`` or
+    ``cubic_stiffness`` is a term of the equation of motion."""
     omega0 = setup.omega0_rad_s * run.frequency_factor
     patches = setup.joint_modes.patches
+    quadratic, cubic = effect_coefficients(setup, effect, effect_size)
 
     def response(tau, modal_peak, duration):
         if joint == "patches":
@@ -837,6 +1042,8 @@ def time_domain_mode_response(setup: JointSetup, joint: str, coulomb: float, run
                 run.zeta0,
                 modal_peak,
                 duration,
+                quadratic=quadratic,
+                cubic=cubic,
             )
         return dahl_mode_response_time_domain(
             tau, setup.dahl_sigma, coulomb, omega0, run.zeta0, modal_peak, duration
@@ -845,43 +1052,125 @@ def time_domain_mode_response(setup: JointSetup, joint: str, coulomb: float, run
     return response
 
 
-def format_run(time_s, force_lbf, acceleration_g, sample_rate_hz=SAMPLE_RATE_HZ) -> str:
-    """The run file text (Dactron-like ASCII export)."""
+# ------------------------------------------------------- the joint on mode 2
+
+
+@functools.lru_cache(maxsize=16)
+def _higher_mode_patch_curves(area_in2: float, settings: LabSettings, index: int):
+    """Amplitude grid and the contact patches' describing function on higher flexible
+    mode ``index`` (0 = mode 2), through that mode's own interface slip (cached)."""
+    jm, _, _, _ = _configuration_physics(area_in2, settings)
+    m = jm.mode.higher_modes[index]
+    _, strip = contact.strip_springs(jm.patches)
+    slip = m.slip_per_xi[:, strip]
+    omega = 2 * np.pi * m.frequency_hz
+    a = _amplitude_grid(m.accelerometer_participation, omega, settings.amplitude_points)
+    p = jm.patches
+    d, loss = contact.patch_describing_function(a, slip, p.stiffness_lbf_in, p.slip_force_lbf)
+    for array in (a, d, loss):
+        array.setflags(write=False)
+    return a, d, loss
+
+
+def higher_mode_table(setup: JointSetup, settings: LabSettings, index: int, run: RunPhysics | None = None):
+    """Averaged dynamics of higher flexible mode ``index`` (0 = mode 2) with the contact
+    patches acting through its own slip, linear damping ``higher_mode_zeta``.
+
+    The modes are taken as uncoupled (a modal Iwan joint per mode): each mode's slip
+    amplitude is its own, the other modes' slip at other frequencies being left out.
+    """
+    run = run if run is not None else RunPhysics(zeta0=settings.zeta0)
+    area = setup.bearing_area_in2 if setup.bearing_area_in2 is not None else PAPER_CONFIGURATIONS["no_washer"]
+    nominal = replace(settings, frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
+    a, patch_d, patch_loss = _higher_mode_patch_curves(float(area), nominal, index)
+    d, loss = scale_slip_forces(a, patch_d, patch_loss, run.slip_force_factor)
+    omega0 = 2 * np.pi * setup.mode.higher_modes[index].frequency_hz * run.frequency_factor
+    zeta, omega = contact.equivalent_damping(a, omega0, settings.higher_mode_zeta, d, loss)
+    return ModeTable.build(a, zeta, omega)
+
+
+def _higher_mode_response(setup: JointSetup, settings: LabSettings, index: int, run: RunPhysics):
+    table = higher_mode_table(setup, settings, index, run)
+    omega0 = 2 * np.pi * setup.mode.higher_modes[index].frequency_hz * run.frequency_factor
+
+    def response(tau, modal_peak, duration):
+        return nonlinear_mode_response(tau, table, omega0, settings.higher_mode_zeta, modal_peak, duration)
+
+    return response, table
+
+
+# ------------------------------------------------------------------ files
+
+
+def format_run(
+    time_s, force_lbf, acceleration_g, sample_rate_hz=SAMPLE_RATE_HZ, names=("Acceleration",)
+) -> str:
+    """The run file text (Dactron-like ASCII export); one acceleration column per name
+    (``acceleration_g`` of shape (n,) or (n_sensors, n))."""
+    columns = np.atleast_2d(acceleration_g)
+    if len(names) != columns.shape[0]:
+        raise ValueError(f"{len(names)} column names for {columns.shape[0]} acceleration columns")
     lines = [
         "Virtual lab ASCII export (lapjoint)",
         f"Sample rate: {sample_rate_hz:g} Hz",
         f"Pre-trigger: {PRETRIGGER_SAMPLES} samples",
-        "Time (s)\tForce (lbf)\tAcceleration (g)",
+        "\t".join(["Time (s)", "Force (lbf)", *(f"{name} (g)" for name in names)]),
     ]
-    body = np.char.add(
-        np.char.add(
-            np.char.add(np.char.add(np.char.mod("%.6f", time_s), "\t"), np.char.mod("%.10g", force_lbf)), "\t"
-        ),
-        np.char.mod("%.10g", acceleration_g),
-    )
+    body = np.char.add(np.char.add(np.char.mod("%.6f", time_s), "\t"), np.char.mod("%.10g", force_lbf))
+    for column in columns:
+        body = np.char.add(np.char.add(body, "\t"), np.char.mod("%.10g", column))
     return "\n".join(lines + body.tolist()) + "\n"
 
 
-def _campaign_yaml(name, configurations, mode_hz, sample_rate_hz) -> str:
+def write_run_mat(path, time_s, force_lbf, acceleration_g, names) -> None:
+    """One run as a MATLAB 5 MAT file of plain variables: ``t`` (s), ``force`` (lbf) and
+    one acceleration vector (g) per sensor, named as the sensor."""
+    import scipy.io
+
+    variables = {"t": np.asarray(time_s), "force": np.asarray(force_lbf)}
+    for name, column in zip(names, np.atleast_2d(acceleration_g), strict=True):
+        variables[name] = column
+    scipy.io.savemat(path, variables, format="5", oned_as="column")
+    # the header's text holds the writing time: a fixed one keeps a seed's files identical
+    with open(path, "r+b") as f:
+        f.write(MAT_HEADER_TEXT.ljust(116))
+
+
+MAT_HEADER_TEXT = b"MATLAB 5.0 MAT-file, written by the lapjoint virtual lab"
+
+
+FILE_FORMATS = {"txt": "ASCII export", "mat": "MATLAB 5 MAT, plain variables"}
+
+
+def _campaign_yaml(name, configurations, modes_hz, sample_rate_hz, channels=None, file_format="txt") -> str:
     lines = [
         f"name: {name}",
         f"sample_rate_hz: {sample_rate_hz:g}",
         f"pretrigger_samples: {PRETRIGGER_SAMPLES}",
-        f"mode_hz: {mode_hz:g}",
-        "response: {quantity: acceleration, unit: g}",
-        "force: {unit: lbf}",
-        "configurations:",
     ]
+    if modes_hz == "auto":
+        lines.append("modes_hz: auto")
+    elif len(modes_hz) == 1:
+        lines.append(f"mode_hz: {modes_hz[0]:g}")
+    else:
+        lines.append("modes_hz: [" + ", ".join(f"{f:g}" for f in modes_hz) + "]")
+    if channels is None:
+        lines.append("response: {quantity: acceleration, unit: g}")
+    else:
+        lines.append("response: {quantity: acceleration, unit: g, channels: [" + ", ".join(channels) + "]}")
+    lines += ["force: {unit: lbf}", "configurations:"]
     for cname, area in configurations.items():
         area_part = f"bearing_area_in2: {area:g}, " if area is not None else ""
-        lines.append(f'  {cname}: {{{area_part}files: "{cname}/*.txt"}}')
+        lines.append(f'  {cname}: {{{area_part}files: "{cname}/*.{file_format}"}}')
     return "\n".join(lines) + "\n"
 
 
-def truth_path(out_dir) -> Path:
-    """Where the truth JSON of a campaign folder lives (beside it, not inside)."""
+def truth_path(out_dir, mode: int = 1) -> Path:
+    """Where the truth JSON of a campaign folder's mode lives (beside it, not inside):
+    ``<campaign>.truth.json`` for mode 1, ``<campaign>.mode<k>.truth.json`` for mode k."""
     out = Path(out_dir)
-    return out.parent / (out.name + ".truth.json")
+    suffix = ".truth.json" if mode == 1 else f".mode{mode}.truth.json"
+    return out.parent / (out.name + suffix)
 
 
 def generate_campaign(
@@ -896,10 +1185,13 @@ def generate_campaign(
     samples_per_run=None,
     settings: LabSettings | None = None,
     integrator="averaged",
-    sensor_gain=1.0,
+    sensors=None,
     noise_stream=0,
+    nonlinear_modes=1,
+    file_format="txt",
+    modes_auto=False,
 ) -> dict:
-    """Write a simulated campaign folder and its truth; return the truth dict.
+    """Write a simulated campaign folder and its truth; return mode 1's truth dict.
 
     Parameters
     ----------
@@ -911,8 +1203,10 @@ def generate_campaign(
     joint : {"patches", "dahl"}
         ``patches``: micro-slip contact patches (true cause ``microslip_power_law``);
         ``dahl``: single-state Dahl joint fitted to the same specimen (cause ``none``).
-    effect : {None, "quadratic_damping", "stiffness_nonlinearity", "run_drift", "second_mode"}
-        One added effect; requires ``joint="dahl"`` (the baseline it departs from).
+    effect : {None, "quadratic_damping", "stiffness_nonlinearity", "cubic_stiffness", "run_drift", "second_mode"}
+        One added effect (``JOINT_EFFECTS``): on the Dahl joint the one cause; on the
+        patches (quadratic damping, a stiffness term) a second mechanism beside
+        micro-slip, the truth's ``causes`` naming both.
     effect_size : float, optional
         Physical size of the effect (see ``EFFECT_SIZE_MEANING``); default
         ``DEFAULT_EFFECT_SIZES[effect]``.
@@ -928,14 +1222,28 @@ def generate_campaign(
         makes every run of a configuration the same beam).
     integrator : {"averaged", "time_domain"}
         ``averaged``: mode 1 from the slow-flow tables (any joint and effect);
-        ``time_domain``: the joint's equation of motion integrated in time (patches or
-        Dahl; effects in ``TIME_DOMAIN_EFFECTS``; about 1 s per patch-joint run).
-    sensor_gain : float
-        Mode 1 as seen by another sensor, relative to the accelerometer's mode shape
-        (see :func:`generate_sensor_campaigns`).
+        ``time_domain``: the joint's equation of motion integrated in time (effects in
+        ``TIME_DOMAIN_EFFECTS[joint]``; about 1 s per patch-joint run).
+    sensors : sequence of Sensor, optional
+        The accelerometers, each a column of every run file (or a MAT variable), at its
+        own point of the beam (every mode at its own shape value there) with its own
+        noise; default the reference accelerometer alone. Several sensors: the
+        campaign.yaml names them as ``response: {channels: [...]}``.
     noise_stream : int
-        Index of the accelerometer-noise stream: with the same ``seed``, campaigns with
-        different streams share the physics and the hammer and differ only in sensor noise.
+        Index of the first sensor's noise stream (sensor ``i`` draws from stream
+        ``noise_stream + i``): with the same ``seed``, campaigns with different streams
+        share the physics and the hammer and differ only in sensor noise.
+    nonlinear_modes : {1, 2}
+        Flexible modes the joint acts on: 2 gives mode 2 the contact patches too, through
+        its own interface slip (``joint="patches"``, no effect, averaged); the
+        campaign.yaml lists both modes (``modes_hz``) and mode 2's truth is written to
+        ``truth_path(out_dir, 2)``.
+    file_format : {"txt", "mat"}
+        Run files as ASCII exports or MATLAB 5 MAT files (``t``, ``force``, one variable
+        per sensor).
+    modes_auto : bool
+        campaign.yaml asks for every mode the analysis finds (``modes_hz: auto``) instead
+        of listing the simulated ones.
     """
     if joint not in ("patches", "dahl"):
         raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")
@@ -943,19 +1251,29 @@ def generate_campaign(
         raise ValueError(
             f"effect must be one of {sorted(k for k in EFFECT_CAUSES if k)} or None, got {effect!r}"
         )
-    if effect is not None and joint != "dahl":
-        raise ValueError("an added effect departs from the Dahl baseline: pass joint='dahl'")
+    if effect is not None and effect not in JOINT_EFFECTS[joint]:
+        raise ValueError(f"the {joint} joint takes an effect in {JOINT_EFFECTS[joint]}, got {effect!r}")
     if integrator not in INTEGRATORS:
         raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
-    if integrator == "time_domain" and effect not in TIME_DOMAIN_EFFECTS:
+    if integrator == "time_domain" and effect not in TIME_DOMAIN_EFFECTS[joint]:
         raise ValueError(
-            "the time-domain path integrates the patch or Dahl joint with linear modal damping: "
-            f"it takes effect in {TIME_DOMAIN_EFFECTS}, got {effect!r}"
+            f"the time-domain path integrates the {joint} joint: it takes effect in "
+            f"{TIME_DOMAIN_EFFECTS[joint]}, got {effect!r}"
         )
-    if not sensor_gain > 0:
-        raise ValueError(f"sensor_gain must be positive, got {sensor_gain!r}")
+    if nonlinear_modes not in (1, 2):
+        raise ValueError(f"nonlinear_modes must be 1 or 2, got {nonlinear_modes!r}")
+    if nonlinear_modes == 2 and (joint != "patches" or effect is not None or integrator != "averaged"):
+        raise ValueError("a joint on two modes is the contact patches alone, averaged")
+    if file_format not in FILE_FORMATS:
+        raise ValueError(f"file_format must be one of {sorted(FILE_FORMATS)}, got {file_format!r}")
+    sensors = _check_sensors(sensors if sensors is not None else (Sensor(),))
     if effect is not None and effect_size is None:
         effect_size = DEFAULT_EFFECT_SIZES[effect]
+    if effect == "cubic_stiffness" and not effect_size > 0:
+        raise ValueError(
+            f"cubic_stiffness is a hardening spring (effect_size > 0), got {effect_size!r}: a softening "
+            "cubic loses all stiffness at a finite amplitude; use stiffness_nonlinearity"
+        )
     if runs_per_configuration < 1:
         raise ValueError("runs_per_configuration must be at least 1")
     configurations = dict(PAPER_CONFIGURATIONS if configurations is None else configurations)
@@ -967,7 +1285,8 @@ def generate_campaign(
     root_seq = np.random.SeedSequence(seed)
     children = root_seq.spawn(len(configurations))
     velocity = np.logspace(-3, 2, 101)
-    cause = EFFECT_CAUSES[effect] if effect else ("microslip_power_law" if joint == "patches" else "none")
+    causes = true_causes(joint, effect)
+    names = [s.name for s in sensors]
     truth = {
         "campaign_dir": out.name,
         "seed": seed,
@@ -976,10 +1295,12 @@ def generate_campaign(
         "effect_size": effect_size,
         "effect_size_meaning": EFFECT_SIZE_MEANING.get(effect),
         "reference_velocity_in_s": REFERENCE_VELOCITY_IN_S,
-        "expected_cause": cause,
+        "expected_cause": causes[0],
+        "causes": causes,
         "integrator": integrator,
-        "sensor_gain": sensor_gain,
-        "noise_stream": noise_stream,
+        "sensors": [
+            {**asdict(s), "noise_stream": noise_stream + i, "column": s.name} for i, s in enumerate(sensors)
+        ],
         "lab_settings": {k: v for k, v in asdict(settings).items() if k != "joint"},
         "joint_parameters": {k: v for k, v in asdict(settings.joint).items() if k != "geometry"},
         "preload_lbf": settings.joint.preload_lbf,
@@ -990,27 +1311,38 @@ def generate_campaign(
     setups = {}
     for cname, area in configurations.items():
         setups[cname] = setup_configuration(cname, area, settings)
-    mode_hz = float(np.mean([s.mode.frequency_hz for s, _ in setups.values()]))
+    modes_hz = [float(np.mean([s.mode.frequency_hz for s, _ in setups.values()]))]
+    if nonlinear_modes == 2:
+        modes_hz.append(float(np.mean([s.mode.higher_modes[0].frequency_hz for s, _ in setups.values()])))
     (out / "campaign.yaml").write_text(
         _campaign_yaml(
             f"virtual-lab-{joint}-{effect or 'baseline'}-{seed}",
             configurations,
-            round(mode_hz),
+            "auto" if modes_auto else [round(f) for f in modes_hz],
             settings.sample_rate_hz,
+            channels=names if len(sensors) > 1 else None,
+            file_format=file_format,
         )
     )
+    mode2_truth = {**truth, "mode": 2, "mode_hz": modes_hz[-1], "causes": causes, "configurations": {}}
+    truth["mode"], truth["mode_hz"] = 1, modes_hz[0]
     for (cname, (setup, curves)), child in zip(setups.items(), children):
         folder = out / cname
         folder.mkdir(exist_ok=True)
-        for stale in folder.glob("run*.txt"):
+        for stale in [*folder.glob("run*.txt"), *folder.glob("run*.mat")]:
             stale.unlink()
         hammer_seq, noise_seq, variability_seq = child.spawn(3)
         rng = np.random.default_rng(hammer_seq)
-        noise_rng = np.random.default_rng(noise_seq.spawn(noise_stream + 1)[noise_stream])
+        noise_rngs = [
+            np.random.default_rng(s) for s in noise_seq.spawn(noise_stream + len(sensors))[noise_stream:]
+        ]
         runs = draw_run_physics(settings, np.random.default_rng(variability_seq), runs_per_configuration)
+        views = tuple(sensor_view(setup.mode, settings, s) for s in sensors)
         base_table = mode_table(setup, curves, settings, joint, effect, effect_size)
-        zeta, fd = truth_curves(setup, base_table, velocity / sensor_gain)
         mode = setup.mode
+        # the truth's curves are against the first sensor's own velocity amplitude
+        first_gain = abs(views[0].mode1_participation / mode.accelerometer_participation)
+        zeta, fd = truth_curves(setup, base_table, velocity / first_gain)
         entry = {
             "bearing_area_in2": setup.bearing_area_in2,
             "linear_frequency_hz": mode.frequency_hz,
@@ -1023,23 +1355,49 @@ def generate_campaign(
             "n_patches_per_interface": int(setup.joint_modes.patches.x_rel_in.size),
             "zeta": zeta.tolist(),
             "damped_frequency_hz": fd.tolist(),
+            "channels": _channel_truth(setup, base_table, velocity, sensors, views, 1),
             "runs": [],
         }
+        mode2_table = higher_mode_table(setup, settings, 0) if nonlinear_modes == 2 else None
+        if mode2_table is not None:
+            mode2_truth["configurations"][cname] = {
+                "bearing_area_in2": setup.bearing_area_in2,
+                "linear_frequency_hz": mode.higher_modes[0].frequency_hz,
+                "accelerometer_participation": mode.higher_modes[0].accelerometer_participation,
+                "hammer_participation": mode.higher_modes[0].hammer_participation,
+                "channels": _channel_truth(setup, mode2_table, velocity, sensors, views, 2),
+                "runs": [],
+            }
         for i, run in enumerate(runs):
             fraction = i / (runs_per_configuration - 1) if runs_per_configuration > 1 else 0.0
             table = mode_table(setup, curves, settings, joint, effect, effect_size, fraction, run)
             coulomb = run_dahl_coulomb(setup, effect, effect_size, fraction, run.slip_force_factor)
             if integrator == "time_domain":
-                response = time_domain_mode_response(setup, joint, coulomb, run)
+                response = time_domain_mode_response(setup, joint, coulomb, run, effect, effect_size)
             else:
                 response = averaged_mode_response(setup, table, run)
+            higher_responses = ()
+            if mode2_table is not None:
+                mode2_response, run_mode2_table = _higher_mode_response(setup, settings, 0, run)
+                higher_responses = (mode2_response,)
             ratio = effect_size if effect == "second_mode" else 0.0
             t, f, acc, facts = simulate_run(
-                setup, response, settings, rng, ratio, run=run, noise_rng=noise_rng, sensor_gain=sensor_gain
+                setup,
+                response,
+                settings,
+                rng,
+                ratio,
+                run=run,
+                sensors=views,
+                noise_rngs=noise_rngs,
+                higher_responses=higher_responses,
             )
             name = run_name(i)
-            (folder / f"{name}.txt").write_text(format_run(t, f, acc, settings.sample_rate_hz))
-            z_run, f_run = truth_curves(setup, table, velocity / sensor_gain)
+            if file_format == "mat":
+                write_run_mat(folder / f"{name}.mat", t, f, acc, names)
+            else:
+                (folder / f"{name}.txt").write_text(format_run(t, f, acc, settings.sample_rate_hz, names))
+            z_run, f_run = truth_curves(setup, table, velocity / first_gain)
             entry["runs"].append(
                 {
                     "run": name,
@@ -1051,25 +1409,52 @@ def generate_campaign(
                     "damped_frequency_hz": f_run.tolist(),
                 }
             )
+            if mode2_table is not None:
+                participation = views[0].participation(2)
+                z2, f2 = truth_curves(setup, run_mode2_table, velocity, participation=participation)
+                mode2_truth["configurations"][cname]["runs"].append(
+                    {"run": name, "zeta": z2.tolist(), "damped_frequency_hz": f2.tolist()}
+                )
         truth["configurations"][cname] = entry
     truth_path(out).write_text(json.dumps(truth, indent=1))
+    if nonlinear_modes == 2:
+        truth_path(out, 2).write_text(json.dumps(mode2_truth, indent=1))
     return truth
 
 
-def generate_sensor_campaigns(out_root, sensor_gains: Mapping[str, float], **campaign_options) -> dict:
+def _channel_truth(setup, table, velocity, sensors, views, mode_index) -> dict:
+    """Per sensor: the mode's shape at it and the true curves against its own velocity
+    amplitude."""
+    channels = {}
+    for sensor, view in zip(sensors, views, strict=True):
+        participation = view.participation(mode_index)
+        zeta, fd = truth_curves(setup, table, velocity, participation=participation)
+        channels[sensor.name] = {
+            "position_in": view.position_in,
+            "participation": participation,
+            "noise_g": view.noise_g,
+            "zeta": zeta.tolist(),
+            "damped_frequency_hz": fd.tolist(),
+        }
+    return channels
+
+
+def generate_sensor_campaigns(out_root, sensors: Mapping[str, Sensor | float], **campaign_options) -> dict:
     """The same campaign as seen by several sensors: one campaign folder per sensor.
 
     Every campaign has the same physics, hammer hits and run-to-run variations (same
-    ``seed``); mode 1's response is scaled by the sensor's mode-shape ratio to the
-    accelerometer, and each sensor has its own independent noise.
+    ``seed``); each sensor sees every mode at its own shape value and has its own
+    independent noise.
 
     Parameters
     ----------
     out_root : path
         Folder that receives ``<sensor name>/`` campaign folders (truth beside each).
-    sensor_gains : mapping of str to float
-        Sensor name -> mode-1 amplitude relative to the accelerometer (``phi(x) /
-        phi(x_accelerometer)``, positive; e.g. ``{"accelerometer": 1.0, "mid": 0.6}``).
+    sensors : mapping of str to Sensor or float
+        Sensor name (the campaign folder) -> a :class:`Sensor`, or mode 1's amplitude
+        relative to the accelerometer (``|phi(x) / phi(x_accelerometer)|``): the sensor
+        is then placed at the point of the first configuration's mode 1 with that ratio
+        nearest the accelerometer.
     **campaign_options
         Passed to :func:`generate_campaign` (seed, joint, effect, configurations ...).
 
@@ -1079,7 +1464,64 @@ def generate_sensor_campaigns(out_root, sensor_gains: Mapping[str, float], **cam
         Sensor name -> truth dict of its campaign.
     """
     root = Path(out_root)
+    settings = campaign_options.get("settings") or LabSettings()
+    configurations = campaign_options.get("configurations") or PAPER_CONFIGURATIONS
+    name, area = next(iter(configurations.items()))
+    mode = setup_configuration(name, area, settings)[0].mode
+    placed = {}
+    for name, sensor in sensors.items():
+        if not isinstance(sensor, Sensor):
+            sensor = sensor_at_gain(mode, settings, float(sensor))
+        placed[name] = sensor
     return {
-        name: generate_campaign(root / name, sensor_gain=gain, noise_stream=index, **campaign_options)
-        for index, (name, gain) in enumerate(sensor_gains.items())
+        name: generate_campaign(root / name, sensors=(sensor,), noise_stream=index, **campaign_options)
+        for index, (name, sensor) in enumerate(placed.items())
     }
+
+
+def sensor_at_gain(
+    mode: specimen.FirstMode, settings: LabSettings, gain: float, name="Acceleration"
+) -> Sensor:
+    """A sensor where mode 1 is ``gain`` times the accelerometer's (the point nearest the
+    accelerometer; gain 1 is the accelerometer itself)."""
+    if gain == 1.0:
+        return Sensor(name)
+    positions = positions_with_mode1_gain(mode, gain)
+    if positions.size == 0:
+        raise ValueError(f"no point of the beam sees mode 1 at {gain:g} times the accelerometer")
+    x_acc = settings.joint.geometry.accelerometer_x_in
+    return Sensor(name, float(positions[np.argmin(np.abs(positions - x_acc))]))
+
+
+HIT_SENSOR_GAINS = {"acc1": 1.0, "acc2": 0.05, "acc3": 2.0}
+"""The one-hit record's sensors: mode 1 at each relative to the reference accelerometer
+(acc2 near a node of mode 1, acc3 towards a free end)."""
+
+
+def generate_one_hit(
+    out_dir, *, seed=7, sample_rate_hz=12800.0, duration_s=5.0, bearing_area_in2=1.36
+) -> dict:
+    """One hammer hit recorded by three accelerometers, as one MAT 5 file.
+
+    The shape of a real multi-sensor impact test: a campaign of one configuration
+    (``hit``) and one run, ``hit/run01.mat`` holding ``t``, ``force`` and ``acc1``-``acc3``
+    (``HIT_SENSOR_GAINS``), the joint acting on modes 1 and 2, campaign.yaml asking for
+    every mode (``modes_hz: auto``) and every channel. Returns mode 1's truth (mode 2's
+    is at ``truth_path(out_dir, 2)``).
+    """
+    settings = LabSettings(
+        sample_rate_hz=sample_rate_hz, samples_per_run=int(round(duration_s * sample_rate_hz))
+    )
+    mode = setup_configuration("hit", bearing_area_in2, settings)[0].mode
+    sensors = tuple(sensor_at_gain(mode, settings, gain, name) for name, gain in HIT_SENSOR_GAINS.items())
+    return generate_campaign(
+        out_dir,
+        seed=seed,
+        runs_per_configuration=1,
+        configurations={"hit": bearing_area_in2},
+        settings=settings,
+        sensors=sensors,
+        nonlinear_modes=2,
+        file_format="mat",
+        modes_auto=True,
+    )

@@ -20,6 +20,8 @@ import numpy as np
 from workflow.io import units
 from workflow.io.campaign import SINGLE_CHANNEL_NAME, RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
+from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, quoted, shortened
+from workflow.io.record_rules import rates_agree
 from workflow.io.settings import (
     AnalysisSettings,
     DampingFitSettings,
@@ -36,6 +38,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "analysis_window",
+    "window_problem",
     "mode_search_range",
     "WINDOW_ADVICE",
     "channel_responses",
@@ -46,11 +49,13 @@ __all__ = [
     "analyse_run_with_quality",
     "read_with_quality",
     "labelled",
+    "analyse_every_mode_and_channel",
     "failed_checks",
     "read_and_check",
     "RunAnalysis",
     "analyse_run_file",
     "identify_configuration_mode",
+    "identify_configuration_modes",
     "find_every_mode",
     "analyse_campaign",
     "response_unit_label",
@@ -60,6 +65,9 @@ __all__ = [
     "with_mode_and_channel",
     "first_mode_rows",
     "collect_tables",
+    "NOTHING_ANALYSED",
+    "nothing_analysed_message",
+    "nothing_analysed_in_tables",
     "fit_damping_curves",
     "fit_mode_damping_curves",
 ]
@@ -78,6 +86,28 @@ def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> 
     start = min(max(start, 0), record.n_samples)
     stop = min(max(stop, start), record.n_samples)
     return start, stop
+
+
+def window_problem(record: RunRecord, window_s: tuple[float, float] | None, configuration: str) -> str | None:
+    """Why campaign.yaml's ``window_s`` leaves too little of a record to analyse, or None.
+
+    The window is the part of every run to analyse, in s from the start of the file
+    (campaign-format.md); the part of it inside the record must hold at least
+    :data:`~workflow.io.campaign.MIN_SAMPLES` samples, as a whole run file must.
+    """
+    from workflow.io.campaign import MIN_SAMPLES
+
+    if window_s is None:
+        return None
+    start, stop = analysis_window(record, window_s)
+    if stop - start >= MIN_SAMPLES:
+        return None
+    return (
+        f"campaign.yaml configurations.{configuration}.window_s [{window_s[0]:.6g}, {window_s[1]:.6g}] s "
+        f"holds {stop - start} samples of this record, which spans 0 to "
+        f"{record.n_samples / record.sample_rate_hz:.6g} s ({record.n_samples} samples at "
+        f"{record.sample_rate_hz:.6g} Hz); the part of the run to analyse needs at least {MIN_SAMPLES} samples"
+    )
 
 
 def mode_search_range(
@@ -168,6 +198,10 @@ def identify_mode(
     )
     if not_a_resonance:
         raise ValueError(not_a_resonance)
+    if not np.isfinite(mode_hz):
+        raise ValueError(f"the {method} spectrum of the runs gives no finite peak frequency")
+    if coherence_at_mode is not None and not np.isfinite(coherence_at_mode):
+        coherence_at_mode = None  # no force energy at the mode: no coherence estimate
     forced = modal_id.forced_line_problem(responses, sample_rate_hz, mode_hz, frequency_hz, amplitude)
     if forced is not None:
         raise ValueError(f"{forced}; {WINDOW_ADVICE}")
@@ -317,10 +351,7 @@ def read_with_quality(
         reason = str(error)
     except Exception as error:  # a fault of the reader on one file must not stop the others
         logging.getLogger(__name__).exception("%s: not read", path)
-        reason = (
-            f"{(Path(campaign_dir) / path).as_posix()}: not read: {type(error).__name__}: {error} "
-            "(an error of the reader, not a known fault of the file: the job's log has the trace)"
-        )
+        reason = _fault_reason(campaign_dir, path, "read", error)
     else:
         requested_hz = [mode_hz for mode_hz, _ in campaign.mode_requests() if mode_hz is not None]
         names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
@@ -352,10 +383,62 @@ def labelled(row: dict, channel: str, several: bool, mode: int = -1, mode_hz: fl
     belongs to; with several channels (or modes) its reason names them."""
     reason = row["reason"]
     if reason:
-        where = [f"channel {channel!r}"] if several else []
+        where = [f"channel {quoted(channel)}"] if several else []
         where += [f"mode {mode_hz:.6g} Hz"] if mode_hz is not None else []
         reason = f"{', '.join(where)}: {reason}" if where else reason
     return {**row, "reason": reason, "channel": channel, "mode": mode}
+
+
+def _window_problems(
+    campaign_dir, run_path: str, record: RunRecord, campaign, configuration: str
+) -> list[str]:
+    """The window problem of one read run (:func:`window_problem`) as a message naming the file."""
+    problem = window_problem(record, campaign.configurations[configuration].window_s, configuration)
+    return [] if problem is None else [f"{(Path(campaign_dir) / run_path).as_posix()}: {problem}"]
+
+
+def _fault_reason(campaign_dir, path: str, step: str, error: Exception) -> str:
+    """The exclusion reason of a run whose reading or analysis raised an unexpected error."""
+    stage = "reader" if step == "read" else "analysis"
+    return (
+        f"{(Path(campaign_dir) / path).as_posix()}: not {step}: {type(error).__name__}: "
+        f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the {stage}, not a known fault "
+        "of the file: the job's log has the trace)"
+    )
+
+
+def analyse_every_mode_and_channel(
+    record: RunRecord,
+    *,
+    configuration: str,
+    run: str,
+    mode: ConfigurationMode,
+    window: tuple[int, int],
+    decay_settings: DecaySettings,
+    quality_settings: QualitySettings,
+) -> tuple[dict[str, np.ndarray], list[dict]]:
+    """:func:`analyse_run_with_quality` for every mode of the configuration on every
+    response channel of the run: the segments (with ``mode``, the mode's index, and
+    ``channel``) and the decay-level quality rows (:func:`labelled`)."""
+    names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
+    several = len(names) > 1 or len(mode.modes) > 1
+    parts, decay_rows = [], []
+    for index, info in enumerate(mode.modes):
+        for name in names:
+            columns, mine = analyse_run_with_quality(
+                record.for_channel(name) if record.responses else record,
+                configuration=configuration,
+                run=run,
+                mode=info,
+                window=window,
+                decay_settings=decay_settings,
+                quality_settings=quality_settings,
+            )
+            n = len(columns["t_s"])
+            parts.append({**columns, "mode": np.full(n, index), "channel": np.full(n, name)})
+            mode_hz = info.mode_hz if len(mode.modes) > 1 else None
+            decay_rows += [labelled(row, name, several, index, mode_hz) for row in mine]
+    return {key: np.concatenate([part[key] for part in parts]) for key in SEGMENT_COLUMNS}, decay_rows
 
 
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
@@ -427,31 +510,28 @@ def analyse_run_file(
     record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
     problems = failed_checks(run_path, rows)
     if record is not None and not problems:
+        problems = _window_problems(campaign_dir, run_path, record, campaign, configuration)
+    if record is not None and not problems:
         if mode.mode is None:
             problems = [mode.error]
         else:
-            window = analysis_window(record, campaign.configurations[configuration].window_s)
-            names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
-            several = len(names) > 1 or len(mode.modes) > 1
-            parts, decay_rows = [], []
-            for index, info in enumerate(mode.modes):
-                for name in names:
-                    columns, mine = analyse_run_with_quality(
-                        record.for_channel(name) if record.responses else record,
-                        configuration=configuration,
-                        run=run,
-                        mode=info,
-                        window=window,
-                        decay_settings=decay_settings,
-                        quality_settings=quality_settings,
-                    )
-                    n = len(columns["t_s"])
-                    parts.append({**columns, "mode": np.full(n, index), "channel": np.full(n, name)})
-                    mode_hz = info.mode_hz if len(mode.modes) > 1 else None
-                    decay_rows += [labelled(row, name, several, index, mode_hz) for row in mine]
-            segments = {key: np.concatenate([part[key] for part in parts]) for key in SEGMENT_COLUMNS}
-            rows += decay_rows
-            problems = failed_checks(run_path, decay_rows)
+            try:
+                segments, decay_rows = analyse_every_mode_and_channel(
+                    record,
+                    configuration=configuration,
+                    run=run,
+                    mode=mode,
+                    window=analysis_window(record, campaign.configurations[configuration].window_s),
+                    decay_settings=decay_settings,
+                    quality_settings=quality_settings,
+                )
+            except Exception as error:  # a fault on one run must not stop the others
+                logging.getLogger(__name__).exception("%s: not analysed", run_path)
+                segments, decay_rows = empty_segments(), []
+                problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
+            else:
+                rows += decay_rows
+                problems = failed_checks(run_path, decay_rows)
     status = {
         "configuration": configuration,
         "run": run,
@@ -498,14 +578,65 @@ def identify_configuration_mode(
     from pathlib import PurePosixPath
 
     window_s = campaign.configurations[configuration].window_s
-    records, windows, skipped = [], [], {}
+    records, windows, run_paths_used, skipped = [], [], [], {}
     for run_path in run_paths:
         record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
+        if not problems:
+            problems = _window_problems(campaign_dir, run_path, record, campaign, configuration)
         if problems:
             skipped[PurePosixPath(run_path).stem] = problems
             continue
         records.append(record)
         windows.append(analysis_window(record, window_s))
+        run_paths_used.append(run_path)
+    if not records:
+        reasons = [problem for problems in skipped.values() for problem in problems]
+        if len(reasons) > MAX_QUOTED_PROBLEMS:
+            hidden = len(reasons) - MAX_QUOTED_PROBLEMS
+            reasons = [*reasons[:MAX_QUOTED_PROBLEMS], f"and {hidden} more (runs.parquet lists every reason)"]
+        return ConfigurationMode(
+            None,
+            f"configuration {configuration}: first mode not found: every run of the configuration is "
+            f"excluded ({len(skipped)} of {len(run_paths)}): " + "; ".join(reasons),
+            skipped,
+        )
+    common_hz = _common_sample_rate_hz([record.sample_rate_hz for record in records])
+    for index in reversed(range(len(records))):
+        rate_hz = records[index].sample_rate_hz
+        if not rates_agree(rate_hz, common_hz):
+            # one spectrum grid for all: a run at another rate would be read at the wrong frequencies
+            skipped[PurePosixPath(run_paths_used[index]).stem] = [
+                f"{run_paths_used[index]}: left out of the mode search only: sample rate {rate_hz:.9g} Hz "
+                f"differs from the {common_hz:.9g} Hz of most runs of the configuration"
+            ]
+            del records[index], windows[index]
+    try:
+        return identify_configuration_modes(
+            records, windows, configuration, campaign, mode_search, quality_settings, skipped
+        )
+    except Exception as error:  # a fault of the search must not stop the other configurations
+        logging.getLogger(__name__).exception("configuration %s: mode search failed", configuration)
+        return ConfigurationMode(
+            None,
+            f"configuration {configuration}: first mode not found: {type(error).__name__}: "
+            f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the mode search, not a known "
+            "fault of the files: the job's log has the trace)",
+            skipped,
+        )
+
+
+def identify_configuration_modes(
+    records: list[RunRecord],
+    windows: list[tuple[int, int]],
+    configuration: str,
+    campaign,
+    mode_search: ModeSearchSettings,
+    quality_settings: QualitySettings,
+    skipped: dict[str, list[str]],
+) -> ConfigurationMode:
+    """Every mode campaign.yaml asks of one configuration's readable runs (``modes_hz``,
+    ``mode_hz`` or ``auto``, :meth:`~workflow.io.campaign.Campaign.mode_requests`); a mode
+    that is not found is the configuration's error, naming it."""
     options = {
         "windows": windows,
         "band_half_width": mode_search.band_half_width,
@@ -569,6 +700,12 @@ def find_every_mode(
             f"no clear, decaying mode in {search_hz[0]:.4g}-{search_hz[1]:.4g} Hz{reasons}{advice}"
         )
     return found, left_out
+
+
+def _common_sample_rate_hz(rates_hz: list[float]) -> float:
+    """The sample rate that most of the rates agree with (the first of equals)."""
+    agreeing = [sum(rates_agree(rate, other) for other in rates_hz) for rate in rates_hz]
+    return rates_hz[int(np.argmax(agreeing))]
 
 
 def analyse_campaign(
@@ -768,6 +905,64 @@ def collect_tables(
             campaign, [row for row in status_rows if row["status"] == "used"]
         ),
     }
+
+
+NOTHING_ANALYSED = "nothing could be analysed"
+"""How :func:`nothing_analysed_message` begins."""
+
+
+def nothing_analysed_message(runs: pd.DataFrame, n_kept_segments: int, rejected: pd.DataFrame) -> str | None:
+    """Why nothing of a campaign could be analysed (no kept segment at all), or None.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        The runs table (:data:`RUN_COLUMNS`): every run file, used or excluded with its reason.
+    n_kept_segments : int
+        Rows of the segments table (kept segments of used runs).
+    rejected : DataFrame
+        The rejected segments, with ``configuration``, ``run`` and ``reject_reason``.
+
+    Returns
+    -------
+    str or None
+        Which runs, why (the first reasons, each naming its file or campaign.yaml key) and
+        what to change, for the last lines a user reads; None when some segment was kept.
+    """
+    if n_kept_segments > 0:
+        return None
+    used = runs[runs["status"] == "used"]
+    excluded = runs[runs["status"] != "used"]
+    lines = [f"{NOTHING_ANALYSED}: no run of the campaign gives a usable segment."]
+    if len(excluded):
+        lines.append(f"{len(excluded)} of {len(runs)} run files (or globs) are excluded:")
+        for row in excluded.head(MAX_QUOTED_PROBLEMS).itertuples():
+            name = f"{row.configuration}/{row.run}" if row.run else row.path
+            lines.append(f"  {name}: {shortened(str(row.reason), 10 * QUOTED_CHARACTERS)}")
+        if len(excluded) > MAX_QUOTED_PROBLEMS:
+            lines.append(f"  and {len(excluded) - MAX_QUOTED_PROBLEMS} more")
+    if len(used):
+        counts = rejected["reject_reason"].value_counts().head(3)
+        reasons = "; ".join(f"{count} x {shortened(str(reason))}" for reason, count in counts.items())
+        lines.append(
+            f"{len(used)} run(s) were read but every segment of them was rejected"
+            + (f" ({reasons})" if reasons else " (none was long enough to measure)")
+        )
+    lines.append(
+        "What to change: each reason names the file (and line) or the campaign.yaml key at fault; "
+        "correct those, or choose the channel, window_s, band_hz or mode_hz that fit the records "
+        "(docs/input-format.md). Every run and its reason: results/tables/runs.csv"
+    )
+    return "\n".join(lines)
+
+
+def nothing_analysed_in_tables(runs_path, segments_path, rejected_path) -> str | None:
+    """:func:`nothing_analysed_message` of the tables rule ``collect_tables`` wrote."""
+    from workflow.io.tables import read_table
+
+    return nothing_analysed_message(
+        read_table(runs_path), len(read_table(segments_path)), read_table(rejected_path)
+    )
 
 
 def fit_damping_curves(

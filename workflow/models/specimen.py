@@ -446,6 +446,12 @@ class LinearMode:
     """Mass-normalised mode shape at the accelerometer (in per unit modal coordinate)."""
     hammer_participation: float
     """Mass-normalised mode shape at the hammer point (in per unit modal coordinate)."""
+    shape_in: np.ndarray
+    """Mass-normalised transverse deflection at the first mode's ``x_in`` (in per unit
+    modal coordinate): what a sensor elsewhere on the beam sees of this mode."""
+    slip_per_xi: np.ndarray
+    """Interface slip per unit modal coordinate at every interface spring (in/in), as
+    :attr:`FirstMode.slip_per_xi`: how much the joint takes part in this mode."""
 
 
 @dataclass(frozen=True)
@@ -517,14 +523,19 @@ def first_mode(
     nodes = model.x_in[crossings] - shape[crossings] * (model.x_in[crossings + 1] - model.x_in[crossings]) / (
         shape[crossings + 1] - shape[crossings]
     )
-    slip = np.array(
-        [
-            [model.slip_operator(itf, float(model.patch_x_in(itf, x))) @ phi for x in model.springs.x_rel_in]
-            for itf in model.interfaces
-        ]
-    )
+    slip_rows = [
+        [model.slip_operator(itf, float(model.patch_x_in(itf, x))) for x in model.springs.x_rel_in]
+        for itf in model.interfaces
+    ]
+    slip = np.array([[row @ phi for row in rows] for rows in slip_rows])
     higher = tuple(
-        LinearMode(float(freqs[j]), float(acc_row @ vecs[:, j]), float(ham_row @ vecs[:, j]))
+        LinearMode(
+            float(freqs[j]),
+            float(acc_row @ vecs[:, j]),
+            float(ham_row @ vecs[:, j]),
+            shape_in=line @ vecs[:, j],
+            slip_per_xi=np.array(slip_rows) @ vecs[:, j],
+        )
         for j in flexible[1:]
         if freqs[j] <= higher_mode_cutoff_hz
     )

@@ -55,6 +55,7 @@ from matplotlib import ticker  # noqa: E402
 from matplotlib.backend_bases import DrawEvent  # noqa: E402
 
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
+from workflow.outputs.escape import plot_text  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 if TYPE_CHECKING:  # tables come in as DataFrames; figures 7-8 are drawn without pandas
@@ -302,7 +303,7 @@ def _plot_runs(
             markersize=markersize,
             color=colours[run],
             alpha=alpha,
-            label=run if labels else None,
+            label=plot_text(run) if labels else None,
         )
     return runs
 

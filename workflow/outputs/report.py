@@ -15,7 +15,6 @@ writes them to ``results/report/`` and ``rules/report.smk`` marks them for
 
 from __future__ import annotations
 
-import html
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -26,6 +25,7 @@ import pandas as pd
 
 from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, UnitSystem
+from workflow.outputs.escape import display_text, html_text, rst_strong, rst_text
 
 __all__ = [
     "CAUSE_WORDS",
@@ -66,7 +66,6 @@ __all__ = [
     "model_fits_html",
     "candidates_html",
     "rejected_segments_html",
-    "rst_escape",
     "verdict_rst",
     "landing_rst",
     "quality_html",
@@ -186,7 +185,8 @@ def ratio(value: Any) -> str:
 
 
 def esc(text: Any) -> str:
-    return html.escape(str(text), quote=True)
+    """Text (the campaign's or ours) as HTML (:func:`workflow.outputs.escape.html_text`)."""
+    return html_text(text)
 
 
 def model_name(model_id: str | None) -> str:
@@ -1183,14 +1183,6 @@ def rejected_segments_html(rejected: pd.DataFrame) -> str:
 
 
 # ------------------------------------------------------------------ the first page (rst)
-_RST_SPECIAL = re.compile(r"([\\`*_|])")
-
-
-def rst_escape(text: Any) -> str:
-    """Plain text made safe for reStructuredText inline markup."""
-    return _RST_SPECIAL.sub(r"\\\1", str(text))
-
-
 def verdict_rst(
     document: Mapping,
     *,
@@ -1207,8 +1199,12 @@ def verdict_rst(
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
     trends = measured_trends(segments) if segments is not None else {}
-    title = f"Verdict: {cause_name(cause)}"
-    lines = [title, "=" * len(title), "", rst_escape(campaign_headline(document)), ""]
+    title = rst_text(f"Verdict: {cause_name(cause)}")
+    lines = [title, "=" * len(title), ""]
+    if document.get("campaign"):
+        lines += [f"Campaign {rst_strong(document['campaign'])}.", ""]
+    # whole sentences are not shortened: only the campaign's text in them is (display_text)
+    lines += [rst_text(campaign_headline(document), limit=None), ""]
     for name, entry in entries.items():
         gain = entry.get("gain") or {}
         base = model_name(entry.get("baseline", {}).get("model"))
@@ -1235,12 +1231,13 @@ def verdict_rst(
         for flag in _flags(entry):
             text += f" Check the fitted {flag}."
         lines += [
-            f"* **{rst_escape(name)}**: *{rst_escape(cause_name(entry.get('cause')))}*. " + rst_escape(text),
+            f"* {rst_strong(name)}: *{rst_text(cause_name(entry.get('cause')))}*. "
+            + rst_text(text, limit=None),
             "",
         ]
     skipped = document.get("skipped_configurations") or {}
     for name, reason in skipped.items():
-        lines += [f"* **{rst_escape(name)}**: not diagnosed ({rst_escape(reason)}).", ""]
+        lines += [f"* {rst_strong(name)}: not diagnosed ({rst_text(reason)}).", ""]
     if hypotheses is not None and not hypotheses.empty:
         parts = []
         for hypothesis, part in hypotheses.groupby("hypothesis", sort=False):
@@ -1254,15 +1251,16 @@ def verdict_rst(
                         ", ".join(f"{v} at {c} of {len(sub)} amplitudes" for v, c in counts.items())
                     )
             parts.append(f"{hypothesis}: {'; '.join(verdicts)}.")
-        lines += ["**The paper's hypotheses.** " + rst_escape(" ".join(parts)), ""]
+        lines += ["**The paper's hypotheses.** " + rst_text(" ".join(parts), limit=None), ""]
     if runs is not None and not runs.empty:
         excluded = excluded_runs(runs)
         text = f"{int((runs['status'] == 'used').sum())} of {len(runs)} run files used"
         if len(excluded):
             text += "; excluded: " + "; ".join(
-                f"{r.configuration}/{r.run} ({r.reason})" for r in excluded.itertuples()
+                f"{display_text(r.configuration)}/{display_text(r.run)} ({display_text(r.reason)})"
+                for r in excluded.itertuples()
             )
-        lines += ["**Runs.** " + rst_escape(text + "."), ""]
+        lines += ["**Runs.** " + rst_text(text + ".", limit=None), ""]
     lines += [
         "The evidence (held-out errors of every candidate, margins, residual tests) is on "
         "the page verdict.html_ in category `1 Verdict`_; the figures and tables are in "
@@ -1275,20 +1273,13 @@ def verdict_rst(
 def landing_rst(verdict: str, description: str) -> str:
     """The report's first page: the verdict, then the workflow description.
 
-    ``verdict`` is protected from Snakemake's Jinja rendering of the page;
-    ``description`` (report/workflow.rst) keeps its Jinja expressions.
+    ``verdict`` (:func:`verdict_rst`) holds the campaign's text only as
+    :func:`~workflow.outputs.escape.rst_text`, in which no Jinja tag can form, so it goes
+    through Snakemake's Jinja rendering of the page as it is; ``description``
+    (report/workflow.rst) keeps its Jinja expressions.
     """
     heading = "About this study"
-    return (
-        "{% raw %}\n"
-        + verdict
-        + "\n{% endraw %}\n\n"
-        + heading
-        + "\n"
-        + "=" * len(heading)
-        + "\n\n"
-        + description
-    )
+    return verdict + "\n\n" + heading + "\n" + "=" * len(heading) + "\n\n" + description
 
 
 def quality_html(quality: pd.DataFrame) -> str:

@@ -30,14 +30,14 @@ from numpy.typing import NDArray
 from workflow.io import units
 from workflow.io.campaign import (
     MIN_SAMPLES,
-    TIME_STEP_REL_TOLERANCE,
     Campaign,
     CampaignFormatError,
     ResponseChannel,
     RunRecord,
     response_unit,
 )
-from workflow.io.record_rules import column_role, rates_agree
+from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
+from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
 
 __all__ = [
@@ -47,8 +47,11 @@ __all__ = [
     "channel_role",
     "describe_channels",
     "assemble_record",
+    "LISTED_CHANNELS",
 ]
 
+LISTED_CHANNELS: int = 32
+"""Most channels an error message lists (a file may hold thousands)."""
 
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
@@ -137,9 +140,11 @@ def channel_role(channel: Channel) -> str | None:
 def describe_channels(channels: list[Channel]) -> str:
     """``[0] 't' (s), [1] 'x', ...``: the listing error messages give."""
     parts = []
-    for index, channel in enumerate(channels):
+    for index, channel in enumerate(channels[:LISTED_CHANNELS]):
         unit = unit_label(channel.unit)
-        parts.append(f"[{index}] {channel.name!r}" + (f" ({unit})" if unit else ""))
+        parts.append(f"[{index}] {quoted(channel.name)}" + (f" ({shortened(unit)})" if unit else ""))
+    if len(channels) > LISTED_CHANNELS:
+        parts.append(f"and {len(channels) - LISTED_CHANNELS} more")
     return ", ".join(parts)
 
 
@@ -177,6 +182,10 @@ def _select_channels(
     channels, name = file_channels.channels, file_channels.format_name
     if not channels:
         raise CampaignFormatError(shown, None, f"no channels of samples in the {name} file")
+    for index, channel in enumerate(channels):
+        long_name = name_length_problem(f"channel [{index}]: name", channel.name)
+        if long_name is not None:
+            raise CampaignFormatError(shown, None, long_name)
     roles = {id(c): channel_role(c) for c in channels}
     force = None
     if campaign.force is not None and campaign.force.channel is not None:
@@ -242,6 +251,15 @@ def _checked_samples(channel: Channel, shown: str) -> NDArray[np.float64]:
     return values
 
 
+def _checked_magnitude(channel: Channel, values: NDArray[np.float64], shown: str) -> NDArray[np.float64]:
+    """The samples of a force or response channel, refused when the analysis cannot square
+    them (:mod:`workflow.io.limits`), naming the sample."""
+    problem = magnitude_problem(values, channel.record)
+    if problem is not None:
+        raise CampaignFormatError(shown, None, f"{problem[1]} (sample {problem[0]}, 0-based)")
+    return values
+
+
 def _response_unit(channel: Channel, campaign: Campaign, shown: str) -> str:
     """The channel's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
     try:
@@ -285,19 +303,16 @@ def _rate_from_time(channel: Channel, shown: str) -> tuple[NDArray[np.float64], 
         )
     time_s = np.ascontiguousarray(np.asarray(channel.values, dtype=np.float64).ravel() * factor_s)
     steps = np.diff(time_s)
-    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    uneven = np.flatnonzero(
-        ~(np.abs(steps - mean_step_s) <= TIME_STEP_REL_TOLERANCE * abs(mean_step_s)) | (steps <= 0)
-    )
-    if uneven.size:
-        i = int(uneven[0])
+    bad = first_bad_time_step(steps)
+    if bad is not None:
+        i, typical_s = bad
         raise CampaignFormatError(
             shown,
             None,
             f"{channel.record}: time not increasing in uniform steps: step {steps[i]:.6g} s after "
-            f"sample {i} (0-based), mean step {mean_step_s:.6g} s",
+            f"sample {i} (0-based), typical step {typical_s:.6g} s",
         )
-    return time_s, 1.0 / mean_step_s
+    return time_s, (time_s.size - 1) / (time_s[-1] - time_s[0])
 
 
 def assemble_record(file_channels: FileChannels, relative: str, shown: str, campaign: Campaign) -> RunRecord:
@@ -329,7 +344,11 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
     selected, force = _select_channels(file_channels, campaign, shown)
     response = selected[0]
     # every channel read has as many samples as the first response channel
-    samples = {id(c): _checked_samples(c, shown) for c in (*selected, force) if c is not None}
+    samples = {
+        id(c): _checked_magnitude(c, _checked_samples(c, shown), shown)
+        for c in (*selected, force)
+        if c is not None
+    }
     n_samples = samples[id(response)].size
     for channel in (*selected, force):
         if channel is not None and samples[id(channel)].size != n_samples:
