@@ -23,7 +23,9 @@ for path in snakemake.input.fits:
 fits = fit_table(documents)
 segments = first_mode_and_channel(read_table(snakemake.input.segments), snakemake.params.first_channel)
 first_mode_hz = segments["mode_hz"].min() if len(segments) else None
-write_table(with_mode_and_channel(fits, first_mode_hz, snakemake.params.first_channel), snakemake.output.table)
+write_table(
+    with_mode_and_channel(fits, first_mode_hz, snakemake.params.first_channel), snakemake.output.table
+)
 atomic_write_bytes(snakemake.output.page, model_fits_html(fits, units).encode())
 log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
 
