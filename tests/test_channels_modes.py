@@ -623,7 +623,11 @@ def test_workflow_analyses_every_mode_on_every_channel(tmp_path):
     for mode in document["modes"]:
         configuration = mode["configurations"]["c"]
         assert set(configuration["channels"]) == {"acc1", "acc2"}
-        assert configuration["cause"] in {c["cause"] for c in configuration["channels"].values()}
+        assert set(configuration["joint"]["amplitude_factors"]) == {"acc1", "acc2"}
+    # one joint analysis of mode 1 on acc1's scale: acc2's amplitudes doubled
+    joint = document["configurations"]["c"]["joint"]
+    assert joint["reference_channel"] == "acc1"
+    assert joint["amplitude_factors"]["acc2"] == pytest.approx(2.0, rel=0.05)
     top = {key: value for key, value in document.items() if key != "modes"}
     assert top == {key: value for key, value in document["modes"][0].items() if key != "mode_hz"}
 
