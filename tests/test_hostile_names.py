@@ -56,6 +56,7 @@ EXCLUDED_RUNS = [
     "short" + RAW_HTML.format(marker=f"{MARKER}-file"),
     "long-" + "n" * 200 + "-end",
     f"ansi {TERMINAL}",
+    '=HYPERLINK("x","y")',
 ]
 """Run files that are too short (so excluded, their names in the exclusion reasons); one
 whose name holds terminal escapes is excluded for its name before it is read."""
@@ -211,6 +212,16 @@ def test_summary_and_console_carry_no_terminal_escape(hostile):
     assert "\\x1b[2J" in summary  # the name is shown, its escape written out
     assert analysed.stderr[analysed.stderr.rindex("lapjoint: campaign") :].startswith(summary)
     assert "\x1b" not in analysed.stderr
+
+
+def test_runs_csv_holds_no_formula(hostile):
+    import csv
+
+    _, workdir, _, _ = hostile
+    with open(workdir / "results" / "tables" / "runs.csv", newline="") as table:
+        rows = list(csv.DictReader(table))
+    assert '\'=HYPERLINK("x","y")' in {row["run"] for row in rows}
+    assert not [cell for row in rows for cell in row.values() if cell.startswith(("=", "+", "-", "@"))]
 
 
 def test_figures_of_the_hostile_run_are_drawn(hostile):
