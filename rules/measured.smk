@@ -98,7 +98,6 @@ rule collect_tables:
         mem_mb=2000,
         runtime=10,
     params:
-        units=SETTINGS.units,
         excluded_paths=[entry.status() for entry in EXCLUDED_PATHS],
     script:
         "../scripts/collect_tables.py"
@@ -147,7 +146,6 @@ rule fit_curves:
         mem_mb=2000,
         runtime=20,
     params:
-        units=SETTINGS.units,
         fits=asdict(SETTINGS.fits),
     script:
         "../scripts/fit_curves.py"

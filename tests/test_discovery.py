@@ -17,6 +17,7 @@ from workflow.discovery.microslip import iwan_as_cells
 from workflow.discovery.misfit import (
     binned_discrepancy,
     explains_data,
+    misfit_significant,
     run_order_trend,
     stiffness_signature,
 )
@@ -758,6 +759,34 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
     text = discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
     assert text.startswith("The measured damping differs from the lugre fit") and "by up to -26 %" in text
     assert "shifts with run order (recording start times in the files) by -26 %" in text
+
+
+def test_discrepancy_sentence_names_both_curves():
+    # UNESP and PFF: a significant frequency misfit was the only one named while the
+    # residual figure showed larger damping residuals over three runs (not significant)
+    damping = {**_bin("damping", -0.25, -6.5, 0.0013, p_limit=0.00083), "n_runs": 3}
+    frequency = _bin("frequency", 4e-4, 26.5, 1e-9, significant=True)
+    text = discrepancy_sentence("lugre", [damping, frequency], None, 10)
+    assert text.startswith("The measured frequency differs from the lugre fit")
+    assert "its largest damping misfit, where the measured damping lies 22 % below the lugre fit" in text
+    assert (
+        "larger than the 2 % in damping the models are accurate to but not statistically significant" in text
+    )
+    # the |t| is quoted with what decides: the runs behind it and p against its limit
+    assert "|t| = 6.5 over 3 runs, p = 0.0013 against 0.00083 after correction" in text
+    # one run: the segments are the observations, never "over 1 runs"
+    one = {**_bin("damping", 0.3, 11.0, 1e-9, significant=True), "n_runs": 1, "n_segments": 40}
+    text = discrepancy_sentence("dahl", [one], None, 1)
+    assert "over the 40 segments of the one run" in text and "1 runs" not in text
+
+
+def test_one_significance_rule():
+    # |t| alone decides nothing: 6.5 over 3 runs is not significant where 6.7 over 10 is
+    assert not misfit_significant(0.0013, 0.00083, 0.05, MODEL_ACCURACY_LN_ZETA)
+    assert misfit_significant(1e-5, 0.00083, 0.05, MODEL_ACCURACY_LN_ZETA)
+    assert not misfit_significant(
+        1e-9, 0.00083, 0.5 * MODEL_ACCURACY_LN_ZETA, MODEL_ACCURACY_LN_ZETA
+    )  # below the accuracy
 
 
 @pytest.mark.parametrize(

@@ -209,3 +209,36 @@ def test_unesp_figures_are_readable(tmp_path):
     result = snakemake(tmp_path, "-c2", *targets, "--config", f"campaign={campaign}", *CHEAP)
     assert result.returncode == 0, result.stderr[-4000:]
     assert hard_to_read(tmp_path) == []
+
+
+def test_area_axis_in_square_metres_has_short_plain_ticks():
+    # the demo's areas (0.17, 0.66, 1.36 in²) are 1e-4 m²: labels like 0.000443 ran together
+    curves, rows = [], []
+    for name, area_in2 in (("no_washer", 1.36), ("large_washer", 0.66), ("small_washer", 0.17)):
+        amplitude = np.logspace(-1.3, 0.6, 30)
+        zeta = 1e-3 * (1 + area_in2 * amplitude / 5)
+        curves.append(
+            pd.DataFrame(
+                {
+                    "configuration": name,
+                    "bearing_area_in2": area_in2,
+                    "velocity_amplitude_in_s": amplitude,
+                    "zeta": zeta,
+                    "zeta_low": 0.9 * zeta,
+                    "zeta_high": 1.1 * zeta,
+                }
+            )
+        )
+        rows += [
+            {
+                "velocity_amplitude_in_s": v,
+                "bearing_area_in2": area_in2,
+                "zeta": 1e-3 * (1 + area_in2 * v / 5),
+            }
+            for v in (0.2, 0.63, 1.5)
+        ]
+    figure = figures.area_fits(pd.concat(curves), pd.DataFrame(rows), title="t", units=SI)
+    figure.canvas.draw()
+    labels = [label.get_text() for label in figure.axes[1].get_xticklabels() if label.get_text()]
+    assert 3 <= len(labels) <= 7 and all(len(label) <= 6 for label in labels), labels
+    assert readability_problems(figure) == []

@@ -25,6 +25,7 @@ from matplotlib import ticker  # noqa: E402
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.escape import plot_text  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
+from workflow.outputs.plain_words import left_out_caveat  # noqa: E402
 
 __all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
@@ -315,13 +316,7 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
             title += f"\nextended / baseline mean error = {ratio:.2f}"
         ax.set_title(title, loc="left")
         ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-        notes = []
-        if finite.size and finite.min() > 10:
-            notes.append(
-                "Both predictions miss every left-out configuration by more than "
-                f"{plain_number(finite.min())} "
-                "times the measured scatter: neither model predicts a new bearing area, and the "
-                "ratio of their errors says little."
-            )
+        caveat = left_out_caveat(np.concatenate(worst)) if worst else None
+        notes = [caveat] if caveat else []
         lay_out(fig, notes, width=100)
     return fig
