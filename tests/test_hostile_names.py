@@ -408,3 +408,27 @@ def test_every_caption_renders_without_a_markup_warning():
         text = rendered.render(snakemake=Snakemake) + "\n" + REPORT_LINKS
         body = publish_parts(text, writer="html", settings_overrides={"report_level": 2, "halt_level": 2})
         assert "System Message" not in body["body"], caption.name
+
+
+def test_figure_of_every_mode_and_channel_draws_hostile_channel_names(tmp_path):
+    import pandas as pd
+
+    from workflow.outputs import figures
+
+    velocity = np.geomspace(0.1, 3.0, 12)
+    channels = [MATH, f"acc {TERMINAL}"]
+    segments = pd.DataFrame(
+        {
+            "configuration": "no_washer",
+            "channel": np.repeat(channels, 6),
+            "mode_hz": 120.0,
+            "velocity_amplitude_in_s": velocity,
+            "zeta": 0.001 * (1 + velocity),
+            "frequency_hz": 120.0 - velocity,
+        }
+    )
+    figure = figures.modes_and_channels(segments, title="every mode", channels=channels)
+    legend = [text.get_text() for text in figure.axes[1].get_legend().get_texts()]
+    figures.save(figure, tmp_path / "modes.png")
+    assert (tmp_path / "modes.png").stat().st_size > 10_000
+    assert legend == ["\\$\\frac{\\$", "acc \\x1b[2J\\x1b[H\\x1b[32mVerdict: none (fake)\\x1b[0m"]
