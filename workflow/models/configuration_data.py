@@ -98,6 +98,11 @@ class ConfigurationData:
         return len(self.run_names)
 
     @property
+    def n_channels(self) -> int:
+        """Response channels pooled in these segments (1 unless :attr:`channel_index`)."""
+        return 1 if self.channel_index is None else int(np.unique(self.channel_index).size)
+
+    @property
     def n(self) -> int:
         return int(self.velocity_in_s.size)
 
