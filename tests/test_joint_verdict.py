@@ -57,7 +57,7 @@ def test_channel_scales_recover_the_mode_shape_ratio_whatever_the_order():
         scales = channel_scales(segments, "b")
         assert scales["b"] == 1.0 and scales["a"] == pytest.approx(20.0, rel=0.03)
     pooled, joint = joint_segments(pd.concat([weak, strong]))
-    assert joint["reference_channel"] == "b"
+    assert joint["c"]["reference_channel"] == "b" and joint["c"]["left_out"] == []
     assert (
         pooled["channel_index"].tolist()
         == [0] * len(weak[weak.run == "r1"]) + [1] * 40 + [0] * len(weak[weak.run == "r2"]) + [1] * 40

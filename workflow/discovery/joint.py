@@ -81,7 +81,7 @@ def channel_scales(segments: pd.DataFrame, reference: str) -> dict[str, float]:
     return scales
 
 
-def joint_segments(segments: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
+def joint_segments(segments: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, dict]]:
     """Every channel's segments of one mode as one configuration's pooled segments.
 
     Parameters
@@ -97,24 +97,33 @@ def joint_segments(segments: pd.DataFrame) -> tuple[pd.DataFrame, dict]:
         ordered by configuration, run, channel name and time, with
         ``velocity_amplitude_in_s`` on the reference channel's scale and an integer
         ``channel_index`` (channels by name).
-    scales : dict
-        ``reference_channel``, and per configuration each pooled channel's factor.
+    joint : dict
+        Per configuration: ``reference_channel`` (the campaign's, :func:`reference_channel`;
+        where it has no segment of the configuration, the configuration's own),
+        ``amplitude_factors`` (channel -> factor, :func:`channel_scales`) and ``left_out``
+        (channels sharing no instant with the reference: not pooled).
     """
     reference = reference_channel(segments)
-    frames, scales = [], {}
+    frames, joint = [], {}
     for configuration, rows in segments.groupby(segments["configuration"].astype(str), sort=False):
-        factors = channel_scales(rows, reference)
-        scales[configuration] = factors
         channel = rows["channel"].astype(str)
+        own = reference if reference in set(channel) else reference_channel(rows)
+        factors = channel_scales(rows, own)
+        joint[configuration] = {
+            "reference_channel": own,
+            "amplitude_factors": factors,
+            "left_out": sorted(set(channel) - set(factors)),
+        }
         kept = rows[channel.isin(list(factors))].copy()
         kept["velocity_amplitude_in_s"] *= kept["channel"].astype(str).map(factors).to_numpy(float)
         frames.append(kept)
     pooled = pd.concat(frames) if frames else segments.iloc[:0].copy()
     names = sorted(set(pooled["channel"].astype(str)))
-    pooled["channel_index"] = pooled["channel"].astype(str).map({n: i for i, n in enumerate(names)})
-    pooled = pooled.assign(_channel=pooled["channel"].astype(str))
     configuration_order = {c: i for i, c in enumerate(dict.fromkeys(segments["configuration"].astype(str)))}
-    pooled = pooled.assign(_configuration=pooled["configuration"].astype(str).map(configuration_order))
+    pooled = pooled.assign(
+        channel_index=pooled["channel"].astype(str).map({n: i for i, n in enumerate(names)}),
+        _channel=pooled["channel"].astype(str),
+        _configuration=pooled["configuration"].astype(str).map(configuration_order),
+    )
     pooled = pooled.sort_values(["_configuration", "run", "_channel", "t_s"], kind="stable")
-    pooled = pooled.drop(columns=["_channel", "_configuration"]).reset_index(drop=True)
-    return pooled, {"reference_channel": reference, "scales": scales}
+    return pooled.drop(columns=["_channel", "_configuration"]).reset_index(drop=True), joint

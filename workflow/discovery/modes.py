@@ -55,15 +55,12 @@ JOINT_RULE = (
 def joint_outcome(segments, runs, configuration: str, **options) -> DiagnosedConfiguration:
     """:func:`diagnosed_outcome` of the segments of one mode seen by every channel, pooled
     by :func:`~workflow.discovery.joint.joint_segments`; the diagnosis's document says how
-    (``joint``: the reference channel, each channel's amplitude factor, the rule)."""
+    (``joint``: the reference channel, each channel's amplitude factor, the channels left
+    out, the rule)."""
     pooled, joint = joint_segments(segments)
     outcome = diagnosed_outcome(pooled, runs, configuration, **options)
     if outcome.diagnosis is not None:
-        outcome.diagnosis.document["joint"] = {
-            "reference_channel": joint["reference_channel"],
-            "amplitude_factors": joint["scales"].get(configuration, {}),
-            "rule": JOINT_RULE,
-        }
+        outcome.diagnosis.document["joint"] = {**joint[configuration], "rule": JOINT_RULE}
     return outcome
 
 
