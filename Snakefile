@@ -7,7 +7,7 @@
 
 from snakemake.utils import min_version
 
-from workflow.outputs.escape import terminal_text
+from workflow.outputs.escape import terminal_lines, terminal_text
 from workflow.outputs.report_command import REPORT_COMMAND_FILE, report_command
 from workflow.runtime.params_pandas import defer_pandas_import
 from workflow.runtime.scheduler import cancel_scheduler_timers
@@ -70,7 +70,7 @@ onerror:
     # Nothing analysed: the reasons, not Snakemake's lines, are the last thing printed.
     nothing = nothing_analysed_this_run()
     if nothing is not None:
-        print(f"\nlapjoint: {nothing}", file=sys.stderr)
+        print(f"\nlapjoint: {terminal_lines(nothing)}", file=sys.stderr)
         sys.exit(1)
 
 

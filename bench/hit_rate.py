@@ -41,6 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
+from workflow.discovery.confidence import verdict_key  # noqa: E402
 from workflow.discovery.decision import evaluate_decision  # noqa: E402
 from workflow.discovery.misfit import EXPLAINS_LIMIT  # noqa: E402
 from workflow.lab.hidden_effects import (  # noqa: E402
@@ -76,17 +77,10 @@ def verdict_causes(configuration: dict) -> list[str]:
 
 
 def verdict_confidence(configuration: dict) -> float | None:
-    """The confidence of the configuration's verdict: its share of the resamples.
-
-    ``confidence`` holds one entry per verdict; a combination's entry is keyed by its
-    causes joined with ``+`` (or by its first cause).
-    """
+    """The confidence of the configuration's verdict (``confidence`` holds one entry per
+    verdict, a combination's keyed by :func:`verdict_key`); 0 when the verdict has none."""
     shares = configuration.get("confidence") or {}
-    causes = verdict_causes(configuration)
-    for key in ("+".join(causes), causes[0]):
-        if key in shares:
-            return float(shares[key])
-    return None
+    return float(shares.get(verdict_key(verdict_causes(configuration)), 0.0)) if shares else None
 
 
 def _one(args):

@@ -36,6 +36,12 @@ TARGETS = {
         "",
     ),
     "decay": ("workflow/measured/decay.py", ["tests/test_decay.py", "tests/test_analysis_truth.py"], ""),
+    # Segment layout only (the decay's other functions take hours of mutants on one core).
+    "segment_bounds": (
+        "workflow/measured/decay.py:segment_bounds",
+        ["tests/test_decay.py", "tests/test_analysis_truth.py"],
+        "segment or overlap",
+    ),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
     "decide": ("workflow/discovery/decision.py:decide", ["tests/test_decision_rules.py"], "not named_none"),

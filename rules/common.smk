@@ -96,7 +96,9 @@ def nothing_analysed_this_run():
     if not (log.exists() and log.stat().st_mtime >= STARTED_S - 1.0 and NOTHING_ANALYSED in log.read_text()):
         return None
     return nothing_analysed_in_tables(
-        "results/tables/runs.parquet", "results/interim/segments.parquet", "results/tables/segments_rejected.parquet"
+        "results/tables/runs.parquet",
+        "results/interim/segments.parquet",
+        "results/tables/segments_rejected.parquet",
     )
 
 
@@ -170,7 +172,37 @@ def campaign_inventory():
     return runs, excluded
 
 
+def channels_and_modes():
+    """The response channels' names in the tables (campaign.yaml's ``response``), and
+    whether the campaign may have several modes (``modes_hz`` listing several, or auto)."""
+    from workflow.io.campaign import SINGLE_CHANNEL_NAME, load_campaign
+
+    if USES_DEMO:
+        return (SINGLE_CHANNEL_NAME,), False
+    campaign = load_campaign(CAMPAIGN)
+    return campaign.response.channel_names(), campaign.auto_modes or len(campaign.mode_requests()) > 1
+
+
 RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
+RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes()
+
+
+def channel_index(channel_key):
+    """The 0-based index of the response channel a ``c00``, ``c01``, ... key names."""
+    return int(channel_key[1:])
+
+
+def mode_channel_diagnoses():
+    """rule diagnose_modes's outputs: every configuration's channels, the first only when
+    the campaign may have more than one mode (its first mode is diagnose_configuration's)."""
+    first = 0 if SEVERAL_MODES else 1
+    return [
+        f"results/interim/diagnosis_modes/{name}/c{index:02d}"
+        for name in CONFIGURATIONS
+        for index in range(first, len(RESPONSE_CHANNELS))
+    ]
+
+
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:
@@ -187,6 +219,7 @@ wildcard_constraints:
     configuration="|".join(re.escape(name) for name in CONFIGURATIONS),
     number=r"\d\d",
     group=r"runs\d+",
+    channel_key=r"c\d\d",
 
 
 def campaign_yaml(wildcards):
@@ -240,6 +273,12 @@ def backbone_figures():
     return [f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS]
 
 
+def modes_channels_figures():
+    """The figure of every mode and channel, for a campaign that may have several."""
+    several = SEVERAL_MODES or len(RESPONSE_CHANNELS) > 1
+    return ["results/figures/modes_channels.png"] if several else []
+
+
 def measured_outputs():
     """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
@@ -253,6 +292,7 @@ def measured_outputs():
         *damping_figures(),
         "results/figures/fig13_area_fits.png",
         *backbone_figures(),
+        *modes_channels_figures(),
     ]
 
 

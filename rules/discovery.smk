@@ -37,11 +37,43 @@ rule diagnose_configuration:
         "../scripts/diagnose_configuration.py"
 
 
+rule diagnose_modes:
+    # Every mode of one response channel of one configuration (campaign.yaml's modes_hz
+    # or auto, response.channels): one job per channel, so that the channels of a hit
+    # are diagnosed side by side.
+    input:
+        segments="results/tables/segments.parquet",
+        runs="results/tables/runs.parquet",
+        campaign_settings="results/interim/campaign.json",
+    output:
+        directory("results/interim/diagnosis_modes/{configuration}/{channel_key}"),
+    log:
+        "results/logs/diagnose_modes/{configuration}/{channel_key}.log",
+    benchmark:
+        "results/benchmarks/diagnose_modes/{configuration}/{channel_key}.tsv"
+    priority: 1
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=60,
+    params:
+        channel=lambda wildcards: RESPONSE_CHANNELS[channel_index(wildcards.channel_key)],
+        first_channel=lambda wildcards: channel_index(wildcards.channel_key) == 0,
+        decay=asdict(SETTINGS.analysis.decay()),
+        discovery=asdict(SETTINGS.discovery),
+    script:
+        "../scripts/diagnose_modes.py"
+
+
 rule diagnose:
     # The campaign's diagnosis from its configurations'. It does not depend on config
     # units: switching them redraws the figures below and re-runs no diagnosis.
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
+        modes_channels=mode_channel_diagnoses(),
+        modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(
@@ -65,6 +97,8 @@ rule diagnose:
     resources:
         mem_mb=1000,
         runtime=10,
+    params:
+        channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/diagnose.py"
 
@@ -112,5 +146,6 @@ rule figures_discovery:
     params:
         configurations=CONFIGURATIONS,
         units=SETTINGS.units,
+        channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/figures_discovery.py"

@@ -49,6 +49,16 @@ rule figures_measured:
             )
             for name, path in zip(CONFIGURATIONS, backbone_figures())
         ],
+        modes_channels=[
+            report(
+                path,
+                caption="../report/modes_channels.rst",
+                category="2 Measured data",
+                subcategory="2.4 Every mode and channel",
+                labels={"figure": "damping and frequency of every mode and channel"},
+            )
+            for path in modes_channels_figures()
+        ],
     log:
         "results/logs/figures_measured.log",
     benchmark:
@@ -63,5 +73,6 @@ rule figures_measured:
         units=SETTINGS.units,
         configurations=CONFIGURATIONS,
         decay=asdict(SETTINGS.analysis.decay()),
+        channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/figures_measured.py"

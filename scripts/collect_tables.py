@@ -15,7 +15,7 @@ tables = collect_tables(
     campaign=campaign,
     excluded_paths=snakemake.params.excluded_paths,
 )
-response_unit = {"response_amplitude": f"{campaign.response.unit} ({campaign.response.quantity})"}
+response_unit = {"response_amplitude": tables["response_unit"]}
 for name in ("segments", "rejected", "runs", "quality", "modes"):
     write_table(tables[name], snakemake.output[name], units=response_unit)
 runs = tables["runs"]

@@ -13,7 +13,7 @@ from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
 from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
-from workflow.measured.runs import analysis_window
+from workflow.measured.runs import analysis_window, first_mode_and_channel, first_mode_rows
 from workflow.outputs import figures
 from workflow.outputs.escape import plot_text
 from workflow.runtime.logs import ScriptStop, setup_script_logging
@@ -40,7 +40,7 @@ if used.empty:
     )
     configuration = all_used.iloc[0]["configuration"]
     used = all_used[all_used["configuration"] == configuration]
-modes = read_table(snakemake.input.modes).set_index("configuration")
+modes = first_mode_rows(read_table(snakemake.input.modes)).set_index("configuration")
 row = used.iloc[0]
 record = read_run(campaign_dir, row["path"], campaign)
 band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))
@@ -71,8 +71,10 @@ figures.save(figure, snakemake.output.time_history)
 log.info("figure 9 from %s", row["path"])
 
 # figures 10-13
-segments = read_table(snakemake.input.segments)
-curves = read_table(snakemake.input.curves)
+# the paper's figures: the first mode, from the first channel (docs/outputs.md)
+first_channel = campaign.response.channel_names()[0]
+segments = first_mode_and_channel(read_table(snakemake.input.segments), first_channel)
+curves = first_mode_and_channel(read_table(snakemake.input.curves), first_channel)
 for configuration, path in zip(snakemake.params.configurations, snakemake.output.damping, strict=True):
     mine = segments[segments["configuration"] == configuration]
     figure = figures.damping_vs_amplitude(
@@ -86,7 +88,7 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     log.info("%s: %d segments plotted", configuration, len(mine))
 figure = figures.area_fits(
     curves,
-    read_table(snakemake.input.area),
+    first_mode_and_channel(read_table(snakemake.input.area), first_channel),
     title=f"{plot_text(campaign.name)}: damping vs velocity amplitude and bearing area",
     units=units,
 )
@@ -102,3 +104,15 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     )
     figures.save(figure, path)
     log.info("%s: backbone of %d segments plotted", configuration, len(mine))
+
+# every mode on every channel (campaigns with several)
+all_segments = read_table(snakemake.input.segments)
+for path in snakemake.output.modes_channels:
+    figure = figures.modes_and_channels(
+        all_segments,
+        title=f"{campaign.name}: damping and frequency of every mode, per channel",
+        channels=snakemake.params.channels,
+        units=units,
+    )
+    figures.save(figure, path)
+    log.info("every mode and channel: %d segments plotted", len(all_segments))

@@ -111,3 +111,32 @@ def test_velocity_uses_each_segments_own_frequency_not_the_mode_frequency():
     t_s = segments["t_s"][kept] - 25 / FS_HZ
     analytic_in_s = G_IN_S2 * np.exp(-ZETA * 2 * np.pi * true_hz * t_s) / (2 * np.pi * true_hz)
     np.testing.assert_allclose(segments["velocity_amplitude_in_s"][kept], analytic_in_s, rtol=0.01)
+
+
+def test_segment_layout_at_its_limits():
+    # the last segment ends at the range's end at most: 399 samples hold two 200-sample
+    # segments 100 apart, 400 hold three
+    assert segment_bounds(0, 399, 2560.0, 128.0, 10.0, 0.5)[1].tolist() == [200, 300]
+    assert segment_bounds(0, 400, 2560.0, 128.0, 10.0, 0.5)[1].tolist() == [200, 300, 400]
+    # a segment has at least 3 samples (a line through the log envelope and a residual),
+    # and consecutive ones advance by at least one sample
+    starts, stops = segment_bounds(0, 10, 1000.0, 500.0, segment_cycles=1.0, segment_overlap=0.9)
+    assert starts.tolist() == list(range(8)) and np.all(stops - starts == 3)
+    # Slow modes and slow sampling are valid: a 0.5 Hz mode, a 0.5 Hz sample rate.
+    assert len(segment_bounds(0, 1000, 100.0, 0.5, segment_cycles=2.0)[0]) == 4  # 400 samples, hop 200
+    assert len(segment_bounds(0, 100, 0.5, 0.01, segment_cycles=2.0)[0]) == 1
+    # (starts are int64: np.arange of Python ints is int64 already under NumPy 2, so its
+    # dtype argument is an equivalent mutant)
+    assert starts.dtype == np.int64
+
+
+@pytest.mark.parametrize("mode_hz, fs_hz", [(0.0, 2560.0), (-125.0, 2560.0), (125.0, 0.0), (125.0, -1.0)])
+def test_segment_layout_needs_positive_frequencies(mode_hz, fs_hz):
+    with pytest.raises(ValueError, match=r"^mode_hz and fs_hz must be positive$"):
+        segment_bounds(0, 1000, fs_hz, mode_hz)
+
+
+@pytest.mark.parametrize("overlap", [1.0, 1.5, -0.1])
+def test_segments_cannot_overlap_whole(overlap):
+    with pytest.raises(ValueError, match=rf"^segment_overlap must lie in \[0, 1\), got {overlap}$"):
+        segment_bounds(0, 1000, 2560.0, 125.0, segment_overlap=overlap)

@@ -16,6 +16,7 @@ import pytest
 
 from tests.support.discovery import diagnose_with_details
 from workflow.discovery.campaign import diagnose_campaign
+from workflow.discovery.confidence import verdict_key
 from workflow.lab.hidden_effects import CASES, campaign_segments, case_causes, generate_case
 
 
@@ -124,3 +125,35 @@ def test_one_hit_seen_by_several_sensors_is_the_one_sensor_campaigns(tmp_path):
         single = np.loadtxt(alone / "joint" / "run03.txt", skiprows=4)
         assert np.array_equal(single[:, :2], several[:, :2])
         assert np.array_equal(single[:, 2], several[:, 2 + stream])
+
+
+NODE_GAIN = 0.05
+"""A sensor near a node of mode 1: its amplitude 1/20 of the accelerometer's against the
+same noise floor (26 dB less signal), the other modes as they are where it stands."""
+
+
+@pytest.mark.parametrize(
+    "cause",
+    [
+        pytest.param(
+            "run_drift",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="known limitation: at x0.05 the drift's gain ratio is 0.86 in a scatter of 0.26 "
+                "in ln zeta, and the gate reads the missing evidence as none (0.84-0.88 sure)",
+            ),
+        ),
+        "microslip_power_law",
+    ],
+)
+def test_a_sensor_near_a_node_may_be_less_sure_never_sure_of_something_else(cause, tmp_path):
+    """The same ring-downs seen at the accelerometer and near a node of mode 1: the two
+    verdicts are the same, or at most one of them is 0.7 sure (output contract)."""
+    verdicts = []
+    for noise_stream, gain in enumerate((1.0, NODE_GAIN)):
+        _, out = generate_case(cause, BASE_SEED, tmp_path, mode1_gain=gain, noise_stream=noise_stream)
+        configuration = diagnose_campaign(campaign_segments(out), out.name)["configurations"]["joint"]
+        key = verdict_key(configuration["causes"])
+        verdicts.append((key, configuration["confidence"].get(key, 0.0)))
+    (a, sure_a), (b, sure_b) = verdicts
+    assert a == b or min(sure_a, sure_b) < 0.7, verdicts

@@ -167,8 +167,13 @@ def test_a_campaign_name_of_100_kilobytes_is_refused_naming_its_line(tmp_path):
         tmp_path, f"name: {'N' * 100_000}\n" + ONE_CONFIGURATION.replace("name: hostile\n", "")
     )
     assert error.line == 1
-    assert "name 'NNN" in error.problem and "(100000 characters) is too long" in error.problem
+    assert "name 'NNN" in error.problem and "(100000 characters) is too long: at most 1000" in error.problem
     assert len(str(error)) < 500
+
+
+def test_a_campaign_name_of_1000_characters_is_a_title_and_is_read(tmp_path):
+    make_campaign(tmp_path, f"name: {'N' * 1000}\n" + ONE_CONFIGURATION.replace("name: hostile\n", ""), {})
+    assert load_campaign(tmp_path).name == "N" * 1000
 
 
 def test_a_channel_name_in_campaign_yaml_beyond_255_characters_is_refused(tmp_path):
@@ -432,6 +437,28 @@ def test_a_window_beyond_the_record_is_said_in_the_words_of_the_contract(lab, tm
     assert status["status"] == "excluded" and status["reason"].startswith(expected)
     # the other configuration goes on
     assert mode_of(root, ["no_washer/run01.txt", "no_washer/run02.txt"], "no_washer").mode is not None
+
+
+@pytest.mark.parametrize(
+    ("setting", "line", "key"),
+    [
+        ("sample_rate_hz: .inf\n", 4, "sample_rate_hz"),
+        ("band_hz: [100, .inf]\n", 4, "band_hz.1"),
+        ("configurations:\n  cfg: {window_s: [0, .inf]}\n", 5, "configurations.cfg.window_s.1"),
+        ("configurations:\n  cfg: {bearing_area_in2: .inf}\n", 5, "configurations.cfg.bearing_area_in2"),
+    ],
+)
+def test_infinities_and_nans_in_campaign_yaml_are_refused_naming_the_key(tmp_path, setting, line, key):
+    yaml_text = BASE_YAML + setting + ("" if "configurations" in setting else "configurations:\n  cfg: {}\n")
+    error = read_error_yaml(tmp_path, yaml_text)
+    assert error.line == line and error.problem.startswith(f"{key}: ")
+
+
+def test_a_window_ending_at_1e308_s_reaches_the_end_of_the_record(lab):
+    from workflow.measured.runs import analysis_window
+
+    record = read_run(lab, "no_washer/run01.txt", load_campaign(lab))
+    assert analysis_window(record, (1.0, 1e308)) == (2560, record.n_samples)
 
 
 # ------------------------------------------------------------------ 8. sample intervals that are not numbers

@@ -119,8 +119,10 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         "status": "used",
         "reason": "",
         "record_start": "",  # an ASCII file states no recording start
+        "response_units": {"response": "g"},
     }
     assert good.segments["kept"].sum() >= 3 and set(good.segments["run"]) == {"run01"}
+    assert set(good.segments["mode"]) == {0} and set(good.segments["channel"]) == {"response"}
     assert good.quality["passed"][good.quality["applied"]].all()
     assert list(good.quality["check"]) == [
         "clipping",

@@ -10,20 +10,34 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.combined import (
+    COMBINATION_CAUSES,
+    combination_starts,
+    combination_test,
+    combinations_to_try,
+)
+from workflow.discovery.confidence import VerdictOption, verdict_causes, verdict_key
 from workflow.discovery.decision import (
     BASELINE_MODELS,
     CAUSE_MODELS,
     CLEAR_GAIN,
     RESIDUAL_GAIN,
+    RUN_ORDER_TESTS,
     ModelEvidence,
-    cause_fractions,
+    confidence_draws,
     evaluate_decision,
     extended_model_of,
-    resample_decisions,
+    verdict_options,
 )
 from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate
 from workflow.discovery.microslip import refine_microslip, threshold_cells, threshold_distribution
-from workflow.discovery.misfit import envelope_structure, explains_data, stiffness_signature
+from workflow.discovery.misfit import (
+    binned_discrepancy,
+    envelope_structure,
+    explains_data,
+    run_order_trend,
+    stiffness_signature,
+)
 from workflow.discovery.wording import discrepancy_sentence
 from workflow.io.settings import AnalysisSettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
@@ -104,7 +118,8 @@ class ConfigurationDiagnosis:
     scatter: Scatter
     residuals: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
     resamples: list[dict] = field(default_factory=list)
-    """Cause and gain ratio on each bootstrap resample (:func:`resample_decisions`)."""
+    """Per Bayesian-bootstrap reweighting of the runs, the verdicts' probabilities, one
+    verdict drawn from them and the gain ratio (:func:`confidence_draws`)."""
     evidence: dict[str, ModelEvidence] = field(default_factory=dict)
     """What the decision was taken on (:func:`evaluate_decision`), per model; not kept in
     the interim files."""
@@ -129,6 +144,131 @@ def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: Configurat
                 f"{spec.name} = {value:.3g} at the {side} edge of its fit range: not identified by the data"
             )
     return flags
+
+
+def add_combinations(
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    *,
+    fits: dict[str, FitResult],
+    cv: dict[str, dict],
+    residuals: dict[str, dict[str, np.ndarray]],
+    evidence: dict[str, ModelEvidence],
+    result: dict,
+    settings: FitSettings,
+    envelope_significant: bool,
+    extended_models: Mapping[str, str],
+) -> tuple[dict, dict[str, dict], list[VerdictOption]]:
+    """Fit the combinations of two mechanisms the single-cause decision points to, and name
+    one where it passes :func:`workflow.discovery.combined.combination_test`.
+
+    Tried after a named cause of the joint's physics, or after ``unknown``
+    (:func:`combinations_to_try`); the fits, held-out errors and residuals are added to
+    ``fits``, ``cv``, ``residuals`` and ``evidence``. A combination becomes the verdict when
+    it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
+    it has a stiffness term, predicts held-out data better than the single verdict's model,
+    and does not leave a significant misfit with less than
+    ``RESIDUAL_GAIN`` of the baseline's error; among several, the lower held-out error.
+
+    Returns
+    -------
+    result, combinations, options
+        The decision (``verdict``: its ``confidence`` key), per combination tried (its
+        key) the evidence, and the combinations as :class:`VerdictOption`.
+    """
+    result["verdict"] = result["cause"]
+    tried = [] if envelope_significant else combinations_to_try(result["cause"])
+    if not tried:
+        return result, {}, []
+    for model in tried:
+        started = time.perf_counter()
+        extension = CAUSE_MODELS[COMBINATION_CAUSES[model][1]]
+        starts = combination_starts(model, fits, NESTED_DAHL[extension](data))
+        fits[model] = fit_model(model, data, scatter, context, settings=settings, nested_start=starts)
+        cv[model] = cross_validate(model, data, scatter, context, fits[model], settings=settings)
+        residuals[model] = model_residuals(fits[model], data, scatter, context)
+        signature = "stiffness_shift" not in fits[model].params or bool(
+            stiffness_signature(fits[model], data)["shows_signature"]
+        )
+        evidence[model] = ModelEvidence(residuals[model], cv[model], len(MODELS[model].params), signature)
+        log.info(
+            "%s %s: fitted and cross-validated in %.1f s (held-out error %.3g)",
+            data.name,
+            model,
+            time.perf_counter() - started,
+            cv[model]["error"],
+        )
+    verdict = result["cause"]
+    result = evaluate_decision(
+        data, evidence, envelope_significant=envelope_significant, extended_models=extended_models
+    )
+    result["verdict"] = verdict
+    base, errors, bic = result["baseline"], result["errors"], result["bic"]
+    combinations, options = {}, []
+    for model in tried:
+        causes = COMBINATION_CAUSES[model]
+        parts = {c: result["unit_squares"][result["extended_models"][c]] for c in causes}
+        test = combination_test(
+            result["unit_squares"][model], parts, result["unit_squares"][base], result["unit_weights"]
+        )
+        bins = binned_discrepancy(data, residuals[model])
+        trend = run_order_trend(data, residuals[model], n_tests=RUN_ORDER_TESTS)
+        significant = any(b["significant"] for b in bins) or bool(trend and trend["significant"])
+        ratio = errors[model]["error"] / errors[base]["error"]
+        eligible = test["named"] and bic[model] < bic[base] and evidence[model].shows_signature
+        key = verdict_key(causes)
+        combinations[key] = {
+            "model": model,
+            **test,
+            "heldout_error": errors[model]["error"],
+            "ratio_to_baseline": ratio,
+            "bic": bic[model],
+            "delta_bic": bic[model] - bic[base],
+            "shows_signature": evidence[model].shows_signature,
+            "residual_significant": bool(significant),
+            "eligible": bool(eligible),
+            "in_sample_rms": float(np.sqrt(fits[model].cost)),
+            "params": fits[model].params,
+            "flags": bound_flags(model, fits[model].coords, data),
+        }
+        options.append(VerdictOption(key, model, bool(eligible), bool(significant)))
+    # a combination replaces the single verdict only where it also predicts better than it
+    single = errors[result["extended_models"][verdict]]["error"] if verdict in CAUSE_MODELS else np.inf
+    named = [
+        k
+        for k, v in combinations.items()
+        if v["eligible"]
+        and v["heldout_error"] < single
+        and not (v["residual_significant"] and v["ratio_to_baseline"] >= RESIDUAL_GAIN)
+    ]
+    if named:
+        best = min(named, key=lambda k: combinations[k]["heldout_error"])
+        result["verdict"] = best
+        result["reason"] = (
+            f"{result['reason']}; two mechanisms, {combinations[best]['model']}, predict better still "
+            f"({combinations[best]['rule']})"
+        )
+    return result, combinations, options
+
+
+def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
+    """The verdict with the largest confidence (``verdict`` itself on a tie).
+
+    The confidence re-takes the decision on reweightings of the runs, sharing ties
+    between candidates by their held-out evidence: where the decision on all the data
+    sits at one of its margins (a gain ratio at ``CLEAR_GAIN``, a near-tie broken by the
+    BIC), the verdict is the one most of the reweightings take.
+
+    Examples
+    --------
+    >>> most_probable_verdict("unknown", {"stiffness_nonlinearity": 0.6, "unknown": 0.4})
+    'stiffness_nonlinearity'
+    >>> most_probable_verdict("none", {"none": 0.5, "run_drift": 0.5})
+    'none'
+    """
+    best = max(confidence, key=confidence.get, default=verdict)
+    return best if confidence.get(best, 0.0) > confidence.get(verdict, 0.0) else verdict
 
 
 def diagnose_configuration(
@@ -204,15 +344,36 @@ def diagnose_configuration(
             errors["iwan"]["error"],
             "adopted" if adopted else "not adopted",
         )
-    resamples = resample_decisions(
+    result, combinations, combination_options = add_combinations(
         data,
-        evidence,
+        scatter,
+        context,
+        fits=fits,
+        cv=cv,
+        residuals=residuals,
+        evidence=evidence,
+        result=result,
+        settings=settings,
         envelope_significant=envelope_significant,
-        n_resamples=settings.resamples,
-        seed=settings.seed,
-        n_folds=settings.folds,
         extended_models=extended_models,
     )
+    confidence, resamples = confidence_draws(
+        result,
+        verdict_options(result, combination_options),
+        envelope_significant=envelope_significant,
+        n_draws=settings.resamples,
+        seed=settings.seed,
+    )
+    verdict = most_probable_verdict(result["verdict"], confidence)
+    if verdict != result["verdict"]:
+        result["reason"] = (
+            f"{verdict}, the most probable verdict over reweightings of the runs "
+            f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
+        )
+    result["verdict"] = verdict
+    causes = combinations[result["verdict"]]["causes"] if result["verdict"] in combinations else None
+    causes = causes or verdict_causes(result["verdict"])
+    result["cause"] = causes[0]
     cause, reason, base = result["cause"], result["reason"], result["baseline"]
     errors, bins, trend, candidates = result["errors"], result["bins"], result["trend"], result["candidates"]
     candidates["stiffness_nonlinearity"]["signature"] = signature
@@ -223,8 +384,11 @@ def diagnose_configuration(
         entry["flags"] = bound_flags(m, fits[m].coords, data)
     ranking = [{"cause": "none", "score": errors[base]["error"]}]
     ranking += [{"cause": c, "score": v["heldout_error"]} for c, v in candidates.items()]
+    # a combination is a candidate cause once it passes the parsimony rule; until then a check
+    ranking += [{"cause": k, "score": v["heldout_error"]} for k, v in combinations.items() if v["eligible"]]
     ranking.sort(key=lambda r: r["score"])
-    ext_model = extended_model_of(result)
+    ext_model = combinations[result["verdict"]]["model"] if result["verdict"] in combinations else None
+    ext_model = ext_model or extended_model_of(result)
     ext_err = errors[ext_model]["error"]
     explained = explains_data(data, residuals[ext_model])
     sentence = discrepancy_sentence(base, bins, trend, data.n_runs)
@@ -279,6 +443,7 @@ def diagnose_configuration(
             "run_order_trend": trend,
             "envelope_structure": envelope,
             "candidates": candidates,
+            "combinations": combinations,
             "clear_gain_threshold": CLEAR_GAIN,
             "residual_gain_threshold": RESIDUAL_GAIN,
             "explains_data": explained,
@@ -299,7 +464,8 @@ def diagnose_configuration(
             "ratio": 1.0 if cause == "none" else ext_err / errors[base]["error"],
         },
         "explains_data": explained["explains_data"],
-        "confidence": cause_fractions([r["cause"] for r in resamples]),
+        "confidence": confidence,
+        "causes": causes,
     }
     return ConfigurationDiagnosis(json_safe(document), fits, data, scatter, residuals, resamples, evidence)
 

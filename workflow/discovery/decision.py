@@ -2,7 +2,8 @@
 
 :func:`decide` is the rule; :func:`evaluate_decision` computes what it needs (held-out
 errors, BIC, the baseline's misfit tests) on all segments or on a resample of runs;
-:func:`resample_decisions` repeats it on bootstrap resamples for the confidence.
+:func:`confidence_draws` re-takes it, softly, on Bayesian-bootstrap reweightings of the
+runs for the confidence (:mod:`workflow.discovery.confidence`).
 """
 
 from __future__ import annotations
@@ -12,16 +13,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from workflow.discovery.confidence import (
+    ChannelEvidence,
+    VerdictOption,
+    dirichlet_unit_weights,
+    mean_probabilities,
+    soft_decisions,
+)
 from workflow.discovery.heldout import (
     amplitude_weights,
     effective_observations,
-    folds_of,
     heldout_standard_error,
     heldout_units,
     information_criterion,
     weighted_rms,
 )
-from workflow.discovery.misfit import binned_discrepancy, run_order_trend
+from workflow.discovery.misfit import binned_discrepancy, failure_draws, run_order_trend
 from workflow.models.configuration_data import ConfigurationData
 
 __all__ = [
@@ -33,7 +40,8 @@ __all__ = [
     "decide",
     "ModelEvidence",
     "evaluate_decision",
-    "resample_decisions",
+    "verdict_options",
+    "confidence_draws",
     "extended_model_of",
     "cause_fractions",
 ]
@@ -189,43 +197,14 @@ class ModelEvidence:
     shows_signature: bool = True
 
 
-def _subset(
-    data: ConfigurationData, segments: np.ndarray, run_index: np.ndarray, n_runs: int
-) -> ConfigurationData:
-    """The segments ``segments`` of a configuration, relabelled into ``n_runs`` runs."""
-    pick = lambda a: None if a is None else a[segments]  # noqa: E731
-    return ConfigurationData(
-        name=data.name,
-        velocity_in_s=data.velocity_in_s[segments],
-        zeta=data.zeta[segments],
-        frequency_hz=data.frequency_hz[segments],
-        run_index=run_index,
-        run_names=[f"r{k}" for k in range(n_runs)],
-        bearing_area_in2=data.bearing_area_in2,
-        response_order=data.response_order,
-        fit_rms=pick(data.fit_rms),
-        response_amplitude=pick(data.response_amplitude),
-        anchor_velocity_in_s=data.anchor_velocity_in_s,
-        run_order=data.run_order,
-    )
-
-
 def evaluate_decision(
     data: ConfigurationData,
     evidence: Mapping[str, ModelEvidence],
     *,
     envelope_significant: bool,
-    segments: np.ndarray | None = None,
-    run_index: np.ndarray | None = None,
-    run_position: np.ndarray | None = None,
-    n_runs: int | None = None,
     extended_models: Mapping[str, str] | None = None,
 ) -> dict:
-    """Held-out errors, BIC, discrepancy tests and the decision, on (a resample of) the data.
-
-    Called once on all segments for the verdict, and on resamples of runs (or of
-    amplitude blocks with one run) for its confidence: the fits are those of all the
-    data, the evidence is recomputed from the resampled segments' residuals.
+    """Held-out errors, BIC, discrepancy tests and the decision on all the data.
 
     Parameters
     ----------
@@ -234,9 +213,6 @@ def evaluate_decision(
         Model id -> :class:`ModelEvidence`.
     envelope_significant : bool
         :func:`~workflow.discovery.misfit.envelope_structure`'s verdict (not resampled).
-    segments, run_index, run_position, n_runs : optional
-        A resample: the segments drawn (with repeats), their new run labels, the drawn
-        runs' positions in run order, and the number of drawn runs.
     extended_models : mapping, optional
         Cause -> the model that represents it once named, where that is not the
         candidate of :data:`CAUSE_MODELS` (the recovered threshold distribution,
@@ -247,34 +223,29 @@ def evaluate_decision(
     dict
         ``cause``, ``reason``, ``baseline`` (model id), ``errors`` and ``bic`` per model,
         ``bins`` and ``trend`` of the baseline, ``baseline_fails``, ``candidates``,
-        ``extended_models``.
+        ``extended_models``, and per unit of held-out evidence (:func:`heldout_units`)
+        ``unit_squares`` (per model) and ``unit_weights``, for the confidence.
     """
-    if segments is None:
-        segments = np.arange(data.n)
-        view = data
-    else:
-        view = _subset(data, segments, run_index, n_runs)
+    view = data
     n_runs_view = view.n_runs
     weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s)
     n_eff = effective_observations(view)
     units = heldout_units(view)
     n_units = int(units.max()) + 1 if units.size else 0
     # the scored segments are the data's (calibration segments are not), the same for every model
-    scored = next(iter(evidence.values())).heldout["scored"][segments]
+    scored = next(iter(evidence.values())).heldout["scored"]
     unit_weights = np.bincount(units[scored], weights=weights[scored], minlength=n_units)
     errors, bic, residuals, unit_squares = {}, {}, {}, {}
     for m, ev in evidence.items():
-        square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])[segments]
+        square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])
         unit_squares[m] = np.bincount(units[scored], weights=(weights * square)[scored], minlength=n_units)
         errors[m] = {
             "error": weighted_rms(square[scored], weights[scored]),
-            "error_zeta": weighted_rms(ev.heldout["squared_zeta"][segments][scored], weights[scored]),
-            "error_frequency": weighted_rms(
-                ev.heldout["squared_frequency"][segments][scored], weights[scored]
-            ),
+            "error_zeta": weighted_rms(ev.heldout["squared_zeta"][scored], weights[scored]),
+            "error_frequency": weighted_rms(ev.heldout["squared_frequency"][scored], weights[scored]),
         }
         res = {
-            k: ev.residuals[k][segments]
+            k: ev.residuals[k]
             for k in (
                 "ln_zeta",
                 "rel_f",
@@ -282,6 +253,7 @@ def evaluate_decision(
                 "ln_zeta_calibrated",
                 "ln_zeta_slope",
                 "calibration",
+                "scatter_ln_zeta",
                 "z_noise",
                 "f_noise",
             )
@@ -292,7 +264,7 @@ def evaluate_decision(
         bic[m] = information_criterion(in_sample, ev.n_params + offsets, n_eff)
     base = min((m for m in BASELINE_MODELS if m in evidence), key=lambda m: errors[m]["error"])
     bins = binned_discrepancy(view, residuals[base])
-    trend = run_order_trend(view, residuals[base], n_tests=RUN_ORDER_TESTS, run_position=run_position)
+    trend = run_order_trend(view, residuals[base], n_tests=RUN_ORDER_TESTS)
     baseline_fails = (
         any(b["significant"] for b in bins) or bool(trend and trend["significant"]) or envelope_significant
     )
@@ -301,7 +273,7 @@ def evaluate_decision(
         if m not in evidence:
             continue
         cb = binned_discrepancy(view, residuals[m])
-        ct = run_order_trend(view, residuals[m], n_tests=RUN_ORDER_TESTS, run_position=run_position)
+        ct = run_order_trend(view, residuals[m], n_tests=RUN_ORDER_TESTS)
         candidates[cause] = {
             "model": m,
             "heldout_error": errors[m]["error"],
@@ -337,59 +309,78 @@ def evaluate_decision(
         "baseline_fails": baseline_fails,
         "candidates": candidates,
         "extended_models": {**CAUSE_MODELS, **(extended_models or {})},
+        "unit_squares": unit_squares,
+        "unit_weights": unit_weights,
     }
 
 
-def resample_decisions(
-    data: ConfigurationData,
-    evidence: Mapping[str, ModelEvidence],
+def verdict_options(result: Mapping, combinations: Sequence[VerdictOption] = ()) -> list[VerdictOption]:
+    """The named verdicts the confidence shares the departure from the baseline among:
+    every candidate cause (represented by its extended model), eligible when its BIC is
+    below the baseline's and its fit shows its cause's signature, and the combinations."""
+    base_bic = result["bic"][result["baseline"]]
+    options = [
+        VerdictOption(
+            cause,
+            result["extended_models"][cause],
+            eligible=bool(v["bic"] < base_bic and v["shows_signature"]),
+            residual_significant=v["residual_significant"],
+        )
+        for cause, v in result["candidates"].items()
+    ]
+    return options + list(combinations)
+
+
+def confidence_draws(
+    result: Mapping,
+    options: Sequence[VerdictOption],
     *,
     envelope_significant: bool,
-    n_resamples: int,
+    n_draws: int,
     seed: int,
-    n_folds: int,
-    extended_models: Mapping[str, str] | None = None,
-) -> list[dict]:
-    """The decision on ``n_resamples`` bootstrap resamples of the runs.
+) -> tuple[dict[str, float], list[dict]]:
+    """The verdict's confidence and its per-draw decisions (:mod:`workflow.discovery.confidence`).
 
-    With two runs or more, runs are drawn with replacement (a run drawn twice counts as
-    two runs, keeping its place in run order); with one run, the amplitude blocks of the
-    cross-validation are drawn instead. Returns one :func:`evaluate_decision` result
-    (``cause``, gain ``ratio``) per resample.
+    Parameters
+    ----------
+    result : mapping
+        :func:`evaluate_decision` on all the data (its ``unit_squares``, ``unit_weights``,
+        ``n_eff``, ``baseline_fails``).
+    options : sequence of VerdictOption
+        :func:`verdict_options`.
+    envelope_significant : bool
+    n_draws, seed : int
+        Bayesian-bootstrap reweightings of the units, and their random seed.
+
+    Returns
+    -------
+    confidence : dict
+        Verdict key -> mean probability over the draws (sums to 1, largest first).
+    draws : list of dict
+        Per draw: ``probabilities`` (verdict key -> probability) and ``ratio`` (the
+        probability-weighted gain ratio); the campaign's confidence combines the
+        configurations' draws.
     """
     rng = np.random.default_rng(seed)
-    if data.n_runs >= 2:
-        units = [np.flatnonzero(data.run_index == r) for r in range(data.n_runs)]
-    else:
-        units = [np.flatnonzero(m) for m in folds_of(data, n_folds)]
-    out = []
-    for _ in range(n_resamples):
-        draw = rng.integers(0, len(units), len(units))
-        segments = np.concatenate([units[k] for k in draw])
-        if data.n_runs >= 2:
-            labels = np.concatenate([np.full(units[k].size, j) for j, k in enumerate(draw)])
-            result = evaluate_decision(
-                data,
-                evidence,
-                envelope_significant=envelope_significant,
-                segments=segments,
-                run_index=labels,
-                run_position=draw.astype(float),
-                n_runs=len(units),
-                extended_models=extended_models,
-            )
-        else:
-            result = evaluate_decision(
-                data,
-                evidence,
-                envelope_significant=envelope_significant,
-                segments=segments,
-                run_index=np.zeros(segments.size, dtype=int),
-                n_runs=1,
-                extended_models=extended_models,
-            )
-        out.append({"cause": result["cause"], "ratio": _gain_ratio(result)})
-    return out
+    channel = ChannelEvidence(result["unit_squares"], result["unit_weights"], result["n_eff"])
+    weights = dirichlet_unit_weights(n_draws, channel.unit_weights.size, rng)
+    probabilities, ratio = soft_decisions(
+        [channel],
+        [m for m in BASELINE_MODELS if m in result["errors"]],
+        options,
+        baseline_fails=failure_draws(result["bins"], result["trend"], weights),
+        envelope_structure=envelope_significant,
+        clear_gain=CLEAR_GAIN,
+        residual_gain=RESIDUAL_GAIN,
+        draws=weights,
+    )
+    keys = list(probabilities)
+    table = np.array([probabilities[k] for k in keys]).T
+    draws = [
+        {"ratio": float(r), "probabilities": {k: float(v) for k, v in zip(keys, row) if v > 0}}
+        for row, r in zip(table, ratio)
+    ]
+    return mean_probabilities(probabilities), draws
 
 
 def extended_model_of(result: Mapping) -> str:
@@ -401,13 +392,6 @@ def extended_model_of(result: Mapping) -> str:
     if cause == "unknown":
         return candidates[min(candidates, key=lambda c: candidates[c]["heldout_error"])]["model"]
     return result["extended_models"][cause]
-
-
-def _gain_ratio(result: Mapping) -> float:
-    if result["cause"] == "none":
-        return 1.0
-    errors = result["errors"]
-    return errors[extended_model_of(result)]["error"] / errors[result["baseline"]]["error"]
 
 
 def cause_fractions(causes: Sequence[str]) -> dict[str, float]:

@@ -9,7 +9,7 @@ candidate's signature.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy import special
@@ -21,6 +21,7 @@ from workflow.models.averaged_fit import FitResult
 from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, robust_trend
 
 __all__ = [
+    "failure_draws",
     "ALPHA",
     "misfit_significant",
     "binned_discrepancy",
@@ -86,7 +87,8 @@ def binned_discrepancy(
         One per (bin, curve): ``curve`` ("damping"/"frequency"), ``v_low_in_s``,
         ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``standard_error``, ``t``,
         ``p``, ``p_limit`` (``alpha / n_tests``), ``n_runs``, ``n_segments``,
-        ``tolerance``, ``significant``.
+        ``tolerance``, ``significant``; with several runs also ``run_ids`` and
+        ``run_means`` (the observations, for :func:`failure_draws`).
     """
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     rows = []
@@ -104,7 +106,9 @@ def binned_discrepancy(
                 m = float(means.mean())
                 se = float(means.std(ddof=1) / np.sqrt(means.size))
                 dof = means.size - 1
+                per_run = {"run_ids": runs.tolist(), "run_means": means.tolist()}
             else:
+                per_run = {}
                 runs = np.zeros(1, dtype=int)
                 seg = r[in_bin][np.argsort(data.velocity_in_s[in_bin])]
                 if seg.size < 4:
@@ -127,6 +131,7 @@ def binned_discrepancy(
                     "n_segments": int(in_bin.sum()),
                     "tolerance": tol,
                     "significant": False,
+                    **per_run,
                 }
             )
     n_tests = 2 * max(len(rows), 1)  # the other half of alpha goes to the run-order test
@@ -154,8 +159,13 @@ def run_order_trend(
     constant shape without it, or where the model's damping changes by less than its
     accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares
     projection over the run's other segments with every quarter decade of amplitude
-    weighted equally (:func:`amplitude_weights`): the run's relative change of friction
-    limit against the shared model. Projecting on the shape weighs each amplitude by how
+    weighted equally (:func:`amplitude_weights`) and every segment by the inverse of its
+    measured variance (``scatter_ln_zeta`` when present): the run's relative change of
+    friction limit against the shared model. Without the variance, the noisy low end of a
+    sensor near a node of the mode (its amplitudes 1/20 of the reference's, the noise
+    the same, a scatter of 0.3 in ln zeta against 0.05 at the top) weighed as much as the
+    top, where the joint shows its change: a drift of 0.29 in ln zeta over the runs went
+    from t = -11 to t = -3.3. Projecting on the shape weighs each amplitude by how
     much a change of the joint shows there, where a plain mean would dilute the change at
     the top of the range with the stuck joint's segments below. The calibration takes out the random
     spread of the runs' linear damping; a random spread of the joint left over only widens
@@ -184,6 +194,9 @@ def run_order_trend(
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
     if "calibration" in residuals:
         w = w * ~residuals["calibration"]
+    if "scatter_ln_zeta" in residuals:
+        # inverse variance: a sensor near a node sees its low amplitudes through noise
+        w = w / residuals["scatter_ln_zeta"] ** 2
     shape = np.ones(data.n)
     if "ln_zeta_slope" in residuals and np.any(w > 0):
         curve_slope = residuals["ln_zeta_slope"]
@@ -215,9 +228,70 @@ def run_order_trend(
         "t": float(t),
         "p": p,
         "significant": misfit_significant(p, alpha / n_tests, change, TOL_LN_ZETA),
+        "p_limit": alpha / n_tests,
         "order": data.run_order,
         "runs": list(data.run_names),
+        "run_ids": np.flatnonzero(keep).tolist(),
+        "run_positions": x.tolist(),
+        "run_projections": y.tolist(),
+        "largest_shape": largest,
     }
+
+
+def failure_draws(bins: Sequence[Mapping], trend: Mapping | None, draws: np.ndarray) -> np.ndarray:
+    """Whether the baseline fails its misfit tests on each Bayesian-bootstrap reweighting
+    of the runs.
+
+    The tests of :func:`binned_discrepancy` and :func:`run_order_trend` re-taken with
+    the runs' observations (a bin's run means, the runs' projections on the drift shape)
+    weighted by ``draws``: weighted mean and its standard error, weighted least-squares
+    slope and its standard error, the same limits. A bin tested on the segments of one run
+    keeps its verdict (its observations are not runs).
+
+    Parameters
+    ----------
+    bins : sequence of mapping
+        :func:`binned_discrepancy` rows.
+    trend : mapping or None
+        :func:`run_order_trend`'s result.
+    draws : ndarray, shape (B, n_runs)
+        Run weights, each row summing to the number of runs.
+
+    Returns
+    -------
+    ndarray of bool, shape (B,)
+    """
+    fails = np.zeros(draws.shape[0], dtype=bool)
+    for row in bins:
+        if "run_means" not in row:
+            fails |= bool(row["significant"])
+            continue
+        y = np.asarray(row["run_means"])
+        a = draws[:, row["run_ids"]]
+        a = a * (y.size / a.sum(axis=1, keepdims=True))
+        mean = (a @ y) / y.size
+        variance = np.sum(a * (y - mean[:, None]) ** 2, axis=1) / (y.size - 1)
+        t = mean / np.maximum(np.sqrt(variance / y.size), 1e-300)
+        p = 2.0 * special.stdtr(y.size - 1, -np.abs(t))
+        fails |= (p < row["p_limit"]) & (np.abs(mean) > row["tolerance"])
+    if trend is not None and "run_projections" in trend:
+        x, y = np.asarray(trend["run_positions"]), np.asarray(trend["run_projections"])
+        a = draws[:, trend["run_ids"]]
+        a = a * (y.size / a.sum(axis=1, keepdims=True))
+        x_mean = (a @ x) / y.size
+        y_mean = (a @ y) / y.size
+        dx = x[None, :] - x_mean[:, None]
+        sxx = np.sum(a * dx * dx, axis=1)
+        slope = np.sum(a * dx * (y[None, :] - y_mean[:, None]), axis=1) / np.maximum(sxx, 1e-300)
+        residual = y[None, :] - y_mean[:, None] - slope[:, None] * dx
+        stderr = np.sqrt(np.sum(a * residual**2, axis=1) / (y.size - 2) / np.maximum(sxx, 1e-300))
+        t = slope / np.maximum(stderr, 1e-300)
+        p = 2.0 * special.stdtr(y.size - 2, -np.abs(t))
+        change = slope * float(np.ptp(x)) * trend["largest_shape"]
+        fails |= (p < trend["p_limit"]) & (np.abs(change) > TOL_LN_ZETA)
+    elif trend is not None:
+        fails |= bool(trend["significant"])
+    return fails
 
 
 ENVELOPE_DEPARTURE_LIMIT = 0.05

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 __all__ = [
     "MAX_NAME_CHARACTERS",
+    "MAX_CAMPAIGN_NAME_CHARACTERS",
     "QUOTED_CHARACTERS",
     "MAX_QUOTED_PROBLEMS",
     "MAX_SAMPLE_MAGNITUDE",
@@ -29,6 +30,13 @@ folder name POSIX file systems (255 bytes) and NTFS (255 UTF-16 units) allow: a 
 default name is its folder's name and a run's name is its file's name, so every name a
 real campaign gives fits. Names are shown in figure titles, legends and table cells; a
 100 kB name made one figure job take 74 s and 3.7 GB."""
+
+MAX_CAMPAIGN_NAME_CHARACTERS: int = 1000
+"""Longest campaign name (campaign.yaml's free-text ``name``): a title of a dozen lines.
+Every page and the summary show a text of up to 2000 characters whole
+(:data:`workflow.outputs.escape.DISPLAY_LIMIT`), so the name is never cut; a 100 kB
+name made one figure job take 74 s and 3.7 GB. Names that are file names (run files,
+channels, the default campaign name: its folder's) keep :data:`MAX_NAME_CHARACTERS`."""
 
 QUOTED_CHARACTERS: int = 60
 """Most characters of an untrusted text (a name, a YAML key) an error message quotes."""
@@ -91,7 +99,7 @@ def quoted(text: str, limit: int = QUOTED_CHARACTERS) -> str:
     return f"{text[:limit] + '…'!r} ({len(text)} characters)"
 
 
-def name_length_problem(what: str, name: str) -> str | None:
+def name_length_problem(what: str, name: str, limit: int | None = None) -> str | None:
     """What is wrong with the length of a name, or None.
 
     Parameters
@@ -100,13 +108,18 @@ def name_length_problem(what: str, name: str) -> str | None:
         What the name names, for the message (``"run file name"``).
     name : str
         The name.
+    limit : int, optional
+        Most characters: :data:`MAX_NAME_CHARACTERS` (a file name's bound) unless given.
     """
-    if len(name) <= MAX_NAME_CHARACTERS:
+    limit = MAX_NAME_CHARACTERS if limit is None else limit
+    if len(name) <= limit:
         return None
-    return (
-        f"{what} {quoted(name)} is too long: at most {MAX_NAME_CHARACTERS} characters "
-        "(the longest file name a file system allows)"
+    why = (
+        "the longest file name a file system allows"
+        if limit == MAX_NAME_CHARACTERS
+        else "a title of a dozen lines"
     )
+    return f"{what} {quoted(name)} is too long: at most {limit} characters ({why})"
 
 
 def magnitude_problem(values: NDArray[np.float64], what: str) -> tuple[int, str] | None:

@@ -29,7 +29,7 @@ differ by less than this fraction (plus the time column's print resolution over 
 record length)."""
 
 TIME_STEP_REL_TOLERANCE: float = 0.01
-"""A time step may differ from the record's mean step by this fraction of it, plus
+"""A time step may differ from the record's typical (median) step by this fraction of it, plus
 the resolution with which the time column is printed (rounding of the last digit)."""
 
 NAME_WITH_UNIT = re.compile(r"(.*?)\s*(?:\(([^)]*)\)|\[([^\]]*)\])\s*")

@@ -50,6 +50,7 @@ COLUMN_UNITS: dict[str, str] = {
     "zeta": "1 (fraction of critical damping)",
     "bearing_area_in2": "in^2",
     "mode_hz": "Hz",
+    "nominal_mode_hz": "Hz",
     "band_low_hz": "Hz",
     "band_high_hz": "Hz",
     "fit_rms": "1 (rms residual of ln envelope)",

@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from workflow.io import units
-from workflow.io.campaign import RunRecord
+from workflow.io.campaign import SINGLE_CHANNEL_NAME, RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
-from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
+from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, quoted, shortened
 from workflow.io.record_rules import rates_agree
 from workflow.io.settings import (
     AnalysisSettings,
@@ -40,23 +40,36 @@ __all__ = [
     "analysis_window",
     "window_problem",
     "mode_search_range",
+    "WINDOW_ADVICE",
+    "channel_responses",
     "identify_mode",
     "RUN_COLUMNS",
     "SEGMENT_COLUMNS",
     "empty_segments",
     "analyse_run_with_quality",
     "read_with_quality",
+    "labelled",
+    "analyse_every_mode_and_channel",
     "failed_checks",
     "read_and_check",
     "RunAnalysis",
     "analyse_run_file",
     "identify_configuration_mode",
+    "identify_configuration_modes",
+    "find_every_mode",
     "analyse_campaign",
+    "response_unit_label",
+    "nominal_modes_hz",
+    "with_nominal_mode",
+    "first_mode_and_channel",
+    "with_mode_and_channel",
+    "first_mode_rows",
     "collect_tables",
     "NOTHING_ANALYSED",
     "nothing_analysed_message",
     "nothing_analysed_in_tables",
     "fit_damping_curves",
+    "fit_mode_damping_curves",
 ]
 
 
@@ -68,10 +81,9 @@ def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> 
     """
     if window_s is None:
         return 0, record.n_samples
-    start = int(round(window_s[0] * record.sample_rate_hz))
-    stop = int(round(window_s[1] * record.sample_rate_hz))
-    start = min(max(start, 0), record.n_samples)
-    stop = min(max(stop, start), record.n_samples)
+    # clamped before rounding: a window end of 1e308 s is past the record, not an overflow
+    start = int(round(min(max(window_s[0] * record.sample_rate_hz, 0.0), record.n_samples)))
+    stop = int(round(min(max(window_s[1] * record.sample_rate_hz, start), record.n_samples)))
     return start, stop
 
 
@@ -114,6 +126,36 @@ def mode_search_range(
     return 5.0, 0.4 * sample_rate_hz
 
 
+WINDOW_ADVICE = (
+    "give the configuration window_s: [start, end] in campaign.yaml, the seconds of every run "
+    "where the free decay is (after the excitation stops)"
+)
+"""What a message about a line that does not decay asks the user for."""
+
+
+def channel_responses(
+    records: list[RunRecord], windows: list[tuple[int, int]]
+) -> tuple[list[np.ndarray], list[tuple[RunRecord, tuple[int, int]]]]:
+    """The analysed part of every response channel of every run, for the mode search, and
+    the run and window each comes from. With several channels each is divided by its RMS
+    over every run, so that a sensor in a larger unit (or nearer an antinode) does not
+    hide the modes the others see; one channel is left as recorded."""
+    parts, owners, names = [], [], []
+    for record, (start, stop) in zip(records, windows):
+        for channel in record.responses or (None,):
+            values = record.response if channel is None else channel.values
+            parts.append(values[start:stop])
+            owners.append((record, (start, stop)))
+            names.append(None if channel is None else channel.name)
+    if len(set(names)) > 1:
+        for name in set(names):
+            mine = [i for i, other in enumerate(names) if other == name]
+            rms = np.sqrt(np.mean(np.concatenate([parts[i] for i in mine]) ** 2))
+            for i in mine:
+                parts[i] = parts[i] / rms if rms > 0 else parts[i]
+    return parts, owners
+
+
 def identify_mode(
     records: list[RunRecord],
     *,
@@ -135,10 +177,10 @@ def identify_mode(
         raise ValueError("no readable run to identify the mode from")
     sample_rate_hz = records[0].sample_rate_hz
     search_hz = mode_search_range(sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction)
-    responses = [record.response[start:stop] for record, (start, stop) in zip(records, windows)]
+    responses, owners = channel_responses(records, windows)
     coherence_at_mode = None
     if all(record.force_lbf is not None for record in records):
-        forces = [record.force_lbf[start:stop] for record, (start, stop) in zip(records, windows)]
+        forces = [owner.force_lbf[start:stop] for owner, (start, stop) in owners]
         frequency_hz, h1, coherence = modal_id.h1_frf(forces, responses, sample_rate_hz)
         mode_hz = modal_id.find_mode_hz(frequency_hz, np.abs(h1), search_hz)
         coherence_at_mode = float(np.interp(mode_hz, frequency_hz, coherence))
@@ -159,6 +201,9 @@ def identify_mode(
         raise ValueError(f"the {method} spectrum of the runs gives no finite peak frequency")
     if coherence_at_mode is not None and not np.isfinite(coherence_at_mode):
         coherence_at_mode = None  # no force energy at the mode: no coherence estimate
+    forced = modal_id.forced_line_problem(responses, sample_rate_hz, mode_hz, frequency_hz, amplitude)
+    if forced is not None:
+        raise ValueError(f"{forced}; {WINDOW_ADVICE}")
     if campaign_band_hz is not None:
         band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
     else:
@@ -186,6 +231,8 @@ file states none; :mod:`workflow.io.recording_time`)."""
 SEGMENT_COLUMNS = [
     "configuration",
     "run",
+    "mode",
+    "channel",
     "t_s",
     "response_amplitude",
     "velocity_amplitude_in_s",
@@ -197,7 +244,14 @@ SEGMENT_COLUMNS = [
 ]
 
 
-_SEGMENT_DTYPES = {"configuration": str, "run": str, "kept": bool, "reject_reason": str}
+_SEGMENT_DTYPES = {
+    "configuration": str,
+    "run": str,
+    "mode": int,
+    "channel": str,
+    "kept": bool,
+    "reject_reason": str,
+}
 
 
 def empty_segments() -> dict[str, np.ndarray]:
@@ -298,7 +352,18 @@ def read_with_quality(
         logging.getLogger(__name__).exception("%s: not read", path)
         reason = _fault_reason(campaign_dir, path, "read", error)
     else:
-        return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
+        requested_hz = [mode_hz for mode_hz, _ in campaign.mode_requests() if mode_hz is not None]
+        names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
+        rows = []
+        for name in names:
+            # the lowest mode asks the most of a record's length in cycles
+            mine = quality.quality_rows(
+                record.for_channel(name) if record.responses else record,
+                quality_settings,
+                mode_hz=min(requested_hz, default=None),
+            )
+            rows += [labelled(row, name, len(names) > 1) for row in mine]
+        return record, rows
     return None, [
         {
             "check": "read",
@@ -310,6 +375,17 @@ def read_with_quality(
             "reason": reason,
         }
     ]
+
+
+def labelled(row: dict, channel: str, several: bool, mode: int = -1, mode_hz: float | None = None) -> dict:
+    """A quality row with the channel and mode (index, -1 for a record-level check) it
+    belongs to; with several channels (or modes) its reason names them."""
+    reason = row["reason"]
+    if reason:
+        where = [f"channel {quoted(channel)}"] if several else []
+        where += [f"mode {mode_hz:.6g} Hz"] if mode_hz is not None else []
+        reason = f"{', '.join(where)}: {reason}" if where else reason
+    return {**row, "reason": reason, "channel": channel, "mode": mode}
 
 
 def _window_problems(
@@ -328,6 +404,40 @@ def _fault_reason(campaign_dir, path: str, step: str, error: Exception) -> str:
         f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the {stage}, not a known fault "
         "of the file: the job's log has the trace)"
     )
+
+
+def analyse_every_mode_and_channel(
+    record: RunRecord,
+    *,
+    configuration: str,
+    run: str,
+    mode: ConfigurationMode,
+    window: tuple[int, int],
+    decay_settings: DecaySettings,
+    quality_settings: QualitySettings,
+) -> tuple[dict[str, np.ndarray], list[dict]]:
+    """:func:`analyse_run_with_quality` for every mode of the configuration on every
+    response channel of the run: the segments (with ``mode``, the mode's index, and
+    ``channel``) and the decay-level quality rows (:func:`labelled`)."""
+    names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
+    several = len(names) > 1 or len(mode.modes) > 1
+    parts, decay_rows = [], []
+    for index, info in enumerate(mode.modes):
+        for name in names:
+            columns, mine = analyse_run_with_quality(
+                record.for_channel(name) if record.responses else record,
+                configuration=configuration,
+                run=run,
+                mode=info,
+                window=window,
+                decay_settings=decay_settings,
+                quality_settings=quality_settings,
+            )
+            n = len(columns["t_s"])
+            parts.append({**columns, "mode": np.full(n, index), "channel": np.full(n, name)})
+            mode_hz = info.mode_hz if len(mode.modes) > 1 else None
+            decay_rows += [labelled(row, name, several, index, mode_hz) for row in mine]
+    return {key: np.concatenate([part[key] for part in parts]) for key in SEGMENT_COLUMNS}, decay_rows
 
 
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
@@ -405,18 +515,17 @@ def analyse_run_file(
             problems = [mode.error]
         else:
             try:
-                segments, decay_rows = analyse_run_with_quality(
+                segments, decay_rows = analyse_every_mode_and_channel(
                     record,
                     configuration=configuration,
                     run=run,
-                    mode=mode.mode,
+                    mode=mode,
                     window=analysis_window(record, campaign.configurations[configuration].window_s),
                     decay_settings=decay_settings,
                     quality_settings=quality_settings,
                 )
             except Exception as error:  # a fault on one run must not stop the others
                 logging.getLogger(__name__).exception("%s: not analysed", run_path)
-                segments, decay_rows = empty_segments(), []
                 problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
             else:
                 rows += decay_rows
@@ -428,6 +537,7 @@ def analyse_run_file(
         "status": "excluded" if problems else "used",
         "reason": "; ".join(problems),
         "record_start": "" if record is None else record.record_start,
+        "response_units": {} if record is None else {c.name: c.unit for c in record.responses},
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
 
@@ -499,19 +609,8 @@ def identify_configuration_mode(
             ]
             del records[index], windows[index]
     try:
-        mode = identify_mode(
-            records,
-            windows=windows,
-            campaign_mode_hz=campaign.mode_hz,
-            campaign_band_hz=campaign.band_hz,
-            band_half_width=mode_search.band_half_width,
-            mode_search_hz=mode_search.mode_search_hz,
-            mode_search_fraction=mode_search.mode_search_fraction,
-            min_mode_prominence=quality_settings.min_mode_prominence,
-        )
-    except ValueError as error:
-        return ConfigurationMode(
-            None, f"configuration {configuration}: first mode not found: {error}", skipped
+        return identify_configuration_modes(
+            records, windows, configuration, campaign, mode_search, quality_settings, skipped
         )
     except Exception as error:  # a fault of the search must not stop the other configurations
         logging.getLogger(__name__).exception("configuration %s: mode search failed", configuration)
@@ -522,7 +621,83 @@ def identify_configuration_mode(
             "fault of the files: the job's log has the trace)",
             skipped,
         )
-    return ConfigurationMode(mode, "", skipped)
+
+
+def identify_configuration_modes(
+    records: list[RunRecord],
+    windows: list[tuple[int, int]],
+    configuration: str,
+    campaign,
+    mode_search: ModeSearchSettings,
+    quality_settings: QualitySettings,
+    skipped: dict[str, list[str]],
+) -> ConfigurationMode:
+    """Every mode campaign.yaml asks of one configuration's readable runs (``modes_hz``,
+    ``mode_hz`` or ``auto``, :meth:`~workflow.io.campaign.Campaign.mode_requests`); a mode
+    that is not found is the configuration's error, naming it."""
+    options = {
+        "windows": windows,
+        "band_half_width": mode_search.band_half_width,
+        "mode_search_hz": mode_search.mode_search_hz,
+        "mode_search_fraction": mode_search.mode_search_fraction,
+        "min_mode_prominence": quality_settings.min_mode_prominence,
+    }
+    left_out: list[str] = []
+    requests = campaign.mode_requests()
+    if campaign.auto_modes:
+        try:
+            found_hz, left_out = find_every_mode(records, **options)
+        except ValueError as error:
+            return ConfigurationMode(None, f"configuration {configuration}: no mode found: {error}", skipped)
+        requests = tuple((mode_hz, None) for mode_hz in found_hz)
+        # each found mode is the largest peak of its own band: search no wider
+        options["mode_search_fraction"] = min(mode_search.mode_search_fraction, mode_search.band_half_width)
+    modes = []
+    for index, (mode_hz, band_hz) in enumerate(requests):
+        which = "first mode" if index == 0 else f"mode {mode_hz:.6g} Hz"
+        try:
+            modes.append(
+                identify_mode(records, campaign_mode_hz=mode_hz, campaign_band_hz=band_hz, **options)
+            )
+        except ValueError as error:
+            return ConfigurationMode(
+                None,
+                f"configuration {configuration}: {which} not found: {error}",
+                skipped,
+                left_out=tuple(left_out),
+            )
+    return ConfigurationMode(modes[0], "", skipped, tuple(modes[1:]), tuple(left_out))
+
+
+def find_every_mode(
+    records: list[RunRecord],
+    *,
+    windows: list[tuple[int, int]],
+    band_half_width: float,
+    mode_search_hz: tuple[float, float] | None,
+    mode_search_fraction: float,
+    min_mode_prominence: float,
+) -> tuple[list[float], list[str]]:
+    """Every clear, decaying mode of a configuration's runs (``modes_hz: auto``), Hz,
+    from the spectrum of every channel (:func:`channel_responses`), searched below
+    0.4 x the sample rate (or in config ``mode_search_hz``); and why each clear peak
+    left out is not a mode. Raises ValueError when there is none."""
+    if not records:
+        raise ValueError("no readable run to find the modes in")
+    sample_rate_hz = records[0].sample_rate_hz
+    search_hz = mode_search_range(sample_rate_hz, None, mode_search_hz, mode_search_fraction)
+    responses, _ = channel_responses(records, windows)
+    frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
+    found, left_out = modal_id.find_decaying_modes(
+        responses, sample_rate_hz, frequency_hz, np.sqrt(psd), search_hz, band_half_width, min_mode_prominence
+    )
+    if not found:
+        reasons = "".join(f"; {reason}" for reason in left_out)
+        advice = f"; {WINDOW_ADVICE}" if left_out else ""
+        raise ValueError(
+            f"no clear, decaying mode in {search_hz[0]:.4g}-{search_hz[1]:.4g} Hz{reasons}{advice}"
+        )
+    return found, left_out
 
 
 def _common_sample_rate_hz(rates_hz: list[float]) -> float:
@@ -569,6 +744,86 @@ def analyse_campaign(
     return pd.concat(frames, ignore_index=True)
 
 
+def response_unit_label(campaign, statuses: list[dict]) -> str:
+    """The unit of the tables' ``response_amplitude``, for the Parquet metadata:
+    campaign.yaml's response unit, else the one the run files record (each channel's
+    when they differ), with the quantity; e.g. ``m/s (velocity)``."""
+    quantity = campaign.response.quantity
+    if campaign.response.unit is not None:
+        return f"{campaign.response.unit} ({quantity})"
+    found: dict[str, set[str]] = {}
+    for status in statuses:
+        for channel, unit in status.get("response_units", {}).items():
+            found.setdefault(channel, set()).add(unit)
+    every = sorted(set().union(*found.values())) if found else []
+    if len(every) == 1:
+        return f"{every[0]} ({quantity})"
+    if not every:
+        return f"unit of the run files ({quantity})"
+    return f"{quantity}, per channel: " + "; ".join(
+        f"{name} {', '.join(sorted(units_))}" for name, units_ in found.items()
+    )
+
+
+def nominal_modes_hz(campaign, configurations_modes: list[tuple[ModeInfo, ...]]) -> list[float]:
+    """The nominal frequency of each analysed mode (the tables' ``mode_hz``), Hz, in the
+    configurations' mode order: campaign.yaml's (``modes_hz`` or ``mode_hz``) when it
+    gives one, else the median over the configurations of the frequency found for the
+    mode of that rank."""
+    count = max((len(modes) for modes in configurations_modes), default=0)
+    requested = [mode_hz for mode_hz, _ in campaign.mode_requests()]
+    nominal = []
+    for index in range(count):
+        given = requested[index] if index < len(requested) else None
+        found = [modes[index].mode_hz for modes in configurations_modes if index < len(modes)]
+        nominal.append(float(given) if given is not None else float(np.median(found)))
+    return nominal
+
+
+def with_nominal_mode(table: pd.DataFrame, nominal_hz: list[float]) -> pd.DataFrame:
+    """The table with its ``mode`` index column replaced by ``mode_hz`` (the nominal mode
+    frequency; NaN for a row of no mode), placed with ``channel`` after ``run``."""
+    lookup = np.array([*nominal_hz, np.nan])
+    index = table["mode"].to_numpy(dtype=int)
+    table = table.drop(columns=["mode"])
+    table.insert(2, "mode_hz", lookup[np.where(index >= 0, index, len(nominal_hz))] if len(index) else [])
+    channel = table.pop("channel")
+    table.insert(3, "channel", channel)
+    return table
+
+
+def first_mode_and_channel(table: pd.DataFrame, channel: str) -> pd.DataFrame:
+    """The rows of the first (lowest) mode and of ``channel``: the paper's models, the
+    diagnosis and the paper's figures analyse this one mode and sensor. A table without
+    ``mode_hz`` or ``channel`` columns is returned whole."""
+    if "mode_hz" in table and len(table):
+        first_hz = table["mode_hz"].min()
+        table = (
+            table[table["mode_hz"].isna() | (table["mode_hz"] == first_hz)]
+            if not np.isnan(first_hz)
+            else table
+        )
+    if "channel" in table:
+        table = table[table["channel"] == channel]
+    return table
+
+
+def with_mode_and_channel(table: pd.DataFrame, mode_hz: float | None, channel: str) -> pd.DataFrame:
+    """The table of one mode and channel with ``mode_hz`` and ``channel`` columns right
+    after ``configuration`` (or first): the tables every campaign's outputs share."""
+    table = table.copy()
+    at = table.columns.get_loc("configuration") + 1 if "configuration" in table else 0
+    table.insert(at, "mode_hz", np.nan if mode_hz is None else float(mode_hz))
+    table.insert(at + 1, "channel", channel)
+    return table
+
+
+def first_mode_rows(modes: pd.DataFrame) -> pd.DataFrame:
+    """The modes table's rows of the first mode (and of configurations where none was found)."""
+    first_hz = modes["nominal_mode_hz"].min()
+    return modes[modes["nominal_mode_hz"].isna() | (modes["nominal_mode_hz"] == first_hz)]
+
+
 def collect_tables(
     *, segment_paths, quality_paths, status_paths, mode_paths, campaign, excluded_paths=()
 ) -> dict[str, pd.DataFrame]:
@@ -594,7 +849,8 @@ def collect_tables(
     from workflow.io.interim import read_mode, read_run_statuses
     from workflow.io.tables import read_columns
 
-    statuses = pd.DataFrame(read_run_statuses(status_paths) + list(excluded_paths))
+    status_rows = read_run_statuses(status_paths)
+    statuses = pd.DataFrame(status_rows + list(excluded_paths))
     statuses = statuses.reindex(columns=RUN_COLUMNS).fillna({"record_start": ""})
     runs = statuses.reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
@@ -616,31 +872,36 @@ def collect_tables(
     segments = all_segments[keep].drop(columns=["kept", "reject_reason"]).copy()
     segments["bearing_area_in2"] = segments["configuration"].map(areas).astype(float)
 
+    found_modes = {Path(path).stem: read_mode(path) for path in mode_paths}
+    nominal_hz = nominal_modes_hz(campaign, [found.modes for found in found_modes.values()])
     mode_rows = []
-    for path in mode_paths:
-        name = Path(path).stem
-        found = read_mode(path)
-        mode = found.mode
-        mode_rows.append(
-            {
-                "configuration": name,
-                "mode_hz": mode.mode_hz if mode else np.nan,
-                "band_low_hz": mode.band_hz[0] if mode else np.nan,
-                "band_high_hz": mode.band_hz[1] if mode else np.nan,
-                "method": mode.method if mode else "not found",
-                "sample_rate_hz": mode.sample_rate_hz if mode else np.nan,
-                "record_duration_s": mode.record_duration_s if mode else np.nan,
-                "coherence_at_mode": (mode.coherence_at_mode if mode else None) or np.nan,
-                "bearing_area_in2": areas.get(name, np.nan),
-                "error": found.error,
-            }
-        )
+    for name, found in found_modes.items():
+        for index, mode in enumerate(found.modes or (None,)):
+            mode_rows.append(
+                {
+                    "configuration": name,
+                    "nominal_mode_hz": nominal_hz[index] if mode else np.nan,
+                    "mode_hz": mode.mode_hz if mode else np.nan,
+                    "band_low_hz": mode.band_hz[0] if mode else np.nan,
+                    "band_high_hz": mode.band_hz[1] if mode else np.nan,
+                    "method": mode.method if mode else "not found",
+                    "sample_rate_hz": mode.sample_rate_hz if mode else np.nan,
+                    "record_duration_s": mode.record_duration_s if mode else np.nan,
+                    "coherence_at_mode": (mode.coherence_at_mode if mode else None) or np.nan,
+                    "bearing_area_in2": areas.get(name, np.nan),
+                    "error": found.error,
+                }
+            )
+    quality_table = pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True)
     return {
-        "segments": segments.reset_index(drop=True),
-        "rejected": rejected.reset_index(drop=True),
+        "segments": with_nominal_mode(segments, nominal_hz).reset_index(drop=True),
+        "rejected": with_nominal_mode(rejected, nominal_hz).reset_index(drop=True),
         "runs": runs,
-        "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True),
+        "quality": with_nominal_mode(quality_table, nominal_hz),
         "modes": pd.DataFrame(mode_rows),
+        "response_unit": response_unit_label(
+            campaign, [row for row in status_rows if row["status"] == "used"]
+        ),
     }
 
 
@@ -703,6 +964,34 @@ def nothing_analysed_in_tables(runs_path, segments_path, rejected_path) -> str |
 
 
 def fit_damping_curves(
+    segments: pd.DataFrame,
+    areas_in2: dict[str, float | None],
+    settings: DampingFitSettings,
+    *,
+    grid_points: int = 60,
+    area_amplitudes: int = 5,
+) -> dict[str, pd.DataFrame]:
+    """:func:`fit_mode_damping_curves` for each (mode, channel) of the segments (their
+    ``mode_hz`` and ``channel`` columns, led by the first mode), each table with the two
+    columns after ``configuration``. A table without the two columns is one mode and
+    channel."""
+    import pandas as pd
+
+    if "mode_hz" not in segments or "channel" not in segments or segments.empty:
+        return fit_mode_damping_curves(
+            segments, areas_in2, settings, grid_points=grid_points, area_amplitudes=area_amplitudes
+        )
+    parts: dict[str, list[pd.DataFrame]] = {}
+    for (mode_hz, channel), part in segments.groupby(["mode_hz", "channel"], sort=False):
+        tables = fit_mode_damping_curves(
+            part, areas_in2, settings, grid_points=grid_points, area_amplitudes=area_amplitudes
+        )
+        for name, table in tables.items():
+            parts.setdefault(name, []).append(with_mode_and_channel(table, mode_hz, str(channel)))
+    return {name: pd.concat(tables, ignore_index=True) for name, tables in parts.items()}
+
+
+def fit_mode_damping_curves(
     segments: pd.DataFrame,
     areas_in2: dict[str, float | None],
     settings: DampingFitSettings,

@@ -94,6 +94,8 @@ __all__ = [
     "gradient_along_grid",
     "CurveGrid",
     "model_curves",
+    "combined_model",
+    "COMBINED_MODELS",
 ]
 
 RESPONSE_ORDER = {"displacement": 0, "velocity": 1, "acceleration": 2}
@@ -673,6 +675,33 @@ def iwan_cells_model(n_cells: int) -> AveragedModel:
 
 
 MODELS.update({f"iwan_cells_{n}": iwan_cells_model(n) for n in range(1, MAX_THRESHOLD_CELLS + 1)})
+
+
+def combined_model(joint_model: str, extension_model: str) -> AveragedModel:
+    """The joint law of ``joint_model`` with the extension of ``extension_model`` added.
+
+    Two mechanisms at once (a micro-slip joint with a velocity-squared loss, with a
+    non-dissipative stiffness): the extension's own parameters (those ``dahl`` lacks) are
+    appended to the joint model's, and the supplied parameters of both are kept. Its id is
+    ``<joint_model>+<extension>`` with the extension named as in ``dahl_<extension>``.
+    """
+    joint, extension = MODELS[joint_model], MODELS[extension_model]
+    own = set(joint.param_names) | set(MODELS["dahl"].param_names)
+    added = tuple(p for p in extension.params if p.name not in own)
+    suffix = extension_model.removeprefix("dahl_")
+    return AveragedModel(
+        f"{joint_model}_{suffix}",
+        joint.joint,
+        joint.params + added,
+        f"{joint.description} + {suffix} term of {extension_model}",
+        fixed=tuple(dict.fromkeys(joint.fixed + extension.fixed)),
+    )
+
+
+COMBINED_MODELS = {("iwan", "dahl_quadratic"): "iwan_quadratic", ("iwan", "dahl_stiffness"): "iwan_stiffness"}
+"""(joint model, extension model) -> the combined model's id (:func:`combined_model`)."""
+
+MODELS.update({name: combined_model(*parts) for parts, name in COMBINED_MODELS.items()})
 
 
 def _joint_averages(model: AveragedModel, y, velocity, params) -> JointAverages:

@@ -11,7 +11,7 @@ joint physics the runs share (:func:`run_offsets`, closed form).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -451,7 +451,7 @@ def fit_model(
     settings: FitSettings = FitSettings(),
     mask: np.ndarray | None = None,
     warm_start: np.ndarray | None = None,
-    nested_start: Mapping[str, float] | None = None,
+    nested_start: Mapping[str, float] | Sequence[Mapping[str, float]] | None = None,
 ) -> FitResult:
     """Weighted least-squares fit of a model to both curves of (part of) a configuration.
 
@@ -469,10 +469,11 @@ def fit_model(
     warm_start : ndarray, optional
         Fit coordinates to refine from (skips the global stage: used for the
         cross-validation folds, started from the all-data fit).
-    nested_start : mapping, optional
+    nested_start : mapping or sequence of mappings, optional
         Physical parameters of a model this one contains (e.g. the Dahl fit with the
         extension switched off): refined as one more start, so that an extended
-        model never fits worse than the model it extends.
+        model never fits worse than the model it extends. A combination of two
+        mechanisms passes one start per single-mechanism fit.
 
     Returns
     -------
@@ -501,8 +502,9 @@ def fit_model(
         starts = [np.clip((warm_start - problem.lo) / span, 0.0, 1.0)]
     else:
         starts = []
-        if nested_start is not None:
-            starts.append(np.clip((to_coords(model, nested_start) - problem.lo) / span, 0.0, 1.0))
+        nested = [nested_start] if isinstance(nested_start, Mapping) else list(nested_start or [])
+        for start in nested:
+            starts.append(np.clip((to_coords(model, start) - problem.lo) / span, 0.0, 1.0))
         n = 2 ** int(np.ceil(np.log2(max(settings.global_samples, 2))))
         unit = scrambled_sobol_points(n, len(model.params), settings.seed)
         cost = np.mean(problem.residuals(unit) ** 2, axis=-1)
@@ -569,8 +571,9 @@ def model_residuals(
     ``ln_zeta_shared``, the damping residual of the shared model before the offsets, and
     ``ln_zeta_calibrated``, the damping residual with each run's offsets set by its own
     lowest-amplitude segments (``calibration``, :func:`calibration_segments`) as a
-    held-out run's are, and ``ln_zeta_slope``, the shared model's log-log damping slope
-    (:func:`damping_curve_slope`).
+    held-out run's are, ``ln_zeta_slope``, the shared model's log-log damping slope
+    (:func:`damping_curve_slope`), and ``scatter_ln_zeta``, the measured scatter of
+    ``ln zeta`` at each segment.
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
@@ -610,6 +613,7 @@ def model_residuals(
             data.velocity_in_s, np.log(np.maximum(shared_zeta, 1e-12)), data.run_index
         ),
         "calibration": calibration,
+        "scatter_ln_zeta": scatter.noise_ln_zeta,
     }
 
 

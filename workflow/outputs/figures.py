@@ -37,6 +37,8 @@ __all__ = [
     "damping_misfit",
     "frequency_misfit",
     "frequency_vs_amplitude",
+    "CHANNEL_MARKERS",
+    "modes_and_channels",
     "area_fits",
     "PARAMETER_SYMBOLS",
     "parameter_text",
@@ -455,6 +457,60 @@ def frequency_vs_amplitude(
             axis.plot(velocity(frame, units), frame["frequency_hz"], style, linewidth=2.0, label=name)
             notes.append(frequency_misfit(segments, frame, name, units))
         _finish_amplitude_panel(figure, axis, segments, FREQUENCY_LABEL, title, notes, units)
+    return figure
+
+
+CHANNEL_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+"""One marker per configuration on the figure of every mode and channel."""
+
+
+def modes_and_channels(
+    segments: pd.DataFrame, *, title: str, channels: Sequence[str], units: UnitSystem = INCH_SECOND
+) -> plt.Figure:
+    """Damping and frequency against velocity amplitude of every mode, one row a mode, each
+    channel in its own colour (configurations by marker): whether the sensors of a hit
+    agree shows at once.
+
+    Parameters
+    ----------
+    segments : DataFrame
+        ``results/tables/segments.parquet`` (its ``mode_hz`` and ``channel`` columns).
+    title : str
+        The figure's title.
+    channels : sequence of str
+        The channels in campaign.yaml's order (the colours' order).
+    units : UnitSystem
+        Config ``units``.
+    """
+    modes_hz = sorted(segments["mode_hz"].dropna().unique())
+    colours = dict(zip(channels, plt.get_cmap("tab10").colors))
+    configurations = list(dict.fromkeys(segments["configuration"]))
+    with plt.rc_context(STYLE):
+        figure, axes = plt.subplots(
+            max(1, len(modes_hz)), 2, figsize=(11.0, 2.0 + 2.6 * max(1, len(modes_hz))), squeeze=False
+        )
+        for row, mode_hz in zip(axes, modes_hz):
+            mode = segments[segments["mode_hz"] == mode_hz]
+            for (column, scale), label, axis in zip(
+                (("zeta", 100.0), ("frequency_hz", 1.0)), (DAMPING_LABEL, FREQUENCY_LABEL), row
+            ):
+                for (configuration, channel), part in mode.groupby(["configuration", "channel"], sort=False):
+                    marker = CHANNEL_MARKERS[configurations.index(configuration) % len(CHANNEL_MARKERS)]
+                    axis.plot(
+                        velocity(part, units),
+                        scale * part[column].to_numpy(float),
+                        marker,
+                        markersize=3.5,
+                        alpha=0.7,
+                        color=colours.get(channel, "0.4"),
+                        label=channel if len(configurations) == 1 else f"{channel} ({configuration})",
+                    )
+                amplitude_axis(axis, units)
+                axis.set_ylabel(label)
+                axis.set_title(f"mode {mode_hz:.5g} Hz")
+            legend_beside(row[1], fontsize=8)
+        figure.suptitle(title)
+        lay_out(figure)
     return figure
 
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.confidence import verdict_key
 from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem
@@ -69,6 +70,7 @@ __all__ = [
     "hypotheses_in_units",
     "hypothesis_summary",
     "excluded_runs",
+    "modes_section",
     "verdict_html",
     "hypotheses_html",
     "runs_in_recorded_order",
@@ -102,7 +104,8 @@ CLEAR_MARGIN = 1.5
 held-out error is at least this many times the verdict's ..."""
 
 CLEAR_CONFIDENCE = 0.8
-"""... and at least this fraction of the resamples name the same cause."""
+"""... and the verdict's confidence (its probability over reweightings of the runs) is at
+least this."""
 
 FLAT_CHANGE = 0.05
 """A measured trend smaller than this relative change (5 %) over the amplitude range is
@@ -738,8 +741,8 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"times its held-out error ({fmt(margin['next_score'])})."
             )
         elif margin["ratio"] >= 1:
-            confidence = (entry.get("confidence") or {}).get(cause)
-            sure = f"; {percent_of(confidence)} of the resamples name it" if confidence is not None else ""
+            confidence = (entry.get("confidence") or {}).get(verdict_key(entry.get("causes") or [cause]))
+            sure = f"; its confidence is {percent_of(confidence)}" if confidence is not None else ""
             items.append(
                 f"The verdict is {margin_words(margin['ratio'], confidence)} the next-best candidate, "
                 f"{candidate_name(margin['next'])}: its held-out error ({fmt(margin['next_score'])}) is "
@@ -879,6 +882,60 @@ def excluded_runs(runs: pd.DataFrame) -> pd.DataFrame:
     return runs[runs["status"] == "excluded"]
 
 
+def _confidence_text(confidence: Mapping | None) -> str:
+    """``microslip (power law) 0.93, none 0.05``: the largest shares, escaped."""
+    shares = sorted((confidence or {}).items(), key=lambda item: -item[1])[:3]
+    return esc(", ".join(f"{cause_name(cause)} {share:.2f}" for cause, share in shares))
+
+
+def modes_section(document: Mapping) -> list[str]:
+    """The verdict page's section on every mode and channel (diagnosis.json ``modes`` and
+    ``channels``): a verdict per mode, and per configuration each channel's own; nothing
+    for a campaign of one mode and one channel."""
+    modes = document.get("modes") or []
+    several_channels = any(
+        entry.get("channels") for mode in modes for entry in mode.get("configurations", {}).values()
+    )
+    if len(modes) < 2 and not several_channels:
+        return []
+    parts = ["<h2>Every mode</h2>"]
+    for mode in modes:
+        mode_hz = mode.get("mode_hz")
+        heading = f"mode {mode_hz:.5g} Hz" if isinstance(mode_hz, int | float) else "mode not found"
+        parts.append(
+            f"<h3>{esc(heading)}: {esc(cause_name(mode.get('cause')))}</h3>"
+            f"<p>confidence: {_confidence_text(mode.get('confidence'))}</p>"
+        )
+        rows = []
+        for name, entry in mode.get("configurations", {}).items():
+            channels = entry.get("channels") or {}
+            seen = "; ".join(
+                f"{channel}: {cause_name(own.get('cause'))}" for channel, own in channels.items()
+            )
+            rows.append(
+                [
+                    esc(name),
+                    esc(cause_name(entry.get("cause"))),
+                    _confidence_text(entry.get("confidence")),
+                    esc(fmt(entry.get("gain", {}).get("ratio"))),
+                    esc(seen),
+                ]
+            )
+        parts.append(
+            html_table(
+                ["configuration", "cause", "confidence", "ratio", "each channel's own verdict"],
+                rows,
+                numeric=(3,),
+            )
+        )
+    parts.append(
+        '<p class="note">Each mode is diagnosed on its own. With several channels a '
+        "configuration's verdict is the cause most channels name, its confidence the "
+        "channels' mean; the paper's figures and models are the first mode's, on the first channel.</p>"
+    )
+    return parts
+
+
 def verdict_html(
     document: Mapping,
     *,
@@ -986,6 +1043,8 @@ def verdict_html(
             parts.append(
                 f"<p><b>{esc(name)}</b>, the cause: {esc(CAUSE_WORDS.get(entry['cause'], entry['cause']))}.</p>"
             )
+
+    parts.extend(modes_section(document))
 
     # how sure
     parts.append("<h2>How sure we are</h2>")

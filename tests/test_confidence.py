@@ -1,0 +1,178 @@
+"""Calibrated confidence (workflow/discovery/confidence.py) and the combination rule
+(workflow/discovery/combined.py), against cases whose answer is known."""
+
+import numpy as np
+import pytest
+
+from workflow.discovery.combined import combination_test
+from workflow.discovery.confidence import (
+    ChannelEvidence,
+    VerdictOption,
+    dirichlet_unit_weights,
+    mean_probabilities,
+    pooled_log_density,
+    soft_decisions,
+    verdict_key,
+)
+
+N_UNITS = 8
+RULE = {"clear_gain": 0.7, "residual_gain": 0.7, "envelope_structure": False}
+
+
+def channel(errors: dict[str, float], spread: float, seed: int, n_eff: int = 40) -> ChannelEvidence:
+    """Held-out sums of ``N_UNITS`` runs of unit weight: model ``m``'s squared error per run
+    is ``errors[m]^2`` times a common run factor and its own lognormal scatter ``spread``."""
+    rng = np.random.default_rng(seed)
+    common = rng.lognormal(0.0, 0.3, N_UNITS)
+    squares = {m: e**2 * common * rng.lognormal(0.0, spread, N_UNITS) for m, e in errors.items()}
+    return ChannelEvidence(squares, np.ones(N_UNITS), n_eff)
+
+
+def decide_softly(channels, options, *, baseline_fails=False, n_draws=400, seed=0):
+    draws = dirichlet_unit_weights(n_draws, N_UNITS, np.random.default_rng(seed))
+    p, ratio = soft_decisions(channels, ["dahl"], options, baseline_fails=baseline_fails, draws=draws, **RULE)
+    return mean_probabilities(p), p, ratio
+
+
+def test_dirichlet_weights_keep_every_unit_and_average_to_the_data():
+    w = dirichlet_unit_weights(2000, 5, np.random.default_rng(1))
+    assert np.all(w > 0)
+    np.testing.assert_allclose(w.sum(axis=1), 5.0)
+    # the mean reweighting is the data itself; Monte Carlo error of the mean ~ 1/sqrt(2000 * 6)
+    np.testing.assert_allclose(w.mean(axis=0), 1.0, atol=0.04)
+
+
+def test_log_density_with_one_channel_returns_its_error():
+    ev = channel({"dahl": 2.0, "iwan": 1.0}, 0.1, seed=3)
+    elpd, error = pooled_log_density([ev], ["dahl", "iwan"], np.ones((1, N_UNITS)))
+    direct = np.sqrt([ev.unit_squares[m].sum() / N_UNITS for m in ("dahl", "iwan")])
+    np.testing.assert_allclose(error[:, 0], direct, rtol=1e-12)
+    # Gaussian with its own variance E^2: elpd = -n/2 (ln E^2 + 1)
+    np.testing.assert_allclose(elpd[:, 0], -0.5 * 40 * (np.log(direct**2) + 1.0), rtol=1e-12)
+
+
+def test_tied_candidates_share_the_confidence():
+    """Two candidates whose held-out errors differ by less than their run-to-run scatter:
+    neither may be sure, and together they carry the departure."""
+    ev = channel({"dahl": 1.0, "dahl_quadratic": 0.5, "dahl_stiffness": 0.505}, 0.15, seed=5)
+    options = [
+        VerdictOption("quadratic_damping", "dahl_quadratic"),
+        VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
+    ]
+    confidence, p, _ = decide_softly([ev], options)
+    assert 0.2 < confidence["quadratic_damping"] < 0.8
+    assert 0.2 < confidence["stiffness_nonlinearity"] < 0.8
+    assert sum(confidence.values()) == pytest.approx(1.0)
+    for b in range(400):  # every draw is a probability vector
+        assert sum(v[b] for v in p.values()) == pytest.approx(1.0)
+
+
+def test_a_duplicated_channel_does_not_make_a_tie_sure():
+    """The same sensor twice doubles the observations, not the evidence that one of two
+    tied models is better: the tie stays shared (the draws' winner still alternates)."""
+    ev = channel({"dahl": 1.0, "dahl_quadratic": 0.5, "dahl_stiffness": 0.505}, 0.15, seed=5)
+    options = [
+        VerdictOption("quadratic_damping", "dahl_quadratic"),
+        VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
+    ]
+    once, _, _ = decide_softly([ev], options)
+    twice, _, _ = decide_softly([ev, ev], options)
+    assert max(twice.values()) < 0.9
+    assert abs(twice["quadratic_damping"] - once["quadratic_damping"]) < 0.2
+
+
+def test_a_clear_leader_takes_the_confidence():
+    ev = channel({"dahl": 1.0, "iwan": 0.3, "dahl_stiffness": 0.8}, 0.1, seed=7)
+    options = [
+        VerdictOption("microslip_power_law", "iwan"),
+        VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
+    ]
+    confidence, _, ratio = decide_softly([ev], options)
+    assert confidence["microslip_power_law"] > 0.99
+    # the gain ratio of the draws is the leader's, 0.3 up to the run scatter
+    assert np.median(ratio) == pytest.approx(0.3, rel=0.15)
+
+
+def test_a_small_gain_without_a_baseline_misfit_is_not_confident_of_an_effect():
+    """No-effect campaigns: an extension absorbs the models' own bias to ~0.85 of the
+    baseline's error. Without a significant misfit the gate (0.7) is rarely passed."""
+    ev = channel({"dahl": 1.0, "dahl_drift": 0.85}, 0.1, seed=11)
+    confidence, _, _ = decide_softly([ev], [VerdictOption("run_drift", "dahl_drift")])
+    assert confidence["none"] > 0.9
+
+
+def test_a_gain_at_the_margin_is_uncertain():
+    """A gain ratio at the margin itself: about half of the reweightings pass it."""
+    ev = channel({"dahl": 1.0, "dahl_drift": 0.7}, 0.2, seed=13)
+    squares = dict(ev.unit_squares)  # the all-data ratio exactly at the margin
+    squares["dahl_drift"] = (
+        squares["dahl_drift"] * 0.7**2 * squares["dahl"].sum() / squares["dahl_drift"].sum()
+    )
+    ev = ChannelEvidence(squares, ev.unit_weights, ev.effective_observations)
+    confidence, _, _ = decide_softly([ev], [VerdictOption("run_drift", "dahl_drift")])
+    assert 0.2 < confidence["none"] < 0.8
+
+
+def test_ineligible_and_misfitting_options():
+    ev = channel({"dahl": 1.0, "dahl_stiffness": 0.3, "iwan": 0.8}, 0.1, seed=17)
+    vetoed = [VerdictOption("stiffness_nonlinearity", "dahl_stiffness", eligible=False)]
+    confidence, _, _ = decide_softly([ev], vetoed, baseline_fails=True)
+    assert confidence == {"unknown": 1.0}
+    misfit = [VerdictOption("microslip_power_law", "iwan", residual_significant=True)]
+    confidence, _, _ = decide_softly([ev], misfit, baseline_fails=True)
+    assert confidence["unknown"] > 0.95  # 0.8 of the baseline's error does not reach 0.7
+
+
+def test_verdict_keys_do_not_depend_on_the_order_of_causes():
+    assert verdict_key(["stiffness_nonlinearity", "microslip_power_law"]) == verdict_key(
+        ["microslip_power_law", "stiffness_nonlinearity"]
+    )
+
+
+def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
+    rng = np.random.default_rng(21)
+    w = np.ones(N_UNITS)
+    combined = 1.0 + 0.05 * rng.standard_normal(N_UNITS)
+    baseline = combined + 3.0  # the two mechanisms' effects add: 1 + 2
+    parts = {"a": combined + 2.0, "b": combined + 1.0}  # each part misses what the other adds
+    result = combination_test(combined, parts, baseline, w)
+    assert result["named"] and result["causes"] == ["b", "a"]
+    assert result["shares"]["b"] == pytest.approx(2.0 / 3.0)
+    # one part alone as good as the combination (up to noise): the second mechanism adds nothing
+    parts = {"a": combined + 0.05 * rng.standard_normal(N_UNITS), "b": combined + 1.0}
+    assert not combination_test(combined, parts, baseline, w)["named"]
+    # both add, but one only a twentieth of the gain: not a second cause
+    parts = {"a": combined + 2.85, "b": combined + 0.15}
+    assert not combination_test(combined, parts, baseline, w, paired_standard_errors=0.0)["named"]
+
+
+def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():
+    """All-ones weights are the data: the bin's t test and the trend's regression p value
+    (scipy's linregress) decide as on the data; reweightings then spread around it."""
+    from scipy import stats
+
+    from workflow.discovery.misfit import failure_draws
+
+    rng = np.random.default_rng(23)
+    y = 0.01 + 0.004 * rng.standard_normal(N_UNITS)  # a bin mean 0.01, t ~ 7
+    t = y.mean() / (y.std(ddof=1) / np.sqrt(N_UNITS))
+    p = 2 * stats.t.sf(abs(t), N_UNITS - 1)
+    row = {"run_ids": list(range(N_UNITS)), "run_means": y.tolist(), "tolerance": 0.005}
+    ones = np.ones((1, N_UNITS))
+    for limit in (p * 1.01, p * 0.99):  # just above and just below the data's p value
+        assert failure_draws([{**row, "p_limit": limit}], None, ones)[0] == (p < limit)
+    x = np.arange(N_UNITS, dtype=float)
+    projections = -0.03 * x + 0.02 * rng.standard_normal(N_UNITS)
+    fit = stats.linregress(x, projections)
+    trend = {
+        "run_ids": list(range(N_UNITS)),
+        "run_positions": x.tolist(),
+        "run_projections": projections.tolist(),
+        "largest_shape": 1.0,
+    }
+    for limit in (fit.pvalue * 1.01, fit.pvalue * 0.99):
+        assert failure_draws([], {**trend, "p_limit": limit}, ones)[0] == (fit.pvalue < limit)
+    # at its limit, about half of the reweightings fail
+    draws = dirichlet_unit_weights(400, N_UNITS, rng)
+    share = failure_draws([], {**trend, "p_limit": fit.pvalue}, draws).mean()
+    assert 0.2 < share < 0.8

@@ -1,0 +1,247 @@
+"""Calibrated confidence of a verdict: how sure the held-out evidence lets one be.
+
+The verdict (:func:`workflow.discovery.decision.decide`) is one decision on all the data.
+Its confidence carries the two uncertainties behind it:
+
+* **Is there a departure from the baseline at all?** The decision's gate (a significant
+  baseline misfit, or a candidate predicting held-out data better than ``CLEAR_GAIN`` of
+  the baseline's error) is re-taken on Bayesian-bootstrap reweightings of the
+  independent units of held-out evidence (runs; with one run, half decades of
+  amplitude): every unit keeps a Dirichlet(1, ..., 1) weight, so no unit is ever left out
+  (a multinomial resample of five amplitude blocks leaves the top one out in a third of
+  the draws, which is what the confidence then measured).
+* **Which mechanism?** Within each reweighting the candidates share the departure by
+  pseudo-BMA+ weights (Yao et al. 2018): the held-out log predictive density of each
+  candidate, a Gaussian with the candidate's own discrepancy variance (its squared
+  held-out error, in scatter units), over the configuration's effective number of
+  independent observations ``n_eff`` (:func:`workflow.discovery.heldout.effective_observations`):
+  ``elpd = -n_eff / 2 (ln E^2 + 1)``. Candidates whose held-out errors differ by less
+  than their scatter over the units share the confidence; one that leads in every
+  reweighting takes it.
+
+Several channels (sensors) of one run pool into one joint likelihood: each channel's
+held-out errors are in its own scatter units (its own noise and amplitude scale), the
+runs (units) are the same on every channel and reweighted together, and the log
+densities add (:class:`ChannelEvidence`, one per channel). Nothing is voted or
+multiplied across sensors: a channel that sees less has larger held-out errors relative
+to its scatter only where its data say less, and a duplicated channel doubles ``n_eff``
+without changing which model predicts better.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "ChannelEvidence",
+    "VerdictOption",
+    "verdict_key",
+    "verdict_causes",
+    "dirichlet_unit_weights",
+    "pooled_log_density",
+    "soft_decisions",
+    "mean_probabilities",
+]
+
+CAUSE_ORDER = ("microslip_power_law", "quadratic_damping", "stiffness_nonlinearity", "run_drift")
+"""Canonical order of the causes inside a combination's key."""
+
+
+def verdict_key(causes: Sequence[str]) -> str:
+    """The ``confidence`` key of a verdict: its cause, or a combination's causes joined by
+    ``+`` in the vocabulary's order (the same key whichever carries more of the gain).
+
+    Examples
+    --------
+    >>> verdict_key(["quadratic_damping", "microslip_power_law"])
+    'microslip_power_law+quadratic_damping'
+    >>> verdict_key(["none"])
+    'none'
+    """
+    rank = {c: i for i, c in enumerate(CAUSE_ORDER)}
+    return "+".join(sorted(causes, key=lambda c: (rank.get(c, len(rank)), c)))
+
+
+def verdict_causes(key: str) -> list[str]:
+    """The causes of a ``confidence`` key (:func:`verdict_key`)."""
+    return key.split("+")
+
+
+@dataclass(frozen=True)
+class ChannelEvidence:
+    """One channel's held-out evidence, summed over the independent units.
+
+    Attributes
+    ----------
+    unit_squares : mapping
+        Model id -> array (U,): the unit's amplitude-weighted squared held-out residuals
+        over the measured scatter (both curves), summed over its scored segments.
+    unit_weights : ndarray, shape (U,)
+        The units' summed amplitude weights (``E^2 = sum S / sum W``).
+    effective_observations : int
+        Independent observations of the channel (2 x occupied run x half-decade cells).
+    """
+
+    unit_squares: Mapping[str, np.ndarray]
+    unit_weights: np.ndarray
+    effective_observations: int
+
+
+@dataclass(frozen=True)
+class VerdictOption:
+    """A verdict other than ``none``/``unknown`` that the evidence may name.
+
+    Attributes
+    ----------
+    key : str
+        Its ``confidence`` key (:func:`verdict_key`).
+    model : str
+        The model that represents it (the extended model once named).
+    eligible : bool
+        Whether the rule lets it be named at all (BIC below the baseline's, its cause's
+        signature, for a combination the parsimony rule), decided on all the data.
+    residual_significant : bool
+        Whether it leaves a significant binned misfit (then it needs a clear gain).
+    """
+
+    key: str
+    model: str
+    eligible: bool = True
+    residual_significant: bool = False
+
+
+def dirichlet_unit_weights(n_draws: int, n_units: int, rng: np.random.Generator) -> np.ndarray:
+    """Bayesian-bootstrap weights of the units, shape (n_draws, n_units), rows summing to
+    the number of units (flat Dirichlet, scaled so that the all-ones row is the data)."""
+    return rng.dirichlet(np.ones(max(n_units, 1)), size=n_draws) * max(n_units, 1)
+
+
+def pooled_log_density(
+    channels: Sequence[ChannelEvidence], models: Sequence[str], draws: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Held-out log predictive density of each model under each reweighting of the units.
+
+    Parameters
+    ----------
+    channels : sequence of ChannelEvidence
+        One per channel; the units (axis of ``unit_squares``) are the same on every channel.
+    models : sequence of str
+    draws : ndarray, shape (B, U)
+        Unit weights (:func:`dirichlet_unit_weights`).
+
+    Returns
+    -------
+    elpd : ndarray, shape (M, B)
+        ``sum_channels -n_eff / 2 (ln E^2 + 1)`` with ``E^2`` the reweighted squared
+        held-out error (the Gaussian's discrepancy variance fitted per model and channel).
+    error : ndarray, shape (M, B)
+        The pooled held-out error, ``exp(-elpd / n_eff_total - 1/2)``: the geometric mean of
+        the channels' errors weighted by their observations (one channel: its error).
+    """
+    elpd = np.zeros((len(models), draws.shape[0]))
+    n_total = 0
+    for channel in channels:
+        weight = draws @ channel.unit_weights
+        n = channel.effective_observations
+        n_total += n
+        for i, m in enumerate(models):
+            squared = (draws @ channel.unit_squares[m]) / np.maximum(weight, 1e-300)
+            elpd[i] -= 0.5 * n * (np.log(np.maximum(squared, 1e-300)) + 1.0)
+    return elpd, np.exp(-elpd / max(n_total, 1) - 0.5)
+
+
+def soft_decisions(
+    channels: Sequence[ChannelEvidence],
+    baselines: Sequence[str],
+    options: Sequence[VerdictOption],
+    *,
+    baseline_fails: bool | np.ndarray,
+    envelope_structure: bool,
+    clear_gain: float,
+    residual_gain: float,
+    draws: np.ndarray,
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """The decision's probabilities on every reweighting of the units.
+
+    Per reweighting ``b``: the baseline is the better of ``baselines``; the options that
+    are eligible and predict better than it share the departure by their pseudo-BMA+
+    weights (softmax of ``elpd``); the departure is certain when the baseline fails its
+    misfit tests (``baseline_fails``: one verdict, or one per reweighting,
+    :func:`workflow.discovery.misfit.failure_draws`), else it happens when the best
+    option's error is below ``clear_gain`` of the baseline's. An option that leaves a significant misfit and does not reach
+    ``residual_gain`` passes its share to ``unknown``. Not single-mode decays:
+    ``unknown``. The same rule as :func:`workflow.discovery.decision.decide`, with the
+    tie-break by BIC replaced by the weights.
+
+    Returns
+    -------
+    probabilities : dict
+        ``none``, ``unknown`` and every option's key -> array (B,), summing to 1 per draw.
+    ratio : ndarray, shape (B,)
+        Per draw, the probability-weighted gain ratio: 1 for ``none``, an option's
+        error over the baseline's for the option, the lowest of every option's for
+        ``unknown`` (its extended model is the best candidate tried).
+    """
+    n_draws = draws.shape[0]
+    keys = ["none", "unknown"] + [o.key for o in options]
+    p = {k: np.zeros(n_draws) for k in keys}
+    models = list(dict.fromkeys([*baselines, *(o.model for o in options)]))
+    elpd, error = pooled_log_density(channels, models, draws)
+    row = {m: i for i, m in enumerate(models)}
+    base = error[[row[m] for m in baselines]].min(axis=0)
+    usable = [o for o in options if o.eligible]
+    fails = np.broadcast_to(np.asarray(baseline_fails, dtype=bool), (n_draws,))
+    all_errors = np.array([error[row[o.model]] for o in options]) if options else base[None, :]
+    unknown_ratio = all_errors.min(axis=0) / base
+    if envelope_structure:
+        p["unknown"][:] = 1.0
+        return p, unknown_ratio
+    if not usable:
+        p["unknown"] += fails
+        p["none"] += ~fails
+        return p, p["none"] + p["unknown"] * unknown_ratio
+    opt_error = np.array([error[row[o.model]] for o in usable])  # (K, B)
+    better = opt_error < base
+    log_w = np.where(better, np.array([elpd[row[o.model]] for o in usable]), -np.inf)
+    any_better = better.any(axis=0)
+    top = np.where(any_better, log_w.max(axis=0), 0.0)
+    w = np.where(better, np.exp(log_w - top), 0.0)
+    w /= np.maximum(w.sum(axis=0), 1e-300)
+    ratio_best = np.where(any_better, opt_error.min(axis=0) / base, 1.0)
+    departs = any_better & (fails | (ratio_best < clear_gain))
+    # no option better: the baseline stands where it fits, nothing removes its misfit where it fails
+    p["unknown"] += ~any_better & fails
+    p["none"] += ~any_better & ~fails
+    p["none"] += any_better & ~departs
+    ratio = np.zeros(n_draws)
+    for k, o in enumerate(usable):
+        share = np.where(departs, w[k], 0.0)
+        ratio_k = opt_error[k] / base
+        to_unknown = o.residual_significant & (ratio_k >= residual_gain)
+        p["unknown"] += np.where(to_unknown, share, 0.0)
+        p[o.key] += np.where(to_unknown, 0.0, share)
+        ratio += np.where(to_unknown, 0.0, share * ratio_k)
+    return p, ratio + p["none"] + p["unknown"] * unknown_ratio
+
+
+REPORTED_PROBABILITY = 1e-3
+"""Smallest mean probability reported: below a thousandth (one draw in a thousand) a
+verdict is not listed, and the rest are renormalised to sum to 1."""
+
+
+def mean_probabilities(probabilities: Mapping[str, np.ndarray]) -> dict[str, float]:
+    """Mean over the draws of each verdict's probability, those of at least
+    :data:`REPORTED_PROBABILITY`, largest first (sums to 1).
+
+    Examples
+    --------
+    >>> mean_probabilities({"none": np.array([1.0, 0.5]), "run_drift": np.array([0.0, 0.5])})
+    {'none': 0.75, 'run_drift': 0.25}
+    """
+    mean = {k: float(np.mean(v)) for k, v in probabilities.items()}
+    kept = {k: v for k, v in mean.items() if v >= REPORTED_PROBABILITY} or mean
+    total = sum(kept.values()) or 1.0
+    return dict(sorted(((k, v / total) for k, v in kept.items()), key=lambda kv: -kv[1]))
