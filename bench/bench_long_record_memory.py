@@ -1,15 +1,16 @@
-"""Peak memory of reading and analysing one long ASCII run file, against the ``mem_mb``
-the rules declare for the jobs that do it.
+"""Peak memory of reading and analysing long ASCII run files, against the ``mem_mb``
+the rules declare for the jobs that do it (workflow/runtime/resources.py).
 
 Run: ``PYTHONPATH=$PWD .venv/bin/python bench/bench_long_record_memory.py [size_mb]``
 (default 200). Writes a ring-down of about ``size_mb`` MB (time, force, response at
 25.6 kHz) to a temporary campaign, then runs each stage in a fresh process and prints
 its peak resident memory (``VmHWM``): the interpreter and imports alone, the reader
-(``read_run``), the mode search of ``identify_mode`` and the whole ``analyse_runs`` work
-for that run.
+(``read_run``), the mode search of ``identify_mode`` on two such runs (it holds every run
+of its configuration) and the whole ``analyse_runs`` work for one run; beside each, the
+bytes per sample above the imports.
 """
 
-import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -17,6 +18,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE_RATE_HZ = 25600.0
@@ -26,26 +29,28 @@ STAGES = {
     "imports": "",
     "read_run": "record = read_run(root, 'long/run01.txt', campaign)",
     "identify_mode": (
-        "record, problems = read_and_check(root, 'long/run01.txt', campaign, quality_settings)\n"
-        "mode = identify_mode([record], windows=[(0, record.n_samples)], campaign_mode_hz=campaign.mode_hz,\n"
-        "    campaign_band_hz=None, band_half_width=0.2, mode_search_hz=None, mode_search_fraction=0.3)\n"
-        "print(json.dumps(mode.to_dict()))"
+        "found = identify_configuration_mode(root, RUNS, configuration='long', campaign=campaign,\n"
+        "    mode_search=AnalysisSettings().mode_search(), quality_settings=quality_settings)\n"
+        "write_mode(sys.argv[2], found)\n"
+        "print(found.mode)"
     ),
     "analyse_runs": (
         "result = analyse_run_file(root, 'long/run01.txt', configuration='long', campaign=campaign,\n"
-        "    mode_document=MODE, quality_settings=quality_settings, analysis=AnalysisSettings().run_parameters())\n"
+        "    mode=read_mode(sys.argv[2]), quality_settings=quality_settings,\n"
+        "    decay_settings=AnalysisSettings().decay())\n"
         "print(result.status['status'], result.status['reason'])"
     ),
 }
 
 PRELUDE = """
-import json, sys
+import sys
 from pathlib import Path
 from workflow.io.campaign import load_campaign, read_run
+from workflow.io.interim import read_mode, write_mode
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_run_file, identify_mode, read_and_check
+from workflow.measured.runs import analyse_run_file, identify_configuration_mode
 root = Path(sys.argv[1])
-MODE = json.loads(sys.argv[2]) if len(sys.argv) > 2 else None
+RUNS = ['long/run01.txt', 'long/run02.txt']
 campaign = load_campaign(root)
 quality_settings = QualitySettings()
 """
@@ -54,16 +59,6 @@ quality_settings = QualitySettings()
 # VmHWM of the process's own memory map: ru_maxrss would also count the parent's
 # memory, which Linux carries across the exec of a spawned child.
 PEAK = "\nprint(next(line.split()[1] for line in open('/proc/self/status') if line.startswith('VmHWM:')))\n"
-
-
-def declared_mem_mb() -> dict[str, int]:
-    """``mem_mb`` of the rules that read whole run files."""
-    text = (REPO / "rules" / "measured.smk").read_text()
-    found = {}
-    for rule in ("identify_mode", "analyse_runs"):
-        block = text[text.index(f"rule {rule}:") :]
-        found[rule] = int(re.search(r"mem_mb=(\d+)", block).group(1))
-    return found
 
 
 def write_campaign(root: Path, size_mb: float) -> Path:
@@ -83,11 +78,13 @@ def write_campaign(root: Path, size_mb: float) -> Path:
         np.savetxt(
             handle, np.column_stack([t, force, response]), fmt=("%.7f", "%.9f", "%.9f"), delimiter="\t"
         )
+    shutil.copyfile(path, root / "long" / "run02.txt")
     return path
 
 
 def peak_mb(stage: str, root: Path, *extra: str) -> tuple[float, float, str]:
-    """Peak RSS (MB), wall time (s) and last stdout line of one stage in a fresh process."""
+    """Peak RSS (MB, 1e6 bytes, as ``mem_mb``), wall time (s) and last stdout line of one
+    stage in a fresh process."""
     start = time.perf_counter()
     result = subprocess.run(
         [sys.executable, "-c", PRELUDE + STAGES[stage] + PEAK, str(root), *extra],
@@ -98,7 +95,7 @@ def peak_mb(stage: str, root: Path, *extra: str) -> tuple[float, float, str]:
     )
     elapsed_s = time.perf_counter() - start
     *output, peak_kb = result.stdout.strip().splitlines()
-    return int(peak_kb) / 1024.0, elapsed_s, output[-1] if output else ""
+    return int(peak_kb) * 1024 / 1e6, elapsed_s, output[-1] if output else ""
 
 
 def main(size_mb: float = 200.0) -> None:
@@ -106,20 +103,29 @@ def main(size_mb: float = 200.0) -> None:
         root = Path(tmp)
         path = write_campaign(root, size_mb)
         file_mb = path.stat().st_size / 1e6
-        print(f"run file: {file_mb:.0f} MB, {sum(1 for _ in open(path)) - 2} samples")
-        declared = declared_mem_mb()
-        print(f"{'stage':<16}{'peak MB':>9}{'wall s':>8}  declared mem_mb")
-        for stage in ("imports", "read_run"):
-            peak, elapsed_s, _ = peak_mb(stage, root)
-            print(f"{stage:<16}{peak:>9.0f}{elapsed_s:>8.1f}")
-        peak, elapsed_s, mode_json = peak_mb("identify_mode", root)
-        within = "within" if peak <= declared["identify_mode"] else "ABOVE"
-        print(f"{'identify_mode':<16}{peak:>9.0f}{elapsed_s:>8.1f}  {declared['identify_mode']} ({within})")
-        peak, elapsed_s, status = peak_mb("analyse_runs", root, mode_json)
-        within = "within" if peak <= declared["analyse_runs"] else "ABOVE"
-        print(
-            f"{'analyse_runs':<16}{peak:>9.0f}{elapsed_s:>8.1f}  {declared['analyse_runs']} ({within}; run {status})"
-        )
+        n_samples = sum(1 for _ in open(path)) - 2
+        print(f"run file: {file_mb:.0f} MB, {n_samples} samples")
+        declared = {
+            "identify_mode": identify_mode_mem_mb([path, root / "long" / "run02.txt"]),
+            "analyse_runs": analyse_runs_mem_mb([path]),
+        }
+        print(f"{'stage':<16}{'peak MB':>9}{'B/sample':>9}{'wall s':>8}  declared mem_mb")
+        mode_path = str(root / "mode.json")
+        imports_mb = 0.0
+        for stage, extra, what in (
+            ("imports", (), ""),
+            ("read_run", (), ""),
+            ("identify_mode", (mode_path,), "2 runs"),
+            ("analyse_runs", (mode_path,), "1 run"),
+        ):
+            peak, elapsed_s, last = peak_mb(stage, root, *extra)
+            imports_mb = imports_mb or peak
+            per_sample = (peak - imports_mb) * 1e6 / n_samples
+            line = f"{stage:<16}{peak:>9.0f}{per_sample:>9.0f}{elapsed_s:>8.1f}"
+            if stage in declared:
+                within = "within" if peak <= declared[stage] else "ABOVE"
+                line += f"  {declared[stage]} ({within}; {what}; {last.strip()[:60]})"
+            print(line)
 
 
 if __name__ == "__main__":

@@ -85,7 +85,7 @@ def verdict_confidence(configuration: dict) -> float | None:
 
 def _one(args):
     cause, seed, work, variability, integrator, placement, keep = args
-    start = time.perf_counter()
+    start, start_cpu = time.perf_counter(), time.process_time()
     record = {"cause": cause, "seed": seed, "verdict": None, "causes": [], "confidence": None, "ratio": None}
     try:
         gain = draw_mode1_gain(cause, seed) if placement else 1.0
@@ -119,9 +119,10 @@ def _one(args):
             v = v[np.isfinite(v) & (v > 0)]
             scatter = conf["evidence"]["scatter"]
             # the truth is against the reference accelerometer's velocity amplitude
+            ratio = case["sensors"][0]["mode1_ratio"]
             measured = (
                 case,
-                (float(v.min()) / case["sensor_mode1_ratio"], float(v.max()) / case["sensor_mode1_ratio"]),
+                (float(v.min()) / ratio, float(v.max()) / ratio),
                 scatter["ln_zeta_median"],
                 scatter["relative_frequency_median"],
             )
@@ -141,6 +142,7 @@ def _one(args):
         record["verdict"] = f"error: {error}"
     record["case"] = case
     record["seconds"] = time.perf_counter() - start
+    record["cpu_s"] = time.process_time() - start_cpu
     return record
 
 
@@ -378,21 +380,23 @@ def main() -> None:
             results = list(pool.map(_one, tasks))
         wall = time.perf_counter() - start
     seconds = np.array([r["seconds"] for r in results])
+    cpu = np.array([r["cpu_s"] for r in results])
     print(
         f"run-to-run variability {'off' if args.no_variability else 'on'}, "
         f"{'time-domain' if args.time_domain else 'averaged (combinations: time-domain)'} integrator, "
         f"sensor {'placed at random (mode 1 x0.05-x8)' if args.random_placement else 'at the accelerometer'}; "
         f"{len(results)} campaigns, {args.seeds} seeds per cause, {args.jobs} jobs, wall {wall:.0f} s; "
-        f"per campaign (one process): median {np.median(seconds):.1f} s, max {seconds.max():.1f} s\n"
+        f"per campaign (one process): wall median {np.median(seconds):.1f} s, max {seconds.max():.1f} s; "
+        f"CPU median {np.median(cpu):.1f} s, max {cpu.max():.1f} s, total {cpu.sum():.0f} s\n"
     )
     report(results, args.causes)
-    print("\nseconds per campaign (one process), median: generate / total")
+    print("\nseconds per campaign (one process), median: wall to generate / wall in all / CPU in all")
     for cause in args.causes:
         rows = [r for r in results if r["cause"] == cause and "generate_s" in r]
         if rows:
             print(
                 f"  {cause:44s} {np.median([r['generate_s'] for r in rows]):5.1f} / "
-                f"{np.median([r['seconds'] for r in rows]):5.1f}"
+                f"{np.median([r['seconds'] for r in rows]):5.1f} / {np.median([r['cpu_s'] for r in rows]):5.1f}"
             )
 
 
@@ -404,6 +408,16 @@ def is_right(record: dict) -> bool:
 def first_cause_right(record: dict) -> bool:
     """The verdict's first cause is one of the hidden ones."""
     return bool(record["causes"]) and record["causes"][0] in case_causes(record["cause"])
+
+
+SHORT_NAMES = {"microslip_power_law": "micro", "quadratic_damping": "quad", "stiffness_nonlinearity": "stiff"}
+
+
+def short_label(label: str) -> str:
+    """A verdict's column heading: a combination's causes shortened, e.g. ``micro+quad``."""
+    if "+" not in label:
+        return label[:12]
+    return "+".join(SHORT_NAMES.get(c, c) for c in label.split("+"))
 
 
 def verdict_label(record: dict) -> str:
@@ -438,7 +452,11 @@ def report(results: list[dict], causes: list[str]) -> None:
     """Confusion table, hit rates, gain ratios, explains_data, reliability, visibility, misses."""
     labels = VERDICTS + [c for c in causes if "+" in c]
     width = max(len(c) for c in causes) + 2
-    header = "hidden cause".ljust(width) + "".join(v[:12].rjust(13) for v in labels) + "   other  hit  first"
+    header = (
+        "hidden cause".ljust(width)
+        + "".join(short_label(v).rjust(13) for v in labels)
+        + "   other  hit  first"
+    )
     print(header)
     for cause in causes:
         rows = [r for r in results if r["cause"] == cause]

@@ -14,10 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-
-from workflow.io.campaign import list_runs, load_campaign
-from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_run_file, identify_configuration_mode
+from peer_speed import project_record
 
 
 def main() -> None:
@@ -28,20 +25,7 @@ def main() -> None:
     args = parser.parse_args()
     folder = args.realdata / "pff-lms-sample"
     reference = pd.read_csv(args.realdata / "pff-lms-sample.reference.csv")
-    campaign = load_campaign(folder)
-    run_file = list_runs(folder, campaign)[0]
-    options = {
-        "configuration": run_file.configuration,
-        "campaign": campaign,
-        "quality_settings": QualitySettings(),
-    }
-    found = identify_configuration_mode(
-        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), **options
-    )
-    result = analyse_run_file(
-        folder, run_file.path, mode=found, decay_settings=AnalysisSettings().decay(), **options
-    )
-    assert result.status["status"] == "used", result.status
+    found, result = project_record(folder)
     mode = found.mode
     segments = pd.DataFrame(result.segments)
     kept = segments[segments["kept"]]

@@ -2,11 +2,15 @@
 
 import os
 import re
+import sys
+import time
 from dataclasses import asdict
 from pathlib import Path
 
 
 from workflow.io.settings import ConfigError, validate_config
+from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
+from workflow.outputs.escape import terminal_lines, terminal_text, visible_controls
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
 # asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
@@ -21,7 +25,7 @@ try:
         command_line=dict(workflow.config_settings.config),
     )
 except ConfigError as error:
-    raise WorkflowError(f"invalid configuration:\n{error}") from None
+    raise WorkflowError(f"invalid configuration:\n{terminal_lines(error)}") from None
 
 CAMPAIGN = Path(SETTINGS.campaign)
 
@@ -38,6 +42,37 @@ envvars:
 
 USES_DEMO = SETTINGS.uses_demo_campaign()
 
+CAMPAIGN_FOLDER_FILE = Path("results/interim/campaign_folder.txt")
+"""The campaign folder whose results results/ holds (:func:`record_campaign_folder`)."""
+
+
+def record_campaign_folder():
+    """Record that results/ holds this campaign's results (the Snakefile's onstart: once
+    jobs are about to run, never on a dry run)."""
+    CAMPAIGN_FOLDER_FILE.parent.mkdir(parents=True, exist_ok=True)
+    CAMPAIGN_FOLDER_FILE.write_text(f"{CAMPAIGN.resolve()}\n", encoding="utf-8")
+
+
+def other_campaign_in_results():
+    """The campaign folder whose results results/ holds, when it is another one than
+    this run's (None when it is this one, or results/ records none)."""
+    if not CAMPAIGN_FOLDER_FILE.exists():
+        return None
+    recorded = CAMPAIGN_FOLDER_FILE.read_text(encoding="utf-8").strip()
+    return None if Path(recorded) == CAMPAIGN.resolve() else recorded
+
+
+if workflow.is_main_process and (_other := other_campaign_in_results()) is not None:
+    # results/ is per working directory (output contract): a second campaign's results
+    # would mix with the first's, figures and report included
+    raise WorkflowError(
+        f"results/ in {Path.cwd()} holds the results of the campaign in {terminal_text(_other)}, "
+        f"and this run is for {terminal_text(CAMPAIGN.resolve())}: their figures, tables and report "
+        "would mix. Run this campaign in a working directory of its own (add -d FOLDER, and "
+        f"-s {workflow.main_snakefile} if you are not in the project folder), or remove results/ "
+        "to replace the other campaign's results."
+    )
+
 if workflow.is_main_process:
     # After a hard kill, Snakemake's lock files stay behind; clear them when no other
     # lapjoint run is alive here, so that `snakemake -c2 all` resumes (workflow/runtime/locks.py).
@@ -45,6 +80,26 @@ if workflow.is_main_process:
 
     for _stale in clear_stale_snakemake_locks():
         logger.info(f"removed stale lock .snakemake/locks/{_stale} (no lapjoint run is alive here)")
+
+
+STARTED_S = time.time()
+"""When this Snakemake run started (the tables of an earlier run say nothing about it)."""
+
+
+def nothing_analysed_this_run():
+    """Why nothing could be analysed, when rule usable_segments stopped for it in this run,
+    else None."""
+    from workflow.measured.runs import NOTHING_ANALYSED, nothing_analysed_in_tables
+
+    log = Path("results/logs/usable_segments.log")
+    # a second of slack: some file systems keep whole seconds
+    if not (log.exists() and log.stat().st_mtime >= STARTED_S - 1.0 and NOTHING_ANALYSED in log.read_text()):
+        return None
+    return nothing_analysed_in_tables(
+        "results/tables/runs.parquet",
+        "results/interim/segments.parquet",
+        "results/tables/segments_rejected.parquet",
+    )
 
 
 def campaign_inventory():
@@ -58,6 +113,7 @@ def campaign_inventory():
     from workflow.io.campaign import (
         CAMPAIGN_FILE,
         CampaignFormatError,
+        ExcludedPath,
         declared_sample_rate_hz,
         frequency_problem,
         load_campaign,
@@ -70,17 +126,39 @@ def campaign_inventory():
         return planned_run_files(SETTINGS.demo.runs_per_configuration), []
     if not CAMPAIGN.is_dir():
         raise WorkflowError(
-            f"campaign folder {CAMPAIGN} does not exist (working directory {Path.cwd()}); "
+            f"campaign folder {terminal_text(CAMPAIGN)} does not exist (working directory {Path.cwd()}); "
             "set campaign in config.yaml or with --config campaign=PATH"
+        )
+    if visible_controls(CAMPAIGN) != str(CAMPAIGN):
+        raise WorkflowError(
+            f"the campaign folder's path {terminal_text(CAMPAIGN)} holds control characters, which "
+            "Snakemake prints raw with every job; rename the folder"
         )
     try:
         campaign = load_campaign(CAMPAIGN)
         runs, excluded = scan_campaign(CAMPAIGN, campaign)
     except (CampaignFormatError, FileNotFoundError) as error:
-        raise WorkflowError(f"cannot read campaign {CAMPAIGN}: {error}") from None
+        raise WorkflowError(
+            f"cannot read campaign {terminal_text(CAMPAIGN)}: {terminal_lines(error)}"
+        ) from None
+    # Snakemake prints each job's input paths raw: a run file whose name would act on the
+    # terminal is listed as excluded instead of read
+    excluded += [
+        ExcludedPath(
+            run.configuration,
+            run.run,
+            run.path,
+            f"{CAMPAIGN.as_posix()}/{run.path}: not read: its name holds control characters "
+            "(shown as escapes), which a terminal would act on; rename the file",
+        )
+        for run in runs
+        if visible_controls(run.path) != run.path
+    ]
+    runs = [run for run in runs if visible_controls(run.path) == run.path]
     if SETTINGS.strict and excluded:
         raise WorkflowError(
-            "strict mode: campaign paths not read:\n" + "\n".join(entry.reason for entry in excluded)
+            "strict mode: campaign paths not read:\n"
+            + "\n".join(terminal_text(entry.reason) for entry in excluded)
         )
     rates_hz = {run.path: declared_sample_rate_hz(CAMPAIGN, run, campaign) for run in runs}
     known_hz = {path: rate for path, rate in rates_hz.items() if rate is not None}
@@ -94,22 +172,61 @@ def campaign_inventory():
     return runs, excluded
 
 
+def channels_and_modes():
+    """The response channels' names in the tables (campaign.yaml's ``response``), and
+    whether the campaign may have several modes (``modes_hz`` listing several, or auto)."""
+    from workflow.io.campaign import SINGLE_CHANNEL_NAME, load_campaign
+
+    if USES_DEMO:
+        return (SINGLE_CHANNEL_NAME,), False
+    campaign = load_campaign(CAMPAIGN)
+    return campaign.response.channel_names(), campaign.auto_modes or len(campaign.mode_requests()) > 1
+
+
 RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
+RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes()
+
+
+def channel_index(channel_key):
+    """The 0-based index of the response channel a ``c00``, ``c01``, ... key names."""
+    return int(channel_key[1:])
+
+
+def mode_channel_diagnoses():
+    """rule diagnose_modes's outputs: every configuration's channels, the first only when
+    the campaign may have more than one mode (its first mode is diagnose_configuration's)."""
+    first = 0 if SEVERAL_MODES else 1
+    return [
+        f"results/interim/diagnosis_modes/{name}/c{index:02d}"
+        for name in CONFIGURATIONS
+        for index in range(first, len(RESPONSE_CHANNELS))
+    ]
+
+
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:
     raise WorkflowError(
-        f"campaign {CAMPAIGN} has no run files" + "".join(f"\n{entry.reason}" for entry in EXCLUDED_PATHS)
+        f"campaign {terminal_text(CAMPAIGN)} has no run files"
+        + "".join(f"\n{terminal_text(entry.reason)}" for entry in EXCLUDED_PATHS)
     )
 if EXCLUDED_PATHS and workflow.is_main_process:
     for _entry in EXCLUDED_PATHS:
-        logger.warning(f"excluded {_entry.reason}")
+        logger.warning(f"excluded {terminal_text(_entry.reason)}")
 
 
 wildcard_constraints:
     configuration="|".join(re.escape(name) for name in CONFIGURATIONS),
     number=r"\d\d",
     group=r"runs\d+",
+    channel_key=r"c\d\d",
+
+
+def campaign_yaml(wildcards):
+    """The campaign's campaign.yaml, named by an input function: Snakemake's report
+    writes a rule's literal input paths and the params of a rule whose outputs it shows
+    raw into a <script> element, which a campaign path holding `</script>` would end."""
+    return CAMPAIGN / "campaign.yaml"
 
 
 def configuration_run_files(wildcards):
@@ -156,6 +273,12 @@ def backbone_figures():
     return [f"results/figures/backbone_{name}.png" for name in CONFIGURATIONS]
 
 
+def modes_channels_figures():
+    """The figure of every mode and channel, for a campaign that may have several."""
+    several = SEVERAL_MODES or len(RESPONSE_CHANNELS) > 1
+    return ["results/figures/modes_channels.png"] if several else []
+
+
 def measured_outputs():
     """The measured-data chain: tables, figures 9-13 and the backbones."""
     return [
@@ -169,6 +292,7 @@ def measured_outputs():
         *damping_figures(),
         "results/figures/fig13_area_fits.png",
         *backbone_figures(),
+        *modes_channels_figures(),
     ]
 
 

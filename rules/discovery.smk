@@ -37,12 +37,43 @@ rule diagnose_configuration:
         "../scripts/diagnose_configuration.py"
 
 
+rule diagnose_modes:
+    # Every mode of one response channel of one configuration (campaign.yaml's modes_hz
+    # or auto, response.channels): one job per channel, so that the channels of a hit
+    # are diagnosed side by side.
+    input:
+        segments="results/tables/segments.parquet",
+        runs="results/tables/runs.parquet",
+        campaign_settings="results/interim/campaign.json",
+    output:
+        directory("results/interim/diagnosis_modes/{configuration}/{channel_key}"),
+    log:
+        "results/logs/diagnose_modes/{configuration}/{channel_key}.log",
+    benchmark:
+        "results/benchmarks/diagnose_modes/{configuration}/{channel_key}.tsv"
+    priority: 1
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=60,
+    params:
+        channel=lambda wildcards: RESPONSE_CHANNELS[channel_index(wildcards.channel_key)],
+        first_channel=lambda wildcards: channel_index(wildcards.channel_key) == 0,
+        decay=asdict(SETTINGS.analysis.decay()),
+        discovery=asdict(SETTINGS.discovery),
+    script:
+        "../scripts/diagnose_modes.py"
+
+
 rule diagnose:
-    # The campaign's diagnosis from its configurations', then every diagnosis figure, in
-    # one job: the figures read the two files written here, and in a job of their own
-    # a third of the time was start-up (Python, matplotlib, pandas).
+    # The campaign's diagnosis from its configurations'. It does not depend on config
+    # units: switching them redraws the figures below and re-runs no diagnosis.
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
+        modes_channels=mode_channel_diagnoses(),
+        modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(
@@ -53,6 +84,31 @@ rule diagnose:
             labels={"item": "file: diagnosis.json (download)"},
         ),
         residuals="results/tables/diagnosis_residuals.parquet",
+    log:
+        "results/logs/diagnose.log",
+    benchmark:
+        "results/benchmarks/diagnose.tsv"
+    # The report and the summary wait for it: ahead of the measured data's figures, so
+    # that it does not end the study alone on one core.
+    priority: 1
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
+    params:
+        channels=list(RESPONSE_CHANNELS),
+    script:
+        "../scripts/diagnose.py"
+
+
+rule figures_discovery:
+    # Every diagnosis figure, from the two files the diagnosis wrote, in config units.
+    input:
+        diagnosis="results/diagnosis.json",
+        residuals="results/tables/diagnosis_residuals.parquet",
+    output:
         residual_figures=[
             report(
                 f"results/figures/discovery_residuals_{name}.png",
@@ -78,12 +134,9 @@ rule diagnose:
             labels={"item": "figure: prediction of a left-out bearing area"},
         ),
     log:
-        "results/logs/diagnose.log",
+        "results/logs/figures_discovery.log",
     benchmark:
-        "results/benchmarks/diagnose.tsv"
-    # The report and the summary wait for it: ahead of the measured data's figures, so
-    # that it does not end the study alone on one core.
-    priority: 1
+        "results/benchmarks/figures_discovery.tsv"
     conda:
         LAPJOINT_ENV
     threads: 1
@@ -93,5 +146,6 @@ rule diagnose:
     params:
         configurations=CONFIGURATIONS,
         units=SETTINGS.units,
+        channels=list(RESPONSE_CHANNELS),
     script:
-        "../scripts/diagnose.py"
+        "../scripts/figures_discovery.py"

@@ -13,6 +13,7 @@ rule figures_measured:
         runs_table="results/tables/runs.parquet",
         modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
+        campaign_yaml=campaign_yaml,
     output:
         time_history=report(
             "results/figures/fig09_time_history.png",
@@ -48,6 +49,16 @@ rule figures_measured:
             )
             for name, path in zip(CONFIGURATIONS, backbone_figures())
         ],
+        modes_channels=[
+            report(
+                path,
+                caption="../report/modes_channels.rst",
+                category="2 Measured data",
+                subcategory="2.4 Every mode and channel",
+                labels={"figure": "damping and frequency of every mode and channel"},
+            )
+            for path in modes_channels_figures()
+        ],
     log:
         "results/logs/figures_measured.log",
     benchmark:
@@ -61,7 +72,7 @@ rule figures_measured:
     params:
         units=SETTINGS.units,
         configurations=CONFIGURATIONS,
-        campaign=str(CAMPAIGN),
         decay=asdict(SETTINGS.analysis.decay()),
+        channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/figures_measured.py"

@@ -4,7 +4,7 @@
 
 rule campaign_settings:
     input:
-        campaign_yaml=CAMPAIGN / "campaign.yaml",
+        campaign_yaml=campaign_yaml,
     output:
         "results/interim/campaign.json",
     log:
@@ -35,7 +35,7 @@ rule identify_mode:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=2000,
+        mem_mb=lambda wildcards, input: identify_mode_mem_mb(input.runs),
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
@@ -62,7 +62,7 @@ rule analyse_runs:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=1500,
+        mem_mb=lambda wildcards, input: analyse_runs_mem_mb(input.runs),
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
@@ -81,7 +81,7 @@ rule collect_tables:
         modes=expand("results/interim/mode/{configuration}.json", configuration=CONFIGURATIONS),
         campaign_settings="results/interim/campaign.json",
     output:
-        segments="results/tables/segments.parquet",
+        segments="results/interim/segments.parquet",
         rejected="results/tables/segments_rejected.parquet",
         runs="results/tables/runs.parquet",
         runs_csv="results/tables/runs.csv",
@@ -98,10 +98,32 @@ rule collect_tables:
         mem_mb=2000,
         runtime=10,
     params:
-        units=SETTINGS.units,
         excluded_paths=[entry.status() for entry in EXCLUDED_PATHS],
     script:
         "../scripts/collect_tables.py"
+
+
+# Every later step reads the kept segments: when there are none, the workflow stops here
+# with one message (which runs, why, what to change) instead of in whichever step runs first.
+rule usable_segments:
+    input:
+        segments="results/interim/segments.parquet",
+        runs="results/tables/runs.parquet",
+        rejected="results/tables/segments_rejected.parquet",
+    output:
+        "results/tables/segments.parquet",
+    log:
+        "results/logs/usable_segments.log",
+    benchmark:
+        "results/benchmarks/usable_segments.tsv"
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=5,
+    script:
+        "../scripts/usable_segments.py"
 
 
 rule fit_curves:
@@ -124,7 +146,6 @@ rule fit_curves:
         mem_mb=2000,
         runtime=20,
     params:
-        units=SETTINGS.units,
         fits=asdict(SETTINGS.fits),
     script:
         "../scripts/fit_curves.py"

@@ -2,7 +2,6 @@
 
 from workflow.io.interim import read_campaign
 from workflow.io.tables import atomic_write_bytes, write_table
-from workflow.io.units import UNIT_SYSTEMS
 from workflow.measured.runs import collect_tables
 from workflow.runtime.logs import setup_script_logging
 
@@ -16,14 +15,9 @@ tables = collect_tables(
     campaign=campaign,
     excluded_paths=snakemake.params.excluded_paths,
 )
-response_unit = {"response_amplitude": f"{campaign.response.unit} ({campaign.response.quantity})"}
+response_unit = {"response_amplitude": tables["response_unit"]}
 for name in ("segments", "rejected", "runs", "quality", "modes"):
-    write_table(
-        tables[name],
-        snakemake.output[name],
-        units=response_unit,
-        unit_system=UNIT_SYSTEMS[snakemake.params.units],
-    )
+    write_table(tables[name], snakemake.output[name], units=response_unit)
 runs = tables["runs"]
 # beside the Parquet: the table of runs opens in any spreadsheet or text editor
 atomic_write_bytes(snakemake.output.runs_csv, runs.to_csv(index=False).encode())

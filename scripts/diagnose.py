@@ -1,41 +1,61 @@
 """Rule diagnose: results/diagnosis.json and the residuals behind it, from every
-configuration's diagnosis; then, from those two files, the baseline and extended model
-residuals of every configuration, the candidate comparison and the held-out area
-prediction."""
+configuration's diagnosis."""
 
-import json
 from pathlib import Path
 
 from workflow.discovery.campaign import campaign_document, configuration_outcomes, residual_table
 from workflow.discovery.diagnosis_files import read_configuration_diagnosis
+from workflow.discovery.modes import mode_document, with_modes
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json, write_table
-from workflow.io.units import UNIT_SYSTEMS
+from workflow.measured.runs import with_mode_and_channel
 from workflow.models.averaged_fit import FitContext
-from workflow.outputs import discovery_figures, figures
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose")
 campaign = read_campaign(snakemake.input.campaign_settings)
-outcomes = [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
-diagnoses, skipped = configuration_outcomes(outcomes)
-context = FitContext(outcomes[0].reference_velocity_in_s)
-document = campaign_document(campaign.name, context, diagnoses, skipped)
-units = UNIT_SYSTEMS[snakemake.params.units]
-write_table(residual_table(diagnoses), snakemake.output.residuals, unit_system=units)
+
+
+def document_of(outcomes):
+    """The campaign's document from its configurations' outcomes (one mode and channel)."""
+    diagnoses, skipped = configuration_outcomes(outcomes)
+    context = FitContext(outcomes[0].reference_velocity_in_s)
+    return diagnoses, campaign_document(campaign.name, context, diagnoses, skipped)
+
+
+# the first mode on the first channel: the residuals, the figures, the paper's models
+diagnoses, first = document_of(
+    [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
+)
+# no mode found anywhere: one entry, of no frequency, with the configurations skipped
+modes_hz = [
+    float(hz) for hz in sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique())
+]
+channels = snakemake.params.channels
+residuals = with_mode_and_channel(residual_table(diagnoses), modes_hz[0] if modes_hz else None, channels[0])
+write_table(residuals, snakemake.output.residuals)
+# every other (mode, channel): rule diagnose_modes's files, <configuration>/c<channel>/<mode>.npz
+outcomes: dict[tuple[int, int], list] = {(0, 0): None}
+for folder in map(Path, snakemake.input.modes_channels):
+    for path in sorted(folder.glob("*.npz")):
+        outcomes.setdefault((int(path.stem), int(folder.name[1:])), []).append(
+            read_configuration_diagnosis(path)
+        )
+documents = {key: first if key == (0, 0) else document_of(found)[1] for key, found in outcomes.items()}
+document = with_modes(
+    [
+        mode_document(
+            mode_hz,
+            {channels[c]: documents[(m, c)] for c in range(len(channels)) if (m, c) in documents},
+        )
+        for m, mode_hz in enumerate(modes_hz or [None])
+    ]
+)
 write_json(snakemake.output.diagnosis, document)
 log.info("campaign verdict: %s", document["cause"])
+for entry in document["modes"][1:]:
+    log.info("mode %s Hz: %s", entry["mode_hz"], entry["cause"])
 for name, entry in document["configurations"].items():
     log.info(
         "%s: %s (gain ratio %s) - %s", name, entry["cause"], entry["gain"]["ratio"], entry["discrepancy"]
     )
-
-# the figures from the files as written (as any later reader sees them)
-document = json.loads(Path(snakemake.output.diagnosis).read_text())
-residuals = read_table(snakemake.output.residuals)
-for configuration, path in zip(
-    snakemake.params.configurations, snakemake.output.residual_figures, strict=True
-):
-    figures.save(discovery_figures.residuals_figure(residuals, configuration, document, units=units), path)
-figures.save(discovery_figures.candidates_figure(document), snakemake.output.candidates)
-figures.save(discovery_figures.heldout_figure(document, units=units), snakemake.output.heldout)

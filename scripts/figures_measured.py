@@ -11,15 +11,16 @@ from workflow.io.campaign import read_run
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
-from workflow.io.units import UNIT_SYSTEMS
+from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
-from workflow.measured.runs import analysis_window
+from workflow.measured.runs import analysis_window, first_mode_and_channel, first_mode_rows
 from workflow.outputs import figures
+from workflow.outputs.escape import plot_text
 from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_measured")
 units = UNIT_SYSTEMS[snakemake.params.units]
-campaign_dir = Path(snakemake.params.campaign)
+campaign_dir = Path(snakemake.input.campaign_yaml).parent
 campaign = read_campaign(snakemake.input.campaign_settings)
 
 # figure 9
@@ -39,7 +40,7 @@ if used.empty:
     )
     configuration = all_used.iloc[0]["configuration"]
     used = all_used[all_used["configuration"] == configuration]
-modes = read_table(snakemake.input.modes).set_index("configuration")
+modes = first_mode_rows(read_table(snakemake.input.modes)).set_index("configuration")
 row = used.iloc[0]
 record = read_run(campaign_dir, row["path"], campaign)
 band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))
@@ -54,13 +55,15 @@ result = decay.analyse_decay(
     **asdict(DecaySettings(**snakemake.params.decay)),
 )
 time_s = np.arange(record.n_samples) / record.sample_rate_hz
+# in SI the record's unit (g, in/s, ...) is converted: one factor for all three curves
+scale, shown_unit = response_in_units(1.0, record.response_quantity, record.response_unit, units)
 figure = figures.time_history(
     time_s,
-    record.response,
-    result.filtered,
-    result.envelope,
-    response_label=f"{record.response_quantity} ({record.response_unit})",
-    title=f"{configuration} / {row['run']}: unfiltered and filtered response",
+    scale * record.response,
+    scale * result.filtered,
+    scale * result.envelope,
+    response_label=f"{plot_text(record.response_quantity)} ({plot_text(shown_unit)})",
+    title=f"{plot_text(configuration)} / {plot_text(row['run'])}: unfiltered and filtered response",
     band_hz=band_hz,
     decay_start_s=result.start_index / record.sample_rate_hz,
 )
@@ -68,13 +71,16 @@ figures.save(figure, snakemake.output.time_history)
 log.info("figure 9 from %s", row["path"])
 
 # figures 10-13
-segments = read_table(snakemake.input.segments)
-curves = read_table(snakemake.input.curves)
+# the paper's figures: the first mode, from the first channel (docs/outputs.md)
+first_channel = campaign.response.channel_names()[0]
+segments = first_mode_and_channel(read_table(snakemake.input.segments), first_channel)
+curves = first_mode_and_channel(read_table(snakemake.input.curves), first_channel)
 for configuration, path in zip(snakemake.params.configurations, snakemake.output.damping, strict=True):
     mine = segments[segments["configuration"] == configuration]
     figure = figures.damping_vs_amplitude(
         mine,
-        title=f"{configuration}: local equivalent damping vs velocity amplitude ({mine['run'].nunique()} runs)",
+        title=f"{plot_text(configuration)}: local equivalent damping vs velocity amplitude "
+        f"({mine['run'].nunique()} runs)",
         curve=curves[curves["configuration"] == configuration],
         units=units,
     )
@@ -82,8 +88,8 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     log.info("%s: %d segments plotted", configuration, len(mine))
 figure = figures.area_fits(
     curves,
-    read_table(snakemake.input.area),
-    title=f"{campaign.name}: damping vs velocity amplitude and bearing area",
+    first_mode_and_channel(read_table(snakemake.input.area), first_channel),
+    title=f"{plot_text(campaign.name)}: damping vs velocity amplitude and bearing area",
     units=units,
 )
 figures.save(figure, snakemake.output.area)
@@ -93,8 +99,20 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     mine = segments[segments["configuration"] == configuration]
     figure = figures.frequency_vs_amplitude(
         mine,
-        title=f"{configuration}: backbone (frequency vs velocity amplitude)",
+        title=f"{plot_text(configuration)}: backbone (frequency vs velocity amplitude)",
         units=units,
     )
     figures.save(figure, path)
     log.info("%s: backbone of %d segments plotted", configuration, len(mine))
+
+# every mode on every channel (campaigns with several)
+all_segments = read_table(snakemake.input.segments)
+for path in snakemake.output.modes_channels:
+    figure = figures.modes_and_channels(
+        all_segments,
+        title=f"{campaign.name}: damping and frequency of every mode, per channel",
+        channels=snakemake.params.channels,
+        units=units,
+    )
+    figures.save(figure, path)
+    log.info("every mode and channel: %d segments plotted", len(all_segments))

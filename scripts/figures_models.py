@@ -7,8 +7,10 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table, write_table
 from workflow.io.units import UNIT_SYSTEMS
+from workflow.measured.runs import first_mode_and_channel, with_mode_and_channel
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
+from workflow.outputs.escape import plot_text
 from workflow.outputs.report import model_fits_html
 from workflow.runtime.logs import setup_script_logging
 
@@ -19,11 +21,14 @@ for path in snakemake.input.fits:
     document = json.loads(Path(path).read_text())
     documents[document["configuration"]] = document
 fits = fit_table(documents)
-write_table(fits, snakemake.output.table, unit_system=units)
-atomic_write_bytes(snakemake.output.page, model_fits_html(fits).encode())
+segments = first_mode_and_channel(read_table(snakemake.input.segments), snakemake.params.first_channel)
+first_mode_hz = segments["mode_hz"].min() if len(segments) else None
+write_table(
+    with_mode_and_channel(fits, first_mode_hz, snakemake.params.first_channel), snakemake.output.table
+)
+atomic_write_bytes(snakemake.output.page, model_fits_html(fits, units).encode())
 log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
 
-segments = read_table(snakemake.input.segments)
 for configuration, dahl_path, lugre_path in zip(
     snakemake.params.configurations, snakemake.output.dahl, snakemake.output.lugre, strict=True
 ):
@@ -39,11 +44,11 @@ for configuration, dahl_path, lugre_path in zip(
     for model, path, label in (("dahl", dahl_path, "Dahl"), ("lugre", lugre_path, "LuGre")):
         fit = document["models"].get(model)
         if fit is None:
-            title = f"{configuration}: {label} not fitted ({document.get('skipped', 'no fit')})"
+            title = f"{plot_text(configuration)}: {label} not fitted ({plot_text(document.get('skipped', 'no fit'))})"
             figures.save(figures.model_comparison(mine, {}, title=title, units=units), path)
             continue
         title = (
-            f"{configuration}: measured vs fitted {label} simulation\n"
+            f"{plot_text(configuration)}: measured vs fitted {label} simulation\n"
             f"(rms error: ln ζ {fit['rms_log_zeta']:.3f}, frequency {100 * fit['rms_rel_frequency']:.3f} %)"
         )
         models = {f"{label} + ζ0 (fitted)": curves[model]}

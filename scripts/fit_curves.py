@@ -3,7 +3,6 @@
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DampingFitSettings
 from workflow.io.tables import read_table, write_table
-from workflow.io.units import UNIT_SYSTEMS
 from workflow.measured.runs import fit_damping_curves
 from workflow.runtime.logs import setup_script_logging
 
@@ -13,7 +12,7 @@ areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.i
 segments = read_table(snakemake.input.segments)
 tables = fit_damping_curves(segments, areas, DampingFitSettings(**snakemake.params.fits))
 for name in ("fits", "curves", "hypotheses", "area"):
-    write_table(tables[name], snakemake.output[name], unit_system=UNIT_SYSTEMS[snakemake.params.units])
+    write_table(tables[name], snakemake.output[name])
 for row in tables["hypotheses"].itertuples():
     log.info(
         "%s [%s]: %s (%.4g, CI %.4g..%.4g)",

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table
 from workflow.io.units import UNIT_SYSTEMS
+from workflow.measured.runs import first_mode_and_channel
 from workflow.outputs import report
 from workflow.outputs.summary import run_summary
 from workflow.runtime.logs import setup_script_logging
@@ -14,10 +15,13 @@ from workflow.runtime.logs import setup_script_logging
 log = setup_script_logging(snakemake.log[0], "report_summary")
 document = json.loads(Path(snakemake.input.diagnosis).read_text())
 runs = read_table(snakemake.input.runs)
-hypotheses = read_table(snakemake.input.hypotheses)
-segments = read_table(snakemake.input.segments)
-damping_fits = read_table(snakemake.input.damping_fits)
+# the verdict is the first mode's, from the first channel (docs/outputs.md)
+first_channel = snakemake.params.first_channel
+hypotheses = first_mode_and_channel(read_table(snakemake.input.hypotheses), first_channel)
+segments = first_mode_and_channel(read_table(snakemake.input.segments), first_channel)
+damping_fits = first_mode_and_channel(read_table(snakemake.input.damping_fits), first_channel)
 areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]))
+units = UNIT_SYSTEMS[snakemake.params.units]
 
 pages = {
     "verdict": report.verdict_html(
@@ -26,9 +30,9 @@ pages = {
         hypotheses=hypotheses,
         areas=areas,
         segments=segments,
-        units=UNIT_SYSTEMS[snakemake.params.units],
+        units=units,
     ),
-    "hypotheses": report.hypotheses_html(hypotheses),
+    "hypotheses": report.hypotheses_html(hypotheses, units),
     "runs": report.runs_html(runs),
     "rejected": report.rejected_segments_html(read_table(snakemake.input.rejected)),
     "quality": report.quality_html(read_table(snakemake.input.quality)),
@@ -39,7 +43,7 @@ for name, text in pages.items():
     atomic_write_bytes(snakemake.output[name], text.encode())
 # the report's first page: the verdict, then report/workflow.rst (see rules/report.smk)
 landing = report.landing_rst(
-    report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments),
+    report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments, units=units),
     Path(snakemake.input.description).read_text(),
 )
 atomic_write_bytes(snakemake.output.landing, landing.encode())

@@ -59,3 +59,29 @@ def failed_check_reasons(record, settings, mode_hz=None) -> list[str]:
 
     rows = quality_rows(record, settings, mode_hz=mode_hz)
     return [row["reason"] for row in rows if row["applied"] and not row["passed"]]
+
+
+REALDATA = next(
+    (
+        folder
+        for folder in (REPO.parent / "shared" / "realdata", REPO.parents[1] / "shared" / "realdata")
+        if folder.is_dir()
+    ),
+    REPO.parent / "shared" / "realdata",
+)
+"""Real campaigns and exports, never committed: ``../shared/realdata`` beside the repository
+(or beside the folder of worktrees that holds it)."""
+
+
+def needs_realdata(*parts: str):
+    """Mark a test that reads ``REALDATA/parts``: skipped where it is absent, a failure
+    then with ``LAPJOINT_REQUIRE_REALDATA=1`` (tests/conftest.py)."""
+    import pytest
+
+    folder = REALDATA.joinpath(*parts)
+
+    def mark(test):
+        test = pytest.mark.skipif(not folder.is_dir(), reason=f"real data not present at {folder}")(test)
+        return pytest.mark.group("realdata")(test)
+
+    return mark

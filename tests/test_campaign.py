@@ -2,10 +2,10 @@
 and every malformed case of campaign-format.md."""
 
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import REALDATA, needs_realdata
 
 from workflow.io import interim
 from workflow.io.campaign import (
@@ -17,7 +17,6 @@ from workflow.io.campaign import (
     read_run,
 )
 from workflow.io.recording_time import run_order
-from workflow.io.units import NEWTON_LBF
 
 FS_HZ = 2560.0
 N = 300
@@ -584,12 +583,8 @@ def test_missing_file(tmp_path):
 
 # ------------------------------------------------------------------ real campaigns
 
-REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
-if not REALDATA.is_dir():
-    REALDATA = Path("/work/shared/realdata")
 
-
-@pytest.mark.skipif(not (REALDATA / "pff-lms-sample").is_dir(), reason="real data not present")
+@needs_realdata("pff-lms-sample")
 def test_real_pff_record_reads():
     """The real PFF record (its read time is a benchmark: bench/bench_readers.py)."""
     folder = REALDATA / "pff-lms-sample"
@@ -603,7 +598,7 @@ def test_real_pff_record_reads():
     assert record.response[0] == pytest.approx(0.4154297)
 
 
-@pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason="real data not present")
+@needs_realdata("unesp-bolted-beam")
 def test_real_unesp_campaign_reads_every_run():
     folder = REALDATA / "unesp-bolted-beam"
     campaign = load_campaign(folder)
@@ -643,7 +638,8 @@ def test_quoted_column_names_of_a_csv_writer_decide_roles_and_units(tmp_path):
     for folder in ("a", "b"):
         (tmp_path / folder).mkdir()
     record = read_one(tmp_path / "a", text, YAML_NO_FORCE)
-    np.testing.assert_allclose(record.force_lbf, force * NEWTON_LBF, rtol=1e-5, atol=1e-6)
+    # 1 lbf = 0.45359237 kg x 9.80665 m/s^2 (exact)
+    np.testing.assert_allclose(record.force_lbf, force / (0.45359237 * 9.80665), rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(record.response, response, atol=1e-6)
     assert record.time_s is not None
     # a quoted unit that contradicts campaign.yaml is the disagreement the contract names

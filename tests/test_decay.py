@@ -16,6 +16,10 @@ from workflow.measured.decay import (
 
 PRETRIGGER = 25
 
+CHAIN_FREQUENCY_BIAS = 1e-4
+"""Bound on the analysis chain's relative frequency error on a noiseless linear decay
+(at most 4.2e-5 measured over LINEAR_CASES, kept segments)."""
+
 
 def ring_down(f_hz, zeta, fs_hz, duration_s, snr_db=40.0, seed=0, amplitude=1.0):
     """Linear decay of the mode, plus two stronger out-of-band modes, a pre-trigger of
@@ -124,7 +128,11 @@ def test_linear_decay_without_noise_is_unbiased_on_kept_segments(f_hz, zeta, fs_
     precise = seg["kept"] & (seg["zeta_std"] < 0.002 * zeta)
     assert precise.sum() >= 3
     assert np.all(np.abs(seg["zeta"][precise] / zeta - 1) < 0.02)
-    assert np.all(np.abs(seg["frequency_hz"][precise] - f_hz * np.sqrt(1 - zeta**2)) < 0.02)
+    # The chain's own frequency error on these cases is at most 4.2e-5 of the frequency
+    # (20 and 125 Hz at zeta 0.02; 2e-6 at 20 Hz, zeta 5e-4): 1e-4 of it is a 2.4x margin.
+    assert np.all(
+        np.abs(seg["frequency_hz"][precise] - f_hz * np.sqrt(1 - zeta**2)) < CHAIN_FREQUENCY_BIAS * f_hz
+    )
     # The rules removed what was biased: the first segments after the hit are.
     assert not seg["kept"][0]
     assert abs(seg["zeta"][0] / zeta - 1) > 0.01
@@ -133,8 +141,8 @@ def test_linear_decay_without_noise_is_unbiased_on_kept_segments(f_hz, zeta, fs_
 @pytest.mark.parametrize("f_hz, zeta, fs_hz, duration_s", LINEAR_CASES)
 def test_linear_decay_at_40_db_snr_ten_runs(f_hz, zeta, fs_hz, duration_s):
     """A configuration of 10 runs at 40 dB: pooled kept segments recover zeta within 2 %
-    and the frequency within 0.02 Hz, unless the noise itself (the predicted standard
-    error of the pooled estimate, x4) allows less; the per-segment standard errors
+    and the frequency within the noise's share (the predicted standard error of the pooled
+    estimate, x4) plus the chain's own bias; the per-segment standard errors
     are calibrated (normalised errors have unit spread)."""
     zetas, freqs, zeta_std, freq_std = [], [], [], []
     for seed in range(10):
@@ -154,7 +162,10 @@ def test_linear_decay_at_40_db_snr_ten_runs(f_hz, zeta, fs_hz, duration_s):
     assert abs(pooled / zeta - 1) < max(0.02, 4 * pooled_std / zeta)
     wf = 1 / freq_std**2
     pooled_f = np.sum(wf * freqs) / np.sum(wf)
-    assert abs(pooled_f - f_hz * np.sqrt(1 - zeta**2)) < max(0.02, 4 * np.sqrt(2 / np.sum(wf)))
+    # The noise's share (4 predicted standard errors) plus the chain's own bias: achieved
+    # 3.1e-5 Hz at 20 Hz (allowed 2.4e-3), 6.5e-2 Hz at 500 Hz, zeta 0.02 (allowed 0.59).
+    allowed_hz = 4 * np.sqrt(2 / np.sum(wf)) + CHAIN_FREQUENCY_BIAS * f_hz
+    assert abs(pooled_f - f_hz * np.sqrt(1 - zeta**2)) < allowed_hz
     # zeta_std must not understate the scatter (it may overstate it on short records,
     # where the floor's windows are short and include some signal-model error). With
     # 50 % overlap about half the segments are independent; the bound is the 99.9 %

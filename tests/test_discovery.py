@@ -11,13 +11,13 @@ import pytest
 from tests.support.discovery import diagnose_with_details
 from workflow.discovery.campaign import campaign_verdict, diagnose_campaign
 from workflow.discovery.configuration import bound_flags
-from workflow.discovery.decision import CAUSE_MODELS, CLEAR_GAIN, decide
+from workflow.discovery.decision import CAUSE_MODELS, decide
 from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate, folds_of, heldout_standard_error
 from workflow.discovery.microslip import iwan_as_cells
 from workflow.discovery.misfit import (
-    EXPLAINS_LIMIT,
     binned_discrepancy,
     explains_data,
+    misfit_significant,
     run_order_trend,
     stiffness_signature,
 )
@@ -25,7 +25,6 @@ from workflow.discovery.wording import discrepancy_sentence, format_percent
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.models.averaged import MODELS, CurveGrid
 from workflow.models.averaged_fit import (
-    JOINT_SHARE_MAX,
     FitContext,
     FitSettings,
     _local_fit,
@@ -41,14 +40,24 @@ from workflow.models.averaged_fit import (
     run_offsets,
 )
 from workflow.models.configuration_data import (
-    TOL_LN_ZETA,
-    TOL_REL_F,
     ConfigurationData,
     Scatter,
     estimate_scatter,
     prepare_configuration,
     scatter_of,
 )
+
+MODEL_ACCURACY_LN_ZETA = 0.02
+"""The averaged models' accuracy in ln zeta: their largest deviation from direct integration
+of the Dahl oscillator, through the slip transition (docs/discovery.md)."""
+
+MODEL_ACCURACY_REL_F = 1e-4
+"""Their accuracy in relative frequency (a few 1e-5 away from the transition, 3.6e-4 at its
+steepest point)."""
+
+EXPLAINS_SCATTERS = 2.0
+"""The output contract's ``explains_data``: every half decade's mean residual within two
+measured scatters."""
 
 FAST = FitSettings(global_samples=128, local_starts=2, resamples=40)
 DAHL = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01, "slip_velocity_in_s": 1.5}
@@ -115,10 +124,15 @@ def test_dahl_data_gives_none_with_unit_gain():
     assert conf["baseline"]["error"]["metric"] == HELD_OUT_METRIC
     assert {r["cause"] for r in conf["ranking"]} == {"none", *CAUSE_MODELS}
     assert "within the run-to-run scatter" in conf["discrepancy"]
-    if conf["baseline"]["model"] == "dahl":
-        fitted = conf["baseline"]["params"]
-        assert fitted["zeta0"] == pytest.approx(DAHL["zeta0"], rel=0.1)
-        assert fitted["f_lin_hz"] == pytest.approx(DAHL["f_lin_hz"], rel=1e-4)
+    # Whichever baseline is chosen recovers the joint's linear part: LuGre holds Dahl (its
+    # stiction term near 0; at this seed it is the baseline, stiction ratio 0.04). Achieved:
+    # f_lin within 3.1e-6 (tolerance 3e-5, the per-segment frequency scatter, which a fit to
+    # hundreds of segments stays well within), zeta0 within 1.5 % (LuGre's micro-damping term
+    # trades against it; 5 % is a 3x margin), the joint's stiffness share within 0.5 %.
+    fitted = conf["baseline"]["params"]
+    assert fitted["f_lin_hz"] == pytest.approx(DAHL["f_lin_hz"], rel=3e-5)
+    assert fitted["zeta0"] == pytest.approx(DAHL["zeta0"], rel=0.05)
+    assert fitted["joint_stiffness_fraction"] == pytest.approx(DAHL["joint_stiffness_fraction"], rel=0.02)
 
 
 EXTENDED = {
@@ -244,7 +258,7 @@ def test_binned_discrepancy_flags_a_consistent_misfit_only():
     data, res = _data_with_offset(0.0)
     assert not any(r["significant"] for r in binned_discrepancy(data, res))
     # significant but below the model accuracy: not a misfit
-    data, res = _data_with_offset(0.5 * TOL_LN_ZETA)
+    data, res = _data_with_offset(0.5 * MODEL_ACCURACY_LN_ZETA)
     assert not any(r["significant"] for r in binned_discrepancy(data, res))
 
 
@@ -352,7 +366,7 @@ def test_run_order_trend_measures_the_change_of_the_friction_limit():
         assert trend["significant"]
         assert trend["slope_per_run"] == pytest.approx(-0.25 / 7, abs=3 * standard_error)
         # a falling friction limit raises the damping where the joint slips
-        assert trend["change_over_sequence"] > TOL_LN_ZETA
+        assert trend["change_over_sequence"] > MODEL_ACCURACY_LN_ZETA
         data, _, shaped = _runs_of_a_slipping_joint(0.0, seed)
         assert not run_order_trend(data, shaped, n_tests=2)["significant"]
 
@@ -428,7 +442,7 @@ def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
         # taking back most of the friction's frequency loss
         residuals = model_residuals(fit, data, scatter, context)
         worst = max(np.max(np.abs(residuals["z_noise"])), np.max(np.abs(residuals["f_noise"])))
-        assert worst < EXPLAINS_LIMIT
+        assert worst < EXPLAINS_SCATTERS
         whole, friction = (
             signature["relative_frequency_change"],
             signature["friction_relative_frequency_change"],
@@ -462,7 +476,7 @@ def test_a_dahl_joint_cannot_absorb_a_velocity_squared_loss():
         worst = max(np.max(np.abs(residuals["z_noise"])), np.max(np.abs(residuals["f_noise"])))
         on_limit = any("physical limit" in flag for flag in bound_flags("dahl", fit.coords, data))
         assert on_limit is (effect is not None), bound_flags("dahl", fit.coords, data)
-        assert bool(worst > EXPLAINS_LIMIT) is (effect is not None), worst
+        assert bool(worst > EXPLAINS_SCATTERS) is (effect is not None), worst
 
 
 def test_campaign_verdict_rule():
@@ -620,7 +634,7 @@ def test_random_spread_between_runs_is_not_a_cause_and_hides_none(cause):
     conf = document["configurations"]["c"]
     assert conf["cause"] == cause, conf["evidence"]["decision_rule"]
     if cause != "none":
-        assert conf["gain"]["ratio"] < CLEAR_GAIN
+        assert conf["gain"]["ratio"] < 0.7  # a named cause cuts the held-out error by 30 % at least
     spread = conf["evidence"]["run_offsets"]["relative_frequency_std"]
     assert spread == pytest.approx(4e-4, rel=0.5)  # 8 runs: the std of the draws itself varies ~25 %
 
@@ -666,7 +680,8 @@ def test_parameters_on_the_edge_of_their_range_are_flagged():
     coords = 0.5 * (lo + hi)
     coords[share] = hi[share]
     (flag,) = bound_flags("iwan", coords, data)
-    assert flag.startswith(f"joint_stiffness_fraction = {JOINT_SHARE_MAX:.3g} at its physical limit")
+    # what a lap joint's contact can carry: at most a tenth of the modal stiffness (docs/discovery.md)
+    assert flag.startswith("joint_stiffness_fraction = 0.1 at its physical limit")
     coords[share] = lo[share]
     (flag,) = bound_flags("iwan", coords, data)
     assert flag.endswith("at the lower edge of its fit range: not identified by the data")
@@ -706,7 +721,7 @@ def test_run_drift_seen_only_in_the_order_of_the_recording_start_times():
 
 
 def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3):
-    tolerance = tolerance or (TOL_LN_ZETA if curve == "damping" else TOL_REL_F)
+    tolerance = tolerance or (MODEL_ACCURACY_LN_ZETA if curve == "damping" else MODEL_ACCURACY_REL_F)
     return {
         "curve": curve,
         "v_low_in_s": 1.0,
@@ -744,6 +759,34 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
     text = discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
     assert text.startswith("The measured damping differs from the lugre fit") and "by up to -26 %" in text
     assert "shifts with run order (recording start times in the files) by -26 %" in text
+
+
+def test_discrepancy_sentence_names_both_curves():
+    # UNESP and PFF: a significant frequency misfit was the only one named while the
+    # residual figure showed larger damping residuals over three runs (not significant)
+    damping = {**_bin("damping", -0.25, -6.5, 0.0013, p_limit=0.00083), "n_runs": 3}
+    frequency = _bin("frequency", 4e-4, 26.5, 1e-9, significant=True)
+    text = discrepancy_sentence("lugre", [damping, frequency], None, 10)
+    assert text.startswith("The measured frequency differs from the lugre fit")
+    assert "its largest damping misfit, where the measured damping lies 22 % below the lugre fit" in text
+    assert (
+        "larger than the 2 % in damping the models are accurate to but not statistically significant" in text
+    )
+    # the |t| is quoted with what decides: the runs behind it and p against its limit
+    assert "|t| = 6.5 over 3 runs, p = 0.0013 against 0.00083 after correction" in text
+    # one run: the segments are the observations, never "over 1 runs"
+    one = {**_bin("damping", 0.3, 11.0, 1e-9, significant=True), "n_runs": 1, "n_segments": 40}
+    text = discrepancy_sentence("dahl", [one], None, 1)
+    assert "over the 40 segments of the one run" in text and "1 runs" not in text
+
+
+def test_one_significance_rule():
+    # |t| alone decides nothing: 6.5 over 3 runs is not significant where 6.7 over 10 is
+    assert not misfit_significant(0.0013, 0.00083, 0.05, MODEL_ACCURACY_LN_ZETA)
+    assert misfit_significant(1e-5, 0.00083, 0.05, MODEL_ACCURACY_LN_ZETA)
+    assert not misfit_significant(
+        1e-9, 0.00083, 0.5 * MODEL_ACCURACY_LN_ZETA, MODEL_ACCURACY_LN_ZETA
+    )  # below the accuracy
 
 
 @pytest.mark.parametrize(

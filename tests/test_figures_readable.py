@@ -18,16 +18,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
-from helpers import CHEAP, REPO, run_snakemake  # noqa: E402
+from helpers import CHEAP, REALDATA, needs_realdata, run_snakemake  # noqa: E402
 
-from workflow.io.units import INCH_M, LBF_N, SI  # noqa: E402
+from workflow.io.units import SI  # noqa: E402
 from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 snakemake = functools.partial(run_snakemake, timeout=1800)
-
-REALDATA = REPO.parent / "shared" / "realdata"
 
 
 # ------------------------------------------------------------------ the checker itself
@@ -184,18 +182,20 @@ def test_si_run_writes_model_parameters_and_residuals_in_si(one_configuration):
         <= set(fits["unit_si"])
         <= {"N/m", "N", "N s/m", "m/s", "1", "rad/s", "Hz"}
     )
-    for parameter, factor in (("sigma", LBF_N / INCH_M), ("fc", LBF_N), ("v0", INCH_M), ("zeta0", 1.0)):
+    # The definitions, not the module's factors: 1 in = 0.0254 m, 1 lbf = 0.45359237 kg x 9.80665 m/s^2.
+    inch_m, lbf_n = 0.0254, 0.45359237 * 9.80665
+    for parameter, factor in (("sigma", lbf_n / inch_m), ("fc", lbf_n), ("v0", inch_m), ("zeta0", 1.0)):
         rows = fits[fits["parameter"] == parameter]
         np.testing.assert_array_equal(rows["value_si"], rows["value"] * factor)
     residuals = pd.read_parquet(one_configuration / "results/tables/diagnosis_residuals.parquet")
     np.testing.assert_array_equal(
-        residuals["velocity_amplitude_m_s"], residuals["velocity_amplitude_in_s"] * INCH_M
+        residuals["velocity_amplitude_m_s"], residuals["velocity_amplitude_in_s"] * inch_m
     )
     verdict = (one_configuration / "results/report/verdict.html").read_text()
     assert "area (m²)" in verdict and " m/s" in verdict
 
 
-@pytest.mark.skipif(not (REALDATA / "unesp-bolted-beam").is_dir(), reason=f"no real data at {REALDATA}")
+@needs_realdata("unesp-bolted-beam")
 def test_unesp_figures_are_readable(tmp_path):
     campaign = REALDATA / "unesp-bolted-beam"
     targets = [
@@ -209,3 +209,36 @@ def test_unesp_figures_are_readable(tmp_path):
     result = snakemake(tmp_path, "-c2", *targets, "--config", f"campaign={campaign}", *CHEAP)
     assert result.returncode == 0, result.stderr[-4000:]
     assert hard_to_read(tmp_path) == []
+
+
+def test_area_axis_in_square_metres_has_short_plain_ticks():
+    # the demo's areas (0.17, 0.66, 1.36 in²) are 1e-4 m²: labels like 0.000443 ran together
+    curves, rows = [], []
+    for name, area_in2 in (("no_washer", 1.36), ("large_washer", 0.66), ("small_washer", 0.17)):
+        amplitude = np.logspace(-1.3, 0.6, 30)
+        zeta = 1e-3 * (1 + area_in2 * amplitude / 5)
+        curves.append(
+            pd.DataFrame(
+                {
+                    "configuration": name,
+                    "bearing_area_in2": area_in2,
+                    "velocity_amplitude_in_s": amplitude,
+                    "zeta": zeta,
+                    "zeta_low": 0.9 * zeta,
+                    "zeta_high": 1.1 * zeta,
+                }
+            )
+        )
+        rows += [
+            {
+                "velocity_amplitude_in_s": v,
+                "bearing_area_in2": area_in2,
+                "zeta": 1e-3 * (1 + area_in2 * v / 5),
+            }
+            for v in (0.2, 0.63, 1.5)
+        ]
+    figure = figures.area_fits(pd.concat(curves), pd.DataFrame(rows), title="t", units=SI)
+    figure.canvas.draw()
+    labels = [label.get_text() for label in figure.axes[1].get_xticklabels() if label.get_text()]
+    assert 3 <= len(labels) <= 7 and all(len(label) <= 6 for label in labels), labels
+    assert readability_problems(figure) == []

@@ -86,6 +86,47 @@ def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
     assert band_b[0] - margin <= a["gain"]["ratio"] <= band_b[1] + margin, (a["gain"], b["gain"], band_b)
 
 
+def test_placed_sensor_sees_mode1_at_the_drawn_gain():
+    """A placement's mode-1 gain against its noise floor is the one drawn: a point of the
+    beam with that shape ratio where one exists, else a quieter sensor at the free end
+    whose shape ratio times the noise-floor ratio is the gain."""
+    from workflow.lab.hidden_effects import PLACEMENT_GAIN_RANGE, draw_mode1_gain, placed_sensor
+    from workflow.lab.virtual_lab import LabSettings, mode1_gain, setup_configuration
+
+    settings = LabSettings()
+    area = 1.2
+    mode = setup_configuration("x", area, settings)[0].mode
+    gains = [draw_mode1_gain(cause, seed) for cause in CASES for seed in range(1, 6)]
+    assert PLACEMENT_GAIN_RANGE[0] <= min(gains) and max(gains) <= PLACEMENT_GAIN_RANGE[1]
+    for gain in (0.05, 0.3, 2.5, 8.0):
+        sensor = placed_sensor(area, gain, seed=4, settings=settings)
+        noise = sensor.noise_g if sensor.noise_g is not None else settings.acceleration_noise_g
+        seen = abs(mode1_gain(mode, settings, sensor)) * settings.acceleration_noise_g / noise
+        assert seen == pytest.approx(gain, rel=1e-9)
+    end = placed_sensor(area, 8.0, seed=4, settings=settings)
+    assert end.position_in in (0.0, settings.joint.geometry.total_length_in)
+    assert placed_sensor(area, 1.0, seed=4) == placed_sensor(area, 1.0, seed=5)
+
+
+def test_one_hit_seen_by_several_sensors_is_the_one_sensor_campaigns(tmp_path):
+    """A case recorded by three sensors in one file holds, column by column, what each
+    one-sensor campaign of the same gain and noise stream records (same physics, hits,
+    run-to-run draws and noise), and campaign.yaml names the channels."""
+    import yaml
+
+    gains = (1.0, 0.05, 5.0)
+    case, out = generate_case("run_drift", BASE_SEED, tmp_path, mode1_gain=gains)
+    meta = yaml.safe_load((out / "campaign.yaml").read_text())
+    assert meta["response"]["channels"] == ["acc1", "acc2", "acc3"]
+    assert [s["mode1_gain"] for s in case["sensors"]] == list(gains)
+    several = np.loadtxt(out / "joint" / "run03.txt", skiprows=4)
+    for stream, gain in enumerate(gains):
+        _, alone = generate_case("run_drift", BASE_SEED, tmp_path, mode1_gain=gain, noise_stream=stream)
+        single = np.loadtxt(alone / "joint" / "run03.txt", skiprows=4)
+        assert np.array_equal(single[:, :2], several[:, :2])
+        assert np.array_equal(single[:, 2], several[:, 2 + stream])
+
+
 NODE_GAIN = 0.05
 """A sensor near a node of mode 1: its amplitude 1/20 of the accelerometer's against the
 same noise floor (26 dB less signal), the other modes as they are where it stands."""

@@ -82,7 +82,12 @@ def test_damping_and_frequency_recover_the_truth(analysed, name):
         truth, name, velocity, "damped_frequency_hz", runs
     )
     assert np.max(np.abs(frequency_error)) < 0.05
-    assert abs(np.median(frequency_error)) < 0.01
+    # The median of n segments' errors has the standard error 1.2533 * spread / sqrt(n)
+    # (spread: their robust standard deviation, 1.7e-3 Hz for the no-washer joint, so about
+    # 1.2e-4 Hz); an unbiased chain keeps the median within 4 of them (2e-5 and 3.3e-5 Hz
+    # achieved at seed 11).
+    spread_hz = 1.4826 * np.median(np.abs(frequency_error - np.median(frequency_error)))
+    assert abs(np.median(frequency_error)) < 4 * 1.2533 * spread_hz / np.sqrt(frequency_error.size)
     # the decay is followed over more than a decade of amplitude for the no-washer joint
     if name == "no_washer":
         assert velocity.max() / velocity.min() > 10
@@ -114,8 +119,10 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         "status": "used",
         "reason": "",
         "record_start": "",  # an ASCII file states no recording start
+        "response_units": {"response": "g"},
     }
     assert good.segments["kept"].sum() >= 3 and set(good.segments["run"]) == {"run01"}
+    assert set(good.segments["mode"]) == {0} and set(good.segments["channel"]) == {"response"}
     assert good.quality["passed"][good.quality["applied"]].all()
     assert list(good.quality["check"]) == [
         "clipping",

@@ -22,10 +22,11 @@ import pytest
 from browser import WINDOW_WIDTH_PX, audit_page, chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
+from workflow.discovery.wording import discrepancy_sentence
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.io.units import SI
 from workflow.lab.virtual_lab import generate_campaign
-from workflow.outputs import report
+from workflow.outputs import figures, report
 
 REPO = Path(__file__).resolve().parents[1]
 FULL = os.environ.get("LAPJOINT_FULL_REPORT_TEST") == "1"
@@ -198,24 +199,36 @@ def test_candidate_margin():
     assert report.candidate_margin({"cause": "none", "ranking": []}) is None
 
 
-def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
-    """The landing page goes through Snakemake's Jinja then docutils: no markup error,
-    and underscores or bars in names stay text."""
+def landing_text(verdict: str, description: str = "") -> str:
+    """The text of the report's first page as Snakemake renders it: Jinja, then docutils
+    (a markup warning is an error)."""
     import jinja2
     from docutils.core import publish_parts
 
-    verdict = report.verdict_rst(document, runs=runs, hypotheses=hypotheses)
-    landing = report.landing_rst(verdict, 'Campaign ``{{ snakemake.config["campaign"] }}``.\n')
+    landing = report.landing_rst(verdict, description)
     links = "\n\n.. _verdict.html: javascript:void(0)\n.. _1 Verdict: javascript:void(0)\n"
 
     class Snakemake:
         config = {"campaign": "my/campaign"}
 
-    rendered = jinja2.Environment().from_string(landing + links).render(snakemake=Snakemake)
+    rendered = (
+        jinja2.Environment(trim_blocks=True, lstrip_blocks=True)
+        .from_string(landing + links)
+        .render(snakemake=Snakemake)
+    )
     body = publish_parts(rendered, writer="html", settings_overrides={"report_level": 2, "halt_level": 2})[
         "html_body"
     ]
-    text = html.unescape(body)
+    return html.unescape(body)
+
+
+def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
+    """The landing page goes through Snakemake's Jinja then docutils: no markup error,
+    and underscores or bars in names stay text."""
+    text = landing_text(
+        report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
+        'Config ``{{ snakemake.config["campaign"] }}``.\n',
+    )
     assert "System Message" not in text
     assert "no_washer" in text and "|t| = 9.4" in text
     assert "my/campaign" in text
@@ -436,18 +449,90 @@ def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
     assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
 
 
+def few_runs_reach_further() -> pd.DataFrame:
+    """The demo's large washer in small: ten runs up to 1.6 in/s at a damping of 0.08 %,
+    three of them on to 4.4 in/s where the damping doubles (0.16 %)."""
+    rng = np.random.default_rng(3)
+    rows = []
+    for run in range(10):
+        top = 4.4 if run < 3 else 1.6
+        amplitude = np.logspace(np.log10(0.27), np.log10(top), 40 if run < 3 else 30)
+        zeta = 0.0008 * (1 + np.clip((amplitude - 1.6) / 2.8, 0, None))
+        rows.append(
+            pd.DataFrame(
+                {
+                    "configuration": "large_washer",
+                    "run": f"run{run:02d}",
+                    "velocity_amplitude_in_s": amplitude,
+                    "zeta": zeta * np.exp(0.01 * rng.standard_normal(amplitude.size)),
+                    "frequency_hz": 500.0 * (1 - 1e-3 * amplitude),
+                }
+            )
+        )
+    return pd.concat(rows, ignore_index=True)
+
+
+def _plotted_points(figure) -> tuple[np.ndarray, np.ndarray]:
+    """The segments' markers of a figure made by workflow.outputs.figures (x, y as drawn)."""
+    lines = [line for line in figure.axes[0].get_lines() if line.get_marker() == "o"]
+    return (
+        np.concatenate([line.get_xdata() for line in lines]),
+        np.concatenate([line.get_ydata() for line in lines]),
+    )
+
+
+def test_trend_sentence_says_what_the_damping_figure_shows():
+    # the sentence once used the lowest and highest 10 % of segments: "0.267 to 1.63 in/s,
+    # 0.0795 % to 0.0855 %" beside a figure whose runs reach 4.4 in/s at 0.16 %
+    segments = few_runs_reach_further()
+    sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"])
+    x, y = _plotted_points(figures.damping_vs_amplitude(segments, title="t"))
+    assert f"Measured from {report.fmt(x.min())} to {report.fmt(x.max())} in/s" in sentence
+    top = y[x >= 10 ** (np.floor(4 * np.log10(x.max())) / 4)]  # the figure's top quarter decade, in %
+    assert f"to {report.fmt(np.median(top))} % at" in sentence and "3 of 10 runs reach it" in sentence
+    # physics: the top end's damping is about double the low end's (0.16 % against 0.08 %)
+    trend = report.measured_trends(segments)["large_washer"]
+    assert 1.7 < trend["zeta_high"] / trend["zeta_low"] < 2.1 and "the damping rises" in sentence
+
+
+def test_trend_sentence_says_what_the_backbone_shows():
+    segments = few_runs_reach_further()
+    sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"], SI)
+    x, y = _plotted_points(figures.frequency_vs_amplitude(segments, title="t", units=SI))
+    assert f"Measured from {report.fmt(x.min())} to {report.fmt(x.max())} m/s" in sentence
+    # the lowest and highest quarter decades of amplitude (in/s) the segments reach
+    low = np.median(y[x < 0.0254 * 10 ** (np.ceil(4 * np.log10(0.27)) / 4)])
+    high = np.median(y[x >= 0.0254 * 10 ** (np.floor(4 * np.log10(4.4)) / 4)])
+    assert f"the frequency falls from {report.fmt(low, 5)} Hz to {report.fmt(high, 5)} Hz" in sentence
+
+
+def test_damping_low_point_on_the_way_is_said():
+    amplitude = np.logspace(-1, 1, 120)
+    segments = pd.DataFrame(
+        {
+            "configuration": "c",
+            "run": "r",
+            "velocity_amplitude_in_s": amplitude,
+            "zeta": 0.001 * (1 + np.log10(amplitude) ** 2),  # 0.2 % at both ends, 0.1 % at 1 in/s
+            "frequency_hz": 100.0,
+        }
+    )
+    sentence = report.trend_sentence(report.measured_trends(segments)["c"])
+    assert "the damping stays level" in sentence and "through a low of 0.1" in sentence
+
+
 def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
     segments = segments_with(-0.1, -0.004)
     trend = report.measured_trends(segments)["t5nm"]
-    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s," in report.trend_sentence(trend)
+    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s (" in report.trend_sentence(trend)
     in_si = report.trend_sentence(trend, SI)
-    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s," in in_si and "in/s" not in in_si
+    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s (" in in_si and "in/s" not in in_si
     assert report.amplitude_range(1.0, 10.0, SI) == "0.0254–0.254 m/s"
     page = report.verdict_html(
         document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36}, units=SI
     )
     assert "area (m²)" in page and report.fmt(1.36 * 0.0254**2) in page
-    assert "whose amplitudes are in in/s (1 in/s = 0.0254 m/s)" in page
+    assert "diagnosis.json and the tables keep in/s and in² (1 in/s = 0.0254 m/s)" in page
     default = report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36})
     assert "area (in²)" in default and "1 in/s =" not in default
 
@@ -501,8 +586,8 @@ def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
     assert "Run-order trend of the damping (file-name order, which may not be" in text
     close["evidence"]["run_order_trend"]["order"] = "file timestamps"
     assert "Run-order trend of the damping (file timestamps)" in report.verdict_html(document)
-    landing = report.verdict_rst(
-        document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
+    landing = landing_text(
+        report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004))
     )
     assert "only marginally ahead of the next best" in landing and "clearly" not in landing
     assert "chi = -0.95 at its lower bound" in landing
@@ -529,9 +614,12 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
 
 
 # ------------------------------------------------------------------ in a real browser
-needs_chromium = pytest.mark.skipif(
-    chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
-)
+def needs_chromium(test):
+    """Skipped without Chromium; a failure then with LAPJOINT_REQUIRE_CHROMIUM=1 (tests/conftest.py)."""
+    test = pytest.mark.skipif(
+        chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
+    )(test)
+    return pytest.mark.group("chromium")(test)
 
 
 @needs_chromium
@@ -637,3 +725,86 @@ def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_asid
     signature["shows_signature"] = True
     assert report.signature_sentences(entry) == []
     assert report.signature_sentences({"evidence": {}}) == []
+
+
+def test_si_page_speaks_one_unit(document):
+    # the discrepancy sentence of diagnosis.json (in/s) is rebuilt in m/s from its evidence
+    bins = [
+        {
+            "curve": "damping",
+            "v_low_in_s": 1.0,
+            "v_high_in_s": 3.16,
+            "mean": 0.3,
+            "t": 9.0,
+            "p": 1e-8,
+            "p_limit": 1e-3,
+            "tolerance": 0.02,
+            "n_runs": 10,
+            "significant": True,
+        }
+    ]
+    entry = document["configurations"]["no_washer"]
+    entry["evidence"]["binned_residuals"] = bins
+    entry["discrepancy"] = discrepancy_sentence("lugre", bins, entry["evidence"]["run_order_trend"], 10)
+    assert "1-3.16 in/s" in entry["discrepancy"]
+    assert "0.0254-0.0803 m/s" in report.discrepancy_text(entry, SI)
+    assert report.discrepancy_text(entry) == entry["discrepancy"]
+    page = report.verdict_html(document, units=SI)
+    assert "0.0254-0.0803 m/s" in page and "1-3.16 in/s" not in page
+    # H2's slope per in² is a slope per m² in SI, its amplitude in m/s
+    table = pd.DataFrame(
+        {
+            "statistic": ["slope of fitted zeta vs bearing area at velocity amplitude 0.63 in/s, 1/in^2"],
+            "estimate": [6.66e-4],
+            "ci_low": [6.0e-4],
+            "ci_high": [7.0e-4],
+        }
+    )
+    shown = report.hypotheses_in_units(table, SI).iloc[0]
+    assert shown["statistic"].endswith("0.016 m/s, 1/m²")
+    np.testing.assert_allclose(shown["estimate"], 6.66e-4 / 0.0254**2)
+
+
+def test_unidentified_parameters_said_once_in_words(document):
+    entry = document["configurations"]["no_washer"]
+    flag = "stiction_ratio = 3 at the upper edge of its fit range: not identified by the data"
+    entry["baseline"]["flags"] = [flag, "slip_velocity_in_s = 5.96e+03 at the upper edge of its fit range: x"]
+    entry["extended_model"]["flags"] = [flag]
+    entry["confidence"] = {"microslip_power_law": 1.0}
+    page = report.verdict_html(document, units=SI)
+    assert page.count("the stiction-to-friction ratio") == 1 and "stiction_ratio" not in page
+    assert "the baseline and the extended model: 3" in page
+    assert "151 m/s" in page and "slip_velocity_in_s" not in page  # 5960 in/s in SI
+    assert "2 fitted parameters not determined by the data" in page
+    assert "100 % of the resamples" in page and "1e+02" not in page
+
+
+def test_one_run_campaign_is_not_said_to_predict_runs(document):
+    for entry in document["configurations"].values():
+        entry["evidence"]["n_runs"] = 1
+    headline = report.campaign_headline(document)
+    assert "runs it was not fitted to" not in headline and "no run could be held out" in headline
+    assert "predicts runs held out" not in headline
+    page = report.verdict_html(document)
+    assert "Based on 1 run and" in page and "nothing here says how a second run" in page
+    assert report.ONE_RUN_ERROR_UNIT.replace("'", "&#x27;") in page
+
+
+def test_model_fits_say_undetermined_parameters_with_their_units():
+    fits = pd.DataFrame(
+        {
+            "configuration": "a",
+            "model": "lugre",
+            "parameter": ["sigma0", "alpha1", "v0"],
+            "value": [6073.0, 0.3504, 5.382],
+            "std": [290.0, 27.0, 0.0],
+            "rms_log_zeta": 0.05,
+            "rms_rel_frequency": 1e-3,
+        }
+    )
+    page = report.model_fits_html(fits)
+    assert "sigma0 = 6073 ± 290 lbf/in<br>" in page
+    assert "alpha1 = 0.3504 ± 27 lbf <i>(not determined: the uncertainty exceeds the value)</i>" in page
+    assert "v0 = 5.382 ± 0 in/s <i>(not determined: the fit does not change with it" in page
+    in_si = report.model_fits_html(fits, SI)
+    assert "m/s" in in_si and " N " in in_si and "lbf" not in in_si and "in/s" not in in_si

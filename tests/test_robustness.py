@@ -135,8 +135,8 @@ def build_campaign(root: Path) -> tuple[Path, dict[str, dict]]:
     malformed(
         "bad_time_backwards",
         backwards,
-        data_line(701),
-        f"time column not increasing: {time_s[700]:.9g} s follows {time_s[701]:.9g} s",
+        data_line(700),  # the first line whose time stamp is wrong
+        f"time column out of order: {time_s[701]:.9g} s is followed by {time_s[700]:.9g} s on the next line",
     )
     rate = list(lines)
     rate[1] = "Sample rate: 2048 Hz"

@@ -84,3 +84,11 @@ def test_scripts_reach_the_installed_library_without_path_edits(path):
 def test_rule_names_its_software(name):
     """snakemake --lint asks every rule for its software: the project's one environment."""
     assert re.search(r"^\s+conda:\n\s+LAPJOINT_ENV$", RULES[name], flags=re.M), name
+
+
+@pytest.mark.parametrize(
+    "name", ["collect_tables", "fit_curves", "diagnose_configuration", "diagnose", "analyse_runs"]
+)
+def test_analysis_rules_do_not_depend_on_the_units_results_are_shown_in(name):
+    # config units is a presentation choice: switching it must re-run no analysis
+    assert "SETTINGS.units" not in RULES[name] and "units=" not in RULES[name], name

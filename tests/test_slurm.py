@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "profiles" / "slurm"
 SNAKEFILE = ROOT / "Snakefile"
 TIMEOUT_S = 600
-# The measured-data chain through SLURM in five job levels (identify_mode, analyse_runs
-# per group of runs, collect_tables, fit_curves, then the figures): every kind of step but the
+# The measured-data chain through SLURM in six job levels (identify_mode, analyse_runs
+# per group of runs, collect_tables, usable_segments, fit_curves, then the figures): every kind of step but the
 # friction-model fits, which take minutes and add nothing SLURM-specific.
 TARGETS = [
     "results/tables/segments.parquet",
@@ -70,7 +70,10 @@ def slurm_unavailable() -> str | None:
 
 REASON = slurm_unavailable()
 REQUIRED = os.environ.get("LAPJOINT_REQUIRE_SLURM") == "1"
-pytestmark = pytest.mark.skipif(REASON is not None and not REQUIRED, reason=f"SLURM smoke test: {REASON}")
+pytestmark = [
+    pytest.mark.group("slurm"),
+    pytest.mark.skipif(REASON is not None and not REQUIRED, reason=f"SLURM smoke test: {REASON}"),
+]
 
 
 def snakemake(workdir: Path, campaign: Path, *options: str) -> tuple[float, str]:

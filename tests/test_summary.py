@@ -70,3 +70,36 @@ def test_nested_unknown_key_lists_its_section_keys():
     with pytest.raises(ConfigError) as error:
         validate_config({"fits": {"max_degre": 2}})
     assert "fits.max_degre: unknown key; valid keys here: max_degree" in str(error.value)
+
+
+@pytest.mark.parametrize(
+    "entries",
+    [
+        ["campaign=/data/lab a/c<1>", "units=si", "strict=True", "runs_per_job=4"],
+        ["models={global_samples: 4, local_starts: 1}", 'fits={bootstrap_samples: 50, note: "a: b, {c}"}'],
+        ["demo={path: campaigns/demo, seed: 7}", "windows=[1, 2.5]"],
+    ],
+)
+def test_report_command_gives_snakemake_the_same_config(entries):
+    """The --config values of the printed report command parse, as Snakemake parses a
+    command line, to the config the run had."""
+    import shlex
+
+    from snakemake.cli import parse_config
+
+    from workflow.outputs.report_command import config_arguments, report_command
+
+    config = parse_config(entries)
+    assert parse_config(config_arguments(config)) == config
+    words = shlex.split(report_command("/p/Snakefile", "/w d", "/p/report.css", ["/c.yaml"], config))
+    assert words[:8] == [
+        "snakemake",
+        "-s",
+        "/p/Snakefile",
+        "-d",
+        "/w d",
+        "--report",
+        "/w d/results/report.html",
+        "--report-html-stylesheet-path",
+    ]
+    assert words[words.index("--config") + 1 :] == config_arguments(config)

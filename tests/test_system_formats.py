@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import REALDATA, REPO, needs_realdata
 from system_format_files import (
     lms_export_group,
     to_uff_ascii_precision,
@@ -20,15 +21,9 @@ from system_format_files import (
     write_uff58,
 )
 
-from workflow.io import units
 from workflow.io.campaign import CampaignFormatError, load_campaign, read_run
 
-REPO = Path(__file__).resolve().parents[1]
-REALDATA = REPO.parent / "shared" / "realdata"
 RAW = REALDATA / "raw"
-needs_realdata = pytest.mark.skipif(
-    not RAW.is_dir(), reason=f"real exports not present at {RAW} (../shared beside the repository)"
-)
 
 N = 2048
 RATE_HZ = 2560.0
@@ -263,7 +258,7 @@ def test_files_without_a_recording_start_have_none(tmp_path):
 def test_force_in_newtons_is_converted_to_lbf(tmp_path):
     force, response = samples()
     channels = {
-        "Force": (force / units.NEWTON_LBF, {"wf_increment": DT_S, "unit_string": "N"}),
+        "Force": (force * (0.45359237 * 9.80665), {"wf_increment": DT_S, "unit_string": "N"}),  # lbf -> N
         "Acceleration": (response, {"wf_increment": DT_S, "unit_string": "g"}),
     }
     record = read(tmp_path, "run.tdms", lambda p: write_tdms(p, "g", channels), yaml_of(force=None))
@@ -545,7 +540,7 @@ def _copy_campaign(tmp_path, yaml_text, source: Path, target: str) -> Path:
     return folder
 
 
-@needs_realdata
+@needs_realdata("raw")
 def test_real_plain_mat_equals_the_converted_campaign(tmp_path):
     yaml_text = (
         "name: pff-lms-sample\nsample_rate_hz: 51200\nmode_hz: 151\n"
@@ -564,7 +559,7 @@ def test_real_plain_mat_equals_the_converted_campaign(tmp_path):
     assert record.force_lbf is None  # 'f' is not named a force: campaign.yaml does not ask for it
 
 
-@needs_realdata
+@needs_realdata("raw")
 def test_real_testlab_export_reads_the_laser_channel_in_its_unit(tmp_path):
     yaml_text = (
         "name: unesp\nmode_hz: 18.7\n"
@@ -592,7 +587,7 @@ def test_real_testlab_export_reads_the_laser_channel_in_its_unit(tmp_path):
         read_run(folder, "t5nm/sine_09hz.mat", load_campaign(folder))
 
 
-@needs_realdata
+@needs_realdata("raw")
 @pytest.mark.parametrize("name", ["pff_Sample_LMS_Data.mat", "unesp_T5Nm_Sine_09Hz_Time.mat"])
 def test_real_exports_corrupted_give_their_messages(tmp_path, name):
     folder = _copy_campaign(

@@ -9,8 +9,7 @@ from datetime import timedelta
 
 import numpy as np
 import pandas as pd
-import pytest
-from helpers import REPO, checksums, run_snakemake
+from helpers import REALDATA, checksums, needs_realdata, run_snakemake
 from system_format_files import FIRST_RECORDING, convert_run, write_mixed_format_copy
 
 from workflow.discovery.campaign import diagnose_campaign
@@ -68,13 +67,7 @@ def test_mixed_format_campaign_gives_the_tables_of_its_ascii_copy(tmp_path):
     assert checksums(mixed_campaign) == before
 
 
-REALDATA = REPO.parent / "shared" / "realdata"
-
-
-@pytest.mark.skipif(
-    not (REALDATA / "raw").is_dir(),
-    reason=f"real exports not present at {REALDATA} (../shared beside the repository)",
-)
+@needs_realdata("raw")
 def test_real_plain_mat_gives_the_segments_of_the_converted_campaign(tmp_path):
     campaign = tmp_path / "campaign"
     (campaign / "decay").mkdir(parents=True)

@@ -498,7 +498,7 @@ def diagnose_configuration_segments(
         The campaign's kept segments (results/tables/segments.parquet).
     name : str
     context : FitContext
-        The campaign's (:func:`campaign_fit_context`).
+        The campaign's (:func:`~workflow.discovery.campaign.campaign_fit_context`).
     response_quantity : str
         The configuration's recorded quantity (campaign.yaml ``response.quantity``).
     settings : FitSettings, optional

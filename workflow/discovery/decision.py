@@ -61,7 +61,7 @@ BASELINE_MODELS = ("dahl", "lugre")
 
 
 RUN_ORDER_TESTS = 2
-"""The run-order test is significant at ``p < ALPHA / RUN_ORDER_TESTS``: it is one
+"""The run-order test is significant at ``p < misfit.ALPHA / RUN_ORDER_TESTS``: it is one
 question on its own axis (run order, not amplitude), so it is not diluted by the number
 of amplitude bins."""
 
@@ -102,7 +102,7 @@ def decide(
         optionally ``shows_signature`` (default true).
 
     envelope_structure : bool
-        Whether the ring-downs are not single-mode decays (:func:`envelope_structure`).
+        Whether the ring-downs are not single-mode decays (:func:`~workflow.discovery.misfit.envelope_structure`).
     unit_squares, unit_weights : optional
         Per candidate, its held-out weighted squared residuals summed over each
         independent unit of evidence (a run; with one run, a half decade of amplitude,
@@ -120,7 +120,7 @@ def decide(
       single mode (baseline or candidate) can remove that misfit.
     * A candidate is *eligible* when its held-out error is below the baseline's, its
       BIC is below the baseline's, and its fit shows its cause's signature
-      (:func:`stiffness_signature`).
+      (:func:`~workflow.discovery.misfit.stiffness_signature`).
     * ``none`` when the baseline has no significant misfit and no eligible candidate
       cuts the held-out error below ``CLEAR_GAIN`` x the baseline's.
     * Otherwise the best eligible candidate by held-out error; candidates whose squared
@@ -185,10 +185,10 @@ def decide(
 class ModelEvidence:
     """What the decision needs of one fitted model, per segment.
 
-    ``residuals`` are the all-data fit's (:func:`model_residuals`); ``heldout`` the
-    cross-validation's (:func:`cross_validate`); ``n_params`` the fitted parameters;
+    ``residuals`` are the all-data fit's (:func:`~workflow.models.averaged_fit.model_residuals`); ``heldout`` the
+    cross-validation's (:func:`~workflow.discovery.heldout.cross_validate`); ``n_params`` the fitted parameters;
     ``shows_signature`` whether a candidate's fit shows its cause's signature
-    (:func:`stiffness_signature`; true where there is no such check).
+    (:func:`~workflow.discovery.misfit.stiffness_signature`; true where there is no such check).
     """
 
     residuals: dict[str, np.ndarray]
@@ -212,11 +212,11 @@ def evaluate_decision(
     evidence : mapping
         Model id -> :class:`ModelEvidence`.
     envelope_significant : bool
-        :func:`envelope_structure`'s verdict (not resampled).
+        :func:`~workflow.discovery.misfit.envelope_structure`'s verdict (not resampled).
     extended_models : mapping, optional
         Cause -> the model that represents it once named, where that is not the
         candidate of :data:`CAUSE_MODELS` (the recovered threshold distribution,
-        :func:`refine_microslip`).
+        :func:`~workflow.discovery.microslip.refine_microslip`).
 
     Returns
     -------

@@ -23,6 +23,7 @@ from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, Configura
 __all__ = [
     "failure_draws",
     "ALPHA",
+    "misfit_significant",
     "binned_discrepancy",
     "run_order_trend",
     "ENVELOPE_DEPARTURE_LIMIT",
@@ -36,6 +37,23 @@ __all__ = [
 ALPHA = 0.01
 """Familywise false-alarm probability of the discrepancy tests: half of it is shared by
 the amplitude bins (Bonferroni over bins and curves), half goes to the run-order test."""
+
+
+def misfit_significant(p: float, p_limit: float, size: float, tolerance: float) -> bool:
+    """The one rule by which a misfit (a bin's mean residual, a run-order change) is real.
+
+    Real means statistically clear, ``p < p_limit`` (the corrected limit), *and* larger
+    than the models' accuracy, ``|size| > tolerance`` (same unit as ``size``). ``|t|``
+    alone decides nothing: its ``p`` depends on the runs behind it.
+
+    Examples
+    --------
+    >>> misfit_significant(1e-6, 1e-3, 0.05, 0.02), misfit_significant(1e-6, 1e-3, 0.01, 0.02)
+    (True, False)
+    >>> misfit_significant(0.0013, 0.00083, 0.05, 0.02)
+    False
+    """
+    return bool(p < p_limit and abs(size) > tolerance)
 
 
 def _lag1_effective(r: np.ndarray) -> float:
@@ -119,7 +137,7 @@ def binned_discrepancy(
     n_tests = 2 * max(len(rows), 1)  # the other half of alpha goes to the run-order test
     for row in rows:
         row["p_limit"] = alpha / n_tests
-        row["significant"] = bool(row["p"] < row["p_limit"] and abs(row["mean"]) > row["tolerance"])
+        row["significant"] = misfit_significant(row["p"], row["p_limit"], row["mean"], row["tolerance"])
     return rows
 
 
@@ -137,7 +155,7 @@ def run_order_trend(
     damping set by its lowest-amplitude segments (``ln_zeta_calibrated`` and
     ``calibration`` when present, as for a held-out run; else ``ln_zeta_shared``, else
     ``ln_zeta``). Of that residual the test takes the amount of the shape a change of the
-    joint's friction limit leaves (``-ln_zeta_slope``, :func:`damping_curve_slope`; a
+    joint's friction limit leaves (``-ln_zeta_slope``, :func:`~workflow.models.averaged_fit.damping_curve_slope`; a
     constant shape without it, or where the model's damping changes by less than its
     accuracy ``TOL_LN_ZETA`` over the scored amplitudes), a weighted least-squares
     projection over the run's other segments with every quarter decade of amplitude
@@ -209,7 +227,7 @@ def run_order_trend(
         "change_over_sequence": change,
         "t": float(t),
         "p": p,
-        "significant": bool(p < alpha / n_tests and abs(change) > TOL_LN_ZETA),
+        "significant": misfit_significant(p, alpha / n_tests, change, TOL_LN_ZETA),
         "p_limit": alpha / n_tests,
         "order": data.run_order,
         "runs": list(data.run_names),

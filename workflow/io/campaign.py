@@ -39,12 +39,13 @@ are run against them):
 from __future__ import annotations
 
 import datetime
+import errno
 import io
 import math
 import os
 import re
 from collections import Counter
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from dataclasses import fields as dataclass_fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
@@ -53,8 +54,22 @@ import numpy as np
 from annotated_types import Ge, Gt, MinLen
 from numpy.typing import NDArray
 
-from workflow.io import units
-from workflow.io.record_rules import column_role, rates_agree, split_name_unit
+from workflow.io import limits, units
+from workflow.io.limits import (
+    MAX_QUOTED_PROBLEMS,
+    QUOTED_CHARACTERS,
+    magnitude_problem,
+    name_length_problem,
+    quoted,
+    shortened,
+)
+from workflow.io.record_rules import (
+    TIME_STEP_REL_TOLERANCE,
+    column_role,
+    first_bad_time_step,
+    rates_agree,
+    split_name_unit,
+)
 from workflow.io.validation import (
     FORBID_UNKNOWN_KEYS,
     MISSING_KEY_ERRORS,
@@ -68,7 +83,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MIN_SAMPLES",
-    "TIME_STEP_REL_TOLERANCE",
     "HEAD_ROWS",
     "CAMPAIGN_FILE",
     "CONFIGURATION_NAME",
@@ -76,6 +90,7 @@ __all__ = [
     "MAX_YAML_VALUES",
     "SYSTEM_FORMAT_EXTENSIONS",
     "CampaignFormatError",
+    "SINGLE_CHANNEL_NAME",
     "ResponseSpec",
     "ForceSpec",
     "ConfigurationSpec",
@@ -91,6 +106,8 @@ __all__ = [
     "DECIMAL_COMMA_HINT",
     "CAREFUL_CHUNK_ROWS",
     "FAST_CHUNK_CHARS",
+    "response_unit",
+    "ResponseChannel",
     "RunRecord",
     "HEAD_BYTES",
     "declared_sample_rate_hz",
@@ -102,10 +119,6 @@ MIN_SAMPLES: int = 256
 """Fewest samples a run file must hold. Below this a record cannot hold even a few
 cycles of the mode plus the filter's settling time, and such short files are in
 practice truncated exports ("fewer than a few hundred samples" in the contract)."""
-
-TIME_STEP_REL_TOLERANCE: float = 0.01
-"""A time step may differ from the record's mean step by this fraction of it, plus
-the resolution with which the time column is printed (rounding of the last digit)."""
 
 HEAD_ROWS: int = 11
 """Numeric rows whose majority decides the delimiter and the column count, so that a
@@ -168,7 +181,9 @@ class CampaignFormatError(ValueError):
 # campaign.yaml
 
 
-def _canonical_force_unit(unit: str) -> str:
+def _canonical_force_unit(unit: str | None) -> str | None:
+    if unit is None:
+        return None
     canonical = units.normalize_unit(unit)
     if canonical not in units.known_units("force"):
         raise ValueError(f"unit {unit!r} is not a force unit; expected lbf or N")
@@ -179,11 +194,11 @@ def _relative_glob(files: str) -> str:
     if not files.strip():
         raise ValueError("files must be a non-empty glob")
     if Path(files).is_absolute() or files.startswith(("/", "\\", "~")) or re.match(r"[A-Za-z]:", files):
-        raise ValueError(f"files glob {files!r} must be relative to the campaign folder")
+        raise ValueError(f"files glob {quoted(files)} must be relative to the campaign folder")
     if ".." in re.split(r"[/\\]", files):
-        raise ValueError(f"files glob {files!r} leaves the campaign folder ('..' is not allowed)")
+        raise ValueError(f"files glob {quoted(files)} leaves the campaign folder ('..' is not allowed)")
     if not Path(files).parts:
-        raise ValueError(f"files glob {files!r} names no file")
+        raise ValueError(f"files glob {quoted(files)} names no file")
     return files
 
 
@@ -198,7 +213,22 @@ def _channel_reference(channel: str | int | None) -> str | int | None:
         raise ValueError(f"channel index must be 0 or more, got {channel}")
     if isinstance(channel, str) and not channel.strip():
         raise ValueError("channel must be a non-empty name or a 0-based index")
+    if isinstance(channel, str) and (problem := name_length_problem("channel name", channel)):
+        raise ValueError(problem)
     return channel
+
+
+def _channel_references(channels: tuple[str | int, ...] | None) -> tuple[str | int, ...] | None:
+    if channels is None:
+        return None
+    if not channels:
+        raise ValueError("channels must list at least one channel (a name or a 0-based index)")
+    for channel in channels:
+        _channel_reference(channel)
+    repeated = sorted({str(c) for c in channels if sum(str(d) == str(c) for d in channels) > 1})
+    if repeated:
+        raise ValueError(f"channels lists {', '.join(map(quoted, repeated))} more than once")
+    return channels
 
 
 def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | None:
@@ -207,26 +237,61 @@ def _ordered_band(band: tuple[float, float] | None) -> tuple[float, float] | Non
     return band
 
 
+def _mode_list(modes: tuple[float, ...] | Literal["auto"] | None) -> tuple[float, ...] | str | None:
+    if modes is None or modes == "auto":
+        return modes
+    if not modes:
+        raise ValueError("modes_hz must list at least one frequency, or be auto")
+    if any(not mode > 0.0 for mode in modes):
+        raise ValueError(f"modes_hz must be frequencies above 0 Hz, got {list(modes)}")
+    if any(b <= a for a, b in zip(modes, modes[1:])):
+        raise ValueError(f"modes_hz must increase, got {list(modes)}")
+    return modes
+
+
+def _band_list(bands: tuple[tuple[float, float], ...] | None) -> tuple[tuple[float, float], ...] | None:
+    if bands is None:
+        return None
+    for band in bands:
+        if not (0.0 < band[0] < band[1]):
+            raise ValueError(f"bands_hz entries must be [low, high] with 0 < low < high, got {list(band)}")
+    return bands
+
+
 # Settings dataclasses (workflow/io/validation.py): load_campaign validates campaign.yaml
 # into them; jobs that read the validated copy (campaign_to_dict / campaign_from_dict)
 # never import pydantic or PyYAML.
-_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True}
+# allow_inf_nan: YAML's .inf and .nan are numbers to it; no campaign.yaml value may be one.
+_CAMPAIGN_YAML_CONFIG = {**FORBID_UNKNOWN_KEYS, "coerce_numbers_to_str": True, "allow_inf_nan": False}
+
+
+SINGLE_CHANNEL_NAME = "response"
+"""The ``channel`` of every table row of a campaign that names no response channel."""
 
 
 @dataclass(frozen=True)
 class ResponseSpec:
-    """The recorded response channel."""
+    """The recorded response channel(s)."""
 
     __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
 
     quantity: Literal["acceleration", "velocity", "displacement"]
-    unit: str
-    """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in)."""
+    unit: str | None = None
+    """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in); None when every run file
+    records its response unit (the file's unit is then used)."""
     channel: Annotated[int | str | None, After(_channel_reference)] = None
-    """Which channel of a system-format file holds the response: its name or 0-based
-    index (workflow/io/readers); None when the file has exactly one response channel."""
+    """Which channel of a run file holds the response: its name (a system file's channel,
+    an ASCII column's name without its unit) or 0-based index (workflow/io/readers); None
+    when the file has exactly one response channel."""
+    channels: Annotated[tuple[int | str, ...] | None, After(_channel_references)] = None
+    """Several response channels of every run file (sensors seeing the same hit), each a
+    name or a 0-based index as ``channel``; each is analysed on its own."""
 
     def __post_init__(self) -> None:
+        if self.channel is not None and self.channels is not None:
+            raise ValueError("give channel (one sensor) or channels (several), not both")
+        if self.unit is None:
+            return
         canonical = units.normalize_unit(self.unit)
         allowed = units.known_units(self.quantity)
         if canonical not in allowed:
@@ -235,6 +300,16 @@ class ResponseSpec:
             )
         object.__setattr__(self, "unit", canonical)
 
+    def references(self) -> tuple[int | str | None, ...]:
+        """What campaign.yaml names as the response channels, in its order: the entries
+        of ``channels``, else ``channel`` (None: the file's one response channel)."""
+        return self.channels if self.channels is not None else (self.channel,)
+
+    def channel_names(self) -> tuple[str, ...]:
+        """The response channels' names in every table (the ``channel`` column): each
+        reference as written in campaign.yaml, :data:`SINGLE_CHANNEL_NAME` without one."""
+        return tuple(SINGLE_CHANNEL_NAME if ref is None else str(ref) for ref in self.references())
+
 
 @dataclass(frozen=True)
 class ForceSpec:
@@ -242,8 +317,8 @@ class ForceSpec:
 
     __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
 
-    unit: Annotated[str, After(_canonical_force_unit)]
-    """Canonical unit name (lbf or N)."""
+    unit: Annotated[str | None, After(_canonical_force_unit)] = None
+    """Canonical unit name (lbf or N); None when the file records it (else lbf)."""
     channel: Annotated[int | str | None, After(_channel_reference)] = None
     """Which channel of a system-format file holds the force (name or 0-based index)."""
 
@@ -272,6 +347,11 @@ class Campaign:
     pretrigger_samples: Annotated[int, Ge(0)] = 0
     mode_hz: Annotated[float, Gt(0.0)] | None = None
     band_hz: Annotated[tuple[float, float] | None, After(_ordered_band)] = None
+    modes_hz: Annotated[tuple[float, ...] | Literal["auto"] | None, After(_mode_list)] = None
+    """Several modes to analyse (Hz, increasing), or ``auto``: every clear, decaying mode
+    of the response spectrum (:func:`workflow.measured.mode.find_decaying_modes`)."""
+    bands_hz: Annotated[tuple[tuple[float, float], ...] | None, After(_band_list)] = None
+    """One band-pass per entry of ``modes_hz``; default: a band around each mode."""
     response: ResponseSpec
     force: ForceSpec | None = None
     configurations: Annotated[dict[str, ConfigurationSpec], MinLen(1)]
@@ -281,6 +361,52 @@ class Campaign:
     pretrigger_given: bool = field(default=False, init=False)
     """Whether campaign.yaml states ``pretrigger_samples`` (rather than the default 0);
     set by :func:`load_campaign`, not a key of campaign.yaml."""
+
+    def __post_init__(self) -> None:
+        problem = _modes_problem(self.mode_hz, self.band_hz, self.modes_hz, self.bands_hz)
+        if problem is not None:
+            raise ValueError(problem)
+
+    @property
+    def auto_modes(self) -> bool:
+        """Whether campaign.yaml asks for every mode found (``modes_hz: auto``)."""
+        return self.modes_hz == "auto"
+
+    def mode_requests(self) -> tuple[tuple[float | None, tuple[float, float] | None], ...]:
+        """The modes campaign.yaml asks for, as (mode Hz or None, band Hz or None) pairs:
+        one per entry of ``modes_hz``; else ``mode_hz`` and ``band_hz`` (a None mode is
+        searched for: the first mode). Empty with ``modes_hz: auto``."""
+        if self.auto_modes:
+            return ()
+        if self.modes_hz is not None:
+            bands = self.bands_hz if self.bands_hz is not None else (None,) * len(self.modes_hz)
+            return tuple(zip(self.modes_hz, bands))
+        return ((self.mode_hz, self.band_hz),)
+
+
+def _modes_problem(
+    mode_hz: float | None,
+    band_hz: tuple[float, float] | None,
+    modes_hz: tuple[float, ...] | str | None,
+    bands_hz: tuple[tuple[float, float], ...] | None,
+) -> str | None:
+    """What is wrong with how campaign.yaml's mode keys combine, or None."""
+    if modes_hz is not None and (mode_hz is not None or band_hz is not None):
+        key = "mode_hz" if mode_hz is not None else "band_hz"
+        return f"{key}: give the one-mode form (mode_hz, band_hz) or modes_hz (with bands_hz), not both"
+    if bands_hz is None:
+        return None
+    if modes_hz is None or modes_hz == "auto":
+        return "bands_hz: needs modes_hz listing one mode per band"
+    if len(bands_hz) != len(modes_hz):
+        return f"bands_hz: {len(bands_hz)} band(s) for {len(modes_hz)} mode(s) in modes_hz; give one band per mode"
+    for mode, band in zip(modes_hz, bands_hz):
+        if not band[0] < mode < band[1]:
+            return (
+                f"bands_hz: [{band[0]:.6g}, {band[1]:.6g}] Hz does not hold its mode {mode:.6g} Hz: "
+                "the band-pass would isolate another mode (or none)"
+            )
+    return None
 
 
 def campaign_to_dict(campaign: Campaign) -> dict[str, Any]:
@@ -295,9 +421,13 @@ def campaign_from_dict(data: dict[str, Any]) -> Campaign:
     def pair(values: list[float] | None) -> tuple[float, float] | None:
         return None if values is None else (float(values[0]), float(values[1]))
 
+    response = dict(data["response"])
+    if response.get("channels") is not None:
+        response["channels"] = tuple(response["channels"])
+    modes_hz = data.get("modes_hz")
     campaign = Campaign(
         name=data["name"],
-        response=ResponseSpec(**data["response"]),
+        response=ResponseSpec(**response),
         configurations={
             name: ConfigurationSpec(
                 files=spec["files"],
@@ -310,6 +440,8 @@ def campaign_from_dict(data: dict[str, Any]) -> Campaign:
         pretrigger_samples=data["pretrigger_samples"],
         mode_hz=data["mode_hz"],
         band_hz=pair(data["band_hz"]),
+        modes_hz=modes_hz if modes_hz is None or modes_hz == "auto" else tuple(float(m) for m in modes_hz),
+        bands_hz=None if data.get("bands_hz") is None else tuple(pair(band) for band in data["bands_hz"]),
         force=None if data["force"] is None else ForceSpec(**data["force"]),
         # A copy without the key was validated before campaign.yaml could set it.
         decimal=data.get("decimal", "."),
@@ -437,6 +569,15 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
     from pydantic import ValidationError
 
     path = Path(campaign_dir) / CAMPAIGN_FILE
+    outside = _link_problem(path, Path(campaign_dir).resolve())
+    if outside is not None:
+        raise CampaignFormatError(
+            path, None, f"{outside}; campaign.yaml must be a file inside the campaign folder"
+        )
+    if path.exists() and not path.is_file():
+        raise CampaignFormatError(
+            path, None, "not read: not a regular file (a directory, a device or a pipe)"
+        )
     if not path.is_file():
         raise CampaignFormatError(
             path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
@@ -491,63 +632,86 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         # free text that YAML read as a date or a yes/no: keep the text as written
         name_node = next(value for key, value in root.value if key.value == "name")
         raw = {**raw, "name": str(name_node.value)}
+    modes = raw.get("modes_hz")
+    if modes is not None and modes != "auto" and not isinstance(modes, list):
+        # a union's own messages (one per form) would not say what to write
+        raise CampaignFormatError(
+            path,
+            _node_line(root, ("modes_hz",)),
+            f"modes_hz: expected a list of frequencies in Hz ([80.5, 297.7]) or auto, got {modes!r}",
+        )
     try:
         campaign = validate(Campaign, _with_default_globs(raw))
     except ValidationError as error:
         problems, first_line = [], None
-        for item in error.errors():
+        errors = error.errors()
+        for item in errors[:MAX_QUOTED_PROBLEMS]:
             loc = tuple(item["loc"])
-            key = ".".join(str(part) for part in loc) or "(top level)"
+            combined = re.match(r"(?:Value error, )?(mode_hz|band_hz|modes_hz|bands_hz): ", item["msg"])
+            if not loc and combined:
+                # a check across keys (Campaign.__post_init__) names the key it is about
+                loc = (combined.group(1),)
+                item = {**item, "msg": item["msg"][combined.start(1) + len(combined.group(1)) + 2 :]}
+            key = ".".join(shortened(str(part)) for part in loc) or "(top level)"
             if item["type"] in UNKNOWN_KEY_ERRORS:
                 message = f"unknown key (allowed here: {', '.join(_allowed_keys(loc))})"
             elif item["type"] in MISSING_KEY_ERRORS:
                 message = "required key is missing"
             else:
-                message = item["msg"]
+                message = shortened(item["msg"], 10 * QUOTED_CHARACTERS)
             problems.append(f"{key}: {message}")
             if first_line is None:
                 first_line = _node_line(root, loc)
+        if len(errors) > MAX_QUOTED_PROBLEMS:
+            problems.append(f"and {len(errors) - MAX_QUOTED_PROBLEMS} more problems")
         raise CampaignFormatError(path, first_line, "; ".join(problems)) from None
     object.__setattr__(campaign, "pretrigger_given", "pretrigger_samples" in raw)
+    long_name = name_length_problem("name", campaign.name, limits.MAX_CAMPAIGN_NAME_CHARACTERS)
+    if long_name is not None:
+        raise CampaignFormatError(path, _node_line(root, ("name",)), long_name)
     if campaign.sample_rate_hz is not None:
         problem = frequency_problem(campaign, campaign.sample_rate_hz)
     else:
         problem = frequency_problem(campaign, math.inf)
     if problem is not None:
-        key = "mode_hz" if problem.startswith("mode_hz") else "band_hz"
+        key = problem.split(":", 1)[0].split("[", 1)[0]
         raise CampaignFormatError(path, _node_line(root, (key,)), problem)
     return campaign
 
 
 def frequency_problem(campaign: Campaign, sample_rate_hz: float, rate_source: str = "") -> str | None:
-    """What is wrong with campaign.yaml's ``mode_hz`` and ``band_hz`` for records sampled
-    at ``sample_rate_hz``, or None.
+    """What is wrong with campaign.yaml's modes and bands (``mode_hz``, ``band_hz``,
+    ``modes_hz``, ``bands_hz``) for records sampled at ``sample_rate_hz``, or None.
 
-    The band must lie inside (0, Nyquist) and hold ``mode_hz``, which must lie below
-    Nyquist; a message starts with the campaign.yaml key it is about.
+    Each band must lie inside (0, Nyquist) and hold its mode, which must lie below
+    Nyquist; a message starts with the campaign.yaml key it is about (``modes_hz[1]``
+    for the second entry of a list).
 
     Parameters
     ----------
     campaign : Campaign
         The validated campaign.yaml.
     sample_rate_hz : float
-        Sample rate of the records, Hz (``math.inf`` checks the band and mode alone).
+        Sample rate of the records, Hz (``math.inf`` checks the bands and modes alone).
     rate_source : str, optional
         Where the sample rate comes from, for the message (e.g. ``"header line 2"``).
     """
     nyquist_hz = sample_rate_hz / 2.0
     source = f" ({rate_source})" if rate_source else ""
     rate = f"the Nyquist frequency {nyquist_hz:.6g} Hz of the sample rate {sample_rate_hz:.6g} Hz{source}"
-    if campaign.mode_hz is not None and campaign.mode_hz >= nyquist_hz:
-        return f"mode_hz: {campaign.mode_hz:.6g} Hz is not below {rate}: such a mode cannot be in the records"
-    band = campaign.band_hz
-    if band is not None and band[1] >= nyquist_hz:
-        return f"band_hz: [{band[0]:.6g}, {band[1]:.6g}] Hz reaches {rate}; the band must lie below it"
-    if band is not None and campaign.mode_hz is not None and not band[0] < campaign.mode_hz < band[1]:
-        return (
-            f"band_hz: [{band[0]:.6g}, {band[1]:.6g}] Hz does not hold mode_hz {campaign.mode_hz:.6g} Hz: "
-            "the band-pass would isolate another mode (or none)"
-        )
+    listed = campaign.modes_hz is not None
+    for index, (mode_hz, band) in enumerate(campaign.mode_requests()):
+        mode_key = f"modes_hz[{index}]" if listed else "mode_hz"
+        band_key = f"bands_hz[{index}]" if listed else "band_hz"
+        if mode_hz is not None and mode_hz >= nyquist_hz:
+            return f"{mode_key}: {mode_hz:.6g} Hz is not below {rate}: such a mode cannot be in the records"
+        if band is not None and band[1] >= nyquist_hz:
+            return f"{band_key}: [{band[0]:.6g}, {band[1]:.6g}] Hz reaches {rate}; the band must lie below it"
+        if band is not None and mode_hz is not None and not band[0] < mode_hz < band[1]:
+            return (
+                f"{band_key}: [{band[0]:.6g}, {band[1]:.6g}] Hz does not hold {mode_key} {mode_hz:.6g} Hz: "
+                "the band-pass would isolate another mode (or none)"
+            )
     return None
 
 
@@ -597,17 +761,41 @@ class ExcludedPath:
         return {**asdict(self), "status": "excluded"}
 
 
-def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
-    """Why a path matched by a glob is not read as a run file, or None."""
-    resolved = path.resolve()
+def _link_problem(path: Path, root_resolved: Path) -> str | None:
+    """Why a path inside the campaign folder leads elsewhere (a symbolic link out of the
+    folder, or a loop of links), or None. The test is on the real path, all links resolved."""
+    try:
+        path.stat()
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            return "not read: a symbolic link loop (the link leads back to itself)"
+    try:
+        resolved = path.resolve()
+    except (OSError, RuntimeError):  # a loop further up the path
+        return "not read: a symbolic link loop (the link leads back to itself)"
     if not resolved.is_relative_to(root_resolved):
         return "not read: a symbolic link that leads outside the campaign folder (docs/input-safety.md)"
+    return None
+
+
+def _unreadable_reason(path: Path, root_resolved: Path) -> str | None:
+    """Why a path matched by a glob is not read as a run file, or None."""
+    link = _link_problem(path, root_resolved)
+    if link is not None:
+        return link
     if path.is_dir():
         return "not read: a directory, not a run file"
     if not path.is_file():
         return "not read: not a regular file (a broken link, a device or a pipe)"
     if not os.access(path, os.R_OK):
         return "not read: permission denied (the file cannot be opened for reading)"
+    size_bytes = path.stat().st_size
+    if size_bytes > limits.MAX_RUN_FILE_BYTES:
+        return (
+            f"not read: {size_bytes} bytes, larger than a run file may be "
+            f"({limits.MAX_RUN_FILE_BYTES} bytes; docs/input-safety.md): cut the record "
+            "to the ring-down or export fewer channels"
+        )
     return None
 
 
@@ -666,7 +854,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
             raise CampaignFormatError(
                 root / CAMPAIGN_FILE,
                 None,
-                f"configurations.{configuration}.files: {spec.files!r} is not a usable glob ({error})",
+                f"configurations.{configuration}.files: {quoted(spec.files)} is not a usable glob ({error})",
             ) from None
         if not matches:
             excluded.append(
@@ -674,7 +862,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                     configuration,
                     "",
                     spec.files,
-                    f"configurations.{configuration}.files: the glob {spec.files!r} matches no "
+                    f"configurations.{configuration}.files: the glob {quoted(spec.files)} matches no "
                     f"file in the campaign folder {root.as_posix()}",
                 )
             )
@@ -682,6 +870,16 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
         for match in matches:
             relative = match.relative_to(root).as_posix()
             reason = _unreadable_reason(match, root_resolved)
+            long_name = name_length_problem("run file name", match.name)
+            if long_name is not None:
+                # the name itself is not repeated in full anywhere
+                shown = shortened(relative)
+                excluded.append(
+                    ExcludedPath(
+                        configuration, shortened(match.stem), shown, f"{shown}: not read: {long_name}"
+                    )
+                )
+                continue
             if reason is not None:
                 excluded.append(
                     ExcludedPath(
@@ -694,7 +892,7 @@ def scan_campaign(campaign_dir: str | Path, campaign: Campaign) -> tuple[list[Ru
                     root / CAMPAIGN_FILE,
                     None,
                     f"configurations.{configuration}.files matches two runs named "
-                    f"{match.stem!r}: {seen[match.stem]} and {relative}",
+                    f"{quoted(match.stem)}: {seen[match.stem]} and {relative}",
                 )
             seen[match.stem] = relative
             runs.append(RunFile(configuration, match.stem, relative))
@@ -798,11 +996,11 @@ def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) ->
         if cell == "":
             return f"empty cell in column {column}"
         if _NON_FINITE.fullmatch(cell):
-            return f"NaN/inf value {cell!r} in column {column}"
+            return f"NaN/inf value {quoted(cell)} in column {column}"
         if not _NUMBER.fullmatch(cell):
-            return f"non-numeric cell {cell!r} in column {column}"
+            return f"non-numeric cell {quoted(cell)} in column {column}"
         if not math.isfinite(float(cell)):
-            return f"value {cell!r} in column {column} overflows a float"
+            return f"value {quoted(cell)} in column {column} overflows a float"
     return None
 
 
@@ -1044,7 +1242,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
             if not parsed or unit not in _RATE_FACTORS_HZ or not 0 < float(parsed.group(1)) < math.inf:
                 raise CampaignFormatError(
-                    path, number, f"cannot read a positive sample rate in Hz from {line.strip()!r}"
+                    path, number, f"cannot read a positive sample rate in Hz from {quoted(line.strip())}"
                 )
             rate, rate_line = float(parsed.group(1)) * _RATE_FACTORS_HZ[unit], number
         elif name in _PRETRIGGER_KEYS and pre_line is None:
@@ -1060,7 +1258,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
                 raise CampaignFormatError(
                     path,
                     number,
-                    f"cannot read the pre-trigger from {line.strip()!r} "
+                    f"cannot read the pre-trigger from {quoted(line.strip())} "
                     "(expected a whole number of samples, e.g. 'Pre-trigger: 25 samples')",
                 )
     return _HeaderValues(rate, rate_line, pre_samples, pre_s, pre_line, entries)
@@ -1068,6 +1266,72 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
 
 # --------------------------------------------------------------------------------------
 # Run files: the record
+
+
+def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
+    """The unit of a response channel: the one its file records, which must be a unit of
+    campaign.yaml's response quantity and agree with campaign.yaml's ``unit`` when given;
+    else campaign.yaml's (campaign.yaml fills only what the file leaves out).
+
+    Parameters
+    ----------
+    file_unit : str or None
+        The unit the file records for the channel (None: none).
+    campaign : Campaign
+        The validated campaign.yaml.
+    what : str
+        How the message names the channel, e.g. ``response column 'acc1 (g)'``.
+
+    Raises
+    ------
+    ValueError
+        The file's unit is no unit of the quantity or disagrees with campaign.yaml, or
+        neither gives one; the message names the channel (the caller adds the file).
+    """
+    quantity, yaml_unit = campaign.response.quantity, campaign.response.unit
+    if file_unit is None:
+        if yaml_unit is None:
+            raise ValueError(
+                f"{what}: the file records no unit and campaign.yaml gives none; "
+                "add unit to response in campaign.yaml"
+            )
+        return yaml_unit
+    canonical = units.normalize_unit(file_unit)
+    if canonical not in units.known_units(quantity):
+        raise ValueError(
+            f"{what}: unit {quoted(file_unit)} in the file is not a unit of {quantity} "
+            f"(campaign.yaml response quantity); expected one of {', '.join(units.known_units(quantity))}"
+        )
+    if yaml_unit is not None and canonical != yaml_unit:
+        raise ValueError(
+            f"{what}: unit {quoted(file_unit)} in the file disagrees with campaign.yaml response unit "
+            f"{yaml_unit!r} ({quantity})"
+        )
+    return canonical
+
+
+@dataclass(frozen=True, eq=False)
+class ResponseChannel:
+    """One response channel of a run, in its own unit.
+
+    Attributes
+    ----------
+    name : str
+        The channel's name in every table: campaign.yaml's reference
+        (:meth:`ResponseSpec.channel_names`).
+    values : ndarray
+        The samples.
+    unit : str
+        Canonical unit of ``values``.
+    source : str
+        The file's own name for the channel (column name, system channel name; empty
+        for an unnamed ASCII column).
+    """
+
+    name: str
+    values: NDArray[np.float64]
+    unit: str
+    source: str = ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -1106,6 +1370,9 @@ class RunRecord:
     record_start : str
         Wall-clock time the recording started, ISO 8601, when the file states it
         (:mod:`workflow.io.recording_time`); empty otherwise (ASCII files).
+    responses : tuple of ResponseChannel
+        Every response channel campaign.yaml asks for, in its order; ``response`` and
+        ``response_unit`` are the first's (:meth:`for_channel` picks another).
     """
 
     path: str
@@ -1122,6 +1389,21 @@ class RunRecord:
     sample_rate_source: str = "campaign.yaml"
     pretrigger_source: str = "default"
     record_start: str = ""
+    responses: tuple[ResponseChannel, ...] = ()
+
+    def channel_names(self) -> tuple[str, ...]:
+        """The names of :attr:`responses`."""
+        return tuple(channel.name for channel in self.responses)
+
+    def for_channel(self, name: str) -> RunRecord:
+        """The record with ``response`` and ``response_unit`` of the response channel
+        ``name`` (KeyError when the record has none of that name)."""
+        for channel in self.responses:
+            if channel.name == name:
+                if channel.values is self.response:
+                    return self
+                return replace(self, response=channel.values, response_unit=channel.unit)
+        raise KeyError(f"{self.path}: no response channel {name!r} (has {', '.join(self.channel_names())})")
 
 
 @dataclass(frozen=True)
@@ -1130,6 +1412,10 @@ class _Columns:
     units: dict[str, str | None]
     names: tuple[str, ...]
     line: int | None
+    responses: tuple[int, ...] = ()
+    """The response columns, one per campaign.yaml channel (``roles["response"]`` is the first)."""
+    response_units: tuple[str | None, ...] = ()
+    """Each response column's unit as written (None: none given)."""
 
 
 _WIDE_ENCODINGS = (
@@ -1174,9 +1460,9 @@ def _read_text(path: Path, shown: str) -> str:
         )
     nul = raw.find(b"\x00")
     if nul >= 0:
-        raise CampaignFormatError(
-            shown, raw.count(b"\n", 0, nul) + 1, "binary data (NUL byte): not a text export"
-        )
+        # lines end in LF, CRLF or a lone CR, as the text is read below
+        line_ends = raw.count(b"\n", 0, nul) + raw.count(b"\r", 0, nul) - raw.count(b"\r\n", 0, nul)
+        raise CampaignFormatError(shown, line_ends + 1, "binary data (NUL byte): not a text export")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError:
@@ -1210,7 +1496,7 @@ def _decimal_commas_to_points(text: str, shown: str) -> str:
             raise CampaignFormatError(
                 shown,
                 number,
-                f"campaign.yaml says decimal: ',' but {clash.group(0)!r} holds more than one separator; "
+                f"campaign.yaml says decimal: ',' but {quoted(clash.group(0))} holds more than one separator; "
                 "with decimal commas the columns must be separated by tabs, semicolons or spaces",
             )
     return "\n".join(lines)
@@ -1280,7 +1566,7 @@ def _find_columns(
                     raise CampaignFormatError(
                         path,
                         last_number,
-                        f"unexpected text {last_line.strip()!r} between the column names "
+                        f"unexpected text {quoted(last_line.strip())} between the column names "
                         f"(line {above_number}) and the numbers",
                     )
                 names, names_line = above, above_number
@@ -1293,22 +1579,25 @@ def _find_columns(
                     f"the column names do not match the {n_columns} column(s) of numbers",
                 )
 
+    references = campaign.response.references()
+    if references != (None,):
+        return _named_response_columns(names, names_line, units_cells, n_columns, first_line, campaign, path)
     if names is None:
-        if n_columns == 3:
-            order = ("time", "force", "response")
-        elif n_columns == 2:
-            order = ("force", "response") if campaign.force is not None else ("time", "response")
-        elif n_columns == 1:
-            order = ("response",)
-        else:
+        order = _positional_roles(n_columns, 0, campaign)
+        if order is None:
             raise CampaignFormatError(
                 path,
                 first_line,
                 f"{n_columns} columns and no line of column names: cannot tell which is "
                 "the response (name the columns, e.g. 'Time (s)  Force (lbf)  Acceleration (g)')",
             )
-        return _Columns({role: i for i, role in enumerate(order)}, {}, (), None)
+        roles = {role: i for i, role in enumerate(order)}
+        return _Columns(roles, {}, (), None, (roles["response"],), (None,))
 
+    for name in names:
+        long_name = name_length_problem("column name", name)
+        if long_name is not None:
+            raise CampaignFormatError(path, names_line, long_name)
     roles: dict[str, int] = {}
     column_units: dict[str, str | None] = {}
     for index, name in enumerate(names):
@@ -1319,10 +1608,17 @@ def _find_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"two {role} columns: {names[roles[role]]!r} and {name!r}",
+                f"two {role} columns: {quoted(names[roles[role]])} and {quoted(name)}",
             )
         roles[role] = index
         unit = split_name_unit(name)[1]
+        if unit is None and any(bracket in name for bracket in "()[]"):
+            raise CampaignFormatError(
+                path,
+                names_line,
+                f"the unit of the {role} column {quoted(name)} cannot be read: write one unit in "
+                "parentheses or brackets after the name, e.g. 'Acceleration (m/s^2)' or 'Force [N]'",
+            )
         if units_cells is not None:
             unit = units_cells[index]
         column_units[role] = unit
@@ -1330,7 +1626,7 @@ def _find_columns(
         raise CampaignFormatError(
             path,
             names_line,
-            f"no response column among {names} (a response column's name contains acc, vel, resp or disp)",
+            f"no response column among {[shortened(name) for name in names][:MAX_QUOTED_PROBLEMS]} (a response column's name contains acc, vel, resp or disp)",
         )
     response_name = split_name_unit(names[roles["response"]])[0].lower()
     for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
@@ -1338,10 +1634,140 @@ def _find_columns(
             raise CampaignFormatError(
                 path,
                 names_line,
-                f"response column {names[roles['response']]!r} is {quantity} but "
+                f"response column {quoted(names[roles['response']])} is {quantity} but "
                 f"campaign.yaml says response quantity {campaign.response.quantity}",
             )
-    return _Columns(roles, column_units, tuple(names), names_line)
+    return _Columns(
+        roles, column_units, tuple(names), names_line, (roles["response"],), (column_units["response"],)
+    )
+
+
+def _positional_roles(n_columns: int, n_responses: int, campaign: Campaign) -> tuple[str, ...] | None:
+    """Roles of a file's columns without a line of names (the contract's positional rules),
+    or None when they do not decide. With ``n_responses`` > 0 the responses are already
+    picked by index and the roles are those of the other columns, in order."""
+    if n_responses == 0:
+        if n_columns == 3:
+            return ("time", "force", "response")
+        if n_columns == 2:
+            return ("force", "response") if campaign.force is not None else ("time", "response")
+        return ("response",) if n_columns == 1 else None
+    others = n_columns - n_responses
+    if others == 2:
+        return ("time", "force")
+    if others == 1:
+        return ("force",) if campaign.force is not None else ("time",)
+    return () if others == 0 else None
+
+
+def _named_response_columns(
+    names: list[str] | None,
+    names_line: int | None,
+    units_cells: list[str] | None,
+    n_columns: int,
+    first_line: int,
+    campaign: Campaign,
+    path: str,
+) -> _Columns:
+    """Columns of a file whose response channels campaign.yaml names (``channel`` or
+    ``channels``): a name is a column's name without its unit (case ignored), an index
+    counts the columns from 0; the time and force columns keep the contract's rules."""
+    references = campaign.response.references()
+    key = "response.channels" if campaign.response.channels is not None else "response.channel"
+    for name in names or ():
+        long_name = name_length_problem("column name", name)
+        if long_name is not None:
+            raise CampaignFormatError(path, names_line, long_name)
+    listing = ", ".join(f"[{i}] {quoted(name)}" for i, name in enumerate(names)) if names else ""
+    bare = [split_name_unit(name)[0].strip().lower() for name in names] if names else []
+    responses = []
+    for reference in references:
+        if isinstance(reference, int):
+            if reference >= n_columns:
+                raise CampaignFormatError(
+                    path,
+                    names_line,
+                    f"campaign.yaml {key}: {reference} but the file has {n_columns} column(s)",
+                )
+            responses.append(reference)
+            continue
+        if names is None:
+            raise CampaignFormatError(
+                path,
+                first_line,
+                f"campaign.yaml {key}: {quoted(reference)} names a column but the file has no line of column names",
+            )
+        matches = [i for i, name in enumerate(names) if name == reference]
+        matches = matches or [i for i, name in enumerate(bare) if name == reference.strip().lower()]
+        if len(matches) != 1:
+            found = "several columns" if matches else "no column"
+            raise CampaignFormatError(
+                path,
+                names_line,
+                f"campaign.yaml {key}: {quoted(reference)} matches {found}; the columns: {listing}",
+            )
+        responses.append(matches[0])
+    roles: dict[str, int] = {}
+    column_units: dict[str, str | None] = {}
+    others = [index for index in range(n_columns) if index not in responses]
+    if names is None:
+        order = _positional_roles(n_columns, len(responses), campaign)
+        if order is None:
+            raise CampaignFormatError(
+                path,
+                first_line,
+                f"{n_columns} columns and no line of column names: cannot tell which are the time "
+                "and force columns (name the columns)",
+            )
+        roles = {role: index for role, index in zip(order, others)}
+    else:
+        for index in others:
+            role = column_role(names[index])
+            if role in ("time", "force"):
+                if role in roles:
+                    raise CampaignFormatError(
+                        path,
+                        names_line,
+                        f"two {role} columns: {quoted(names[roles[role]])} and {quoted(names[index])}",
+                    )
+                roles[role] = index
+                column_units[role] = (
+                    units_cells[index] if units_cells is not None else split_name_unit(names[index])[1]
+                )
+        for index in responses:
+            for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
+                if word in bare[index] and quantity != campaign.response.quantity:
+                    raise CampaignFormatError(
+                        path,
+                        names_line,
+                        f"response column {quoted(names[index])} is {quantity} but campaign.yaml says "
+                        f"response quantity {campaign.response.quantity}",
+                    )
+    response_units = tuple(
+        None
+        if names is None
+        else (units_cells[i] if units_cells is not None else split_name_unit(names[i])[1])
+        for i in responses
+    )
+    roles["response"] = responses[0]
+    column_units["response"] = response_units[0]
+    return _Columns(roles, column_units, tuple(names or ()), names_line, tuple(responses), response_units)
+
+
+def _response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:
+    """Each response column's canonical unit (:func:`response_unit`)."""
+    found = []
+    for index, unit in zip(columns.responses, columns.response_units):
+        what = (
+            f"response column {quoted(columns.names[index])}"
+            if columns.names
+            else f"response column {index + 1}"
+        )
+        try:
+            found.append(response_unit(unit, campaign, what))
+        except ValueError as error:
+            raise CampaignFormatError(path, columns.line, str(error)) from None
+    return tuple(found)
 
 
 _TIME_UNIT_FACTORS_S = {
@@ -1359,15 +1785,7 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     if time_unit:
         time_factor_s = _TIME_UNIT_FACTORS_S.get(time_unit.strip().lower(), 0.0)
         if time_factor_s == 0.0:
-            raise CampaignFormatError(path, line, f"time column unit {time_unit!r}: expected s or ms")
-    response_unit = columns.units.get("response")
-    if response_unit and units.normalize_unit(response_unit) != campaign.response.unit:
-        raise CampaignFormatError(
-            path,
-            line,
-            f"response column unit {response_unit!r} disagrees with campaign.yaml "
-            f"response unit {campaign.response.unit!r}",
-        )
+            raise CampaignFormatError(path, line, f"time column unit {quoted(time_unit)}: expected s or ms")
     force_factor_lbf = 1.0
     if "force" in columns.roles:
         file_unit = columns.units.get("force")
@@ -1375,12 +1793,14 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
         if file_unit:
             canonical = units.normalize_unit(file_unit)
             if canonical not in units.known_units("force"):
-                raise CampaignFormatError(path, line, f"force column unit {file_unit!r}: expected lbf or N")
+                raise CampaignFormatError(
+                    path, line, f"force column unit {quoted(file_unit)}: expected lbf or N"
+                )
             if yaml_unit is not None and canonical != yaml_unit:
                 raise CampaignFormatError(
                     path,
                     line,
-                    f"force column unit {file_unit!r} disagrees with campaign.yaml force unit {yaml_unit!r}",
+                    f"force column unit {quoted(file_unit)} disagrees with campaign.yaml force unit {yaml_unit!r}",
                 )
         # The column's own unit first; else campaign.yaml's; else the original lab's lbf.
         unit = units.normalize_unit(file_unit) if file_unit else (yaml_unit or "lbf")
@@ -1388,30 +1808,41 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     return time_factor_s, force_factor_lbf
 
 
+def _check_magnitude(
+    column: NDArray[np.float64], role: str, columns: _Columns, first_line: int, path: str
+) -> None:
+    """Refuse a force or response column the analysis cannot square (:mod:`workflow.io.limits`),
+    naming the line of the first such value."""
+    index = columns.roles[role]
+    name = f" {quoted(columns.names[index])}" if columns.names else ""
+    problem = magnitude_problem(column, f"{role} column {index + 1}{name}")
+    if problem is not None:
+        raise CampaignFormatError(path, first_line + problem[0], problem[1])
+
+
 def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str) -> float:
     """Sample rate (Hz) from a time column that must increase in uniform steps."""
     steps = np.diff(time_s)
-    backwards = np.flatnonzero(steps <= 0.0)
-    if backwards.size:
-        i = int(backwards[0])
-        raise CampaignFormatError(
-            path,
-            first_line + i + 1,
-            f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s",
-        )
-    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    tolerance_s = TIME_STEP_REL_TOLERANCE * mean_step_s + resolution_s
-    uneven = np.flatnonzero(np.abs(steps - mean_step_s) > tolerance_s)
-    if uneven.size:
-        i = int(uneven[0])
-        raise CampaignFormatError(
-            path,
-            first_line + i + 1,
-            f"time column not uniform: step {steps[i]:.6g} s differs from the mean step "
-            f"{mean_step_s:.6g} s by {100 * abs(steps[i] / mean_step_s - 1):.3g} % "
-            f"(tolerance {100 * tolerance_s / mean_step_s:.3g} %)",
-        )
-    return 1.0 / mean_step_s
+    bad = first_bad_time_step(steps, resolution_s)
+    if bad is not None:
+        i, typical_s = bad
+        if steps[i] <= 0.0:
+            problem = f"time column not increasing: {time_s[i + 1]:.9g} s follows {time_s[i]:.9g} s"
+        elif i + 1 < steps.size and steps[i + 1] <= 0.0:
+            # a stamp ahead of its neighbours (a spike, two rows swapped): this line is the wrong one
+            problem = (
+                f"time column out of order: {time_s[i + 1]:.9g} s is followed by {time_s[i + 2]:.9g} s "
+                "on the next line"
+            )
+        else:
+            tolerance_s = TIME_STEP_REL_TOLERANCE * typical_s + resolution_s
+            problem = (
+                f"time column not uniform: step {steps[i]:.6g} s (from {time_s[i]:.9g} s on the line "
+                f"before) differs from the record's typical step {typical_s:.6g} s by "
+                f"{100 * abs(steps[i] / typical_s - 1):.3g} % (tolerance {100 * tolerance_s / typical_s:.3g} %)"
+            )
+        raise CampaignFormatError(path, first_line + i + 1, problem)
+    return (time_s.size - 1) / (time_s[-1] - time_s[0])
 
 
 HEAD_BYTES: int = 65536
@@ -1553,6 +1984,7 @@ def read_run(
     header_values = _header_values(header, shown)
     columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
     time_factor_s, force_factor_lbf = _column_unit_factors(columns, campaign, shown)
+    response_units = _response_column_units(columns, campaign, shown)
 
     values = _parse_text_fast(text, offset, end, delimiter, n_rows, n_columns)
     if values is None:
@@ -1644,10 +2076,19 @@ def read_run(
             f"pre-trigger of {pretrigger_samples} samples is not shorter than the record ({n_rows} samples)",
         )
 
+    for role in ("force", "response"):
+        if role in columns.roles:
+            _check_magnitude(values[:, columns.roles[role]], role, columns, first_line, shown)
     force_lbf = None
     if "force" in columns.roles:
         force_lbf = values[:, columns.roles["force"]] * force_factor_lbf
-    response = np.ascontiguousarray(values[:, columns.roles["response"]])
+    responses = tuple(
+        ResponseChannel(
+            name, np.ascontiguousarray(values[:, index]), unit, columns.names[index] if columns.names else ""
+        )
+        for name, index, unit in zip(campaign.response.channel_names(), columns.responses, response_units)
+    )
+    response = responses[0].values
     return RunRecord(
         path=relative,
         sample_rate_hz=float(sample_rate_hz),
@@ -1656,10 +2097,11 @@ def read_run(
         force_lbf=None if force_lbf is None else np.ascontiguousarray(force_lbf),
         response=response,
         response_quantity=campaign.response.quantity,
-        response_unit=campaign.response.unit,
+        response_unit=responses[0].unit,
         header=dict(header_values.entries),
         n_samples=int(n_rows),
         column_names=columns.names,
         sample_rate_source=sample_rate_source,
         pretrigger_source=pretrigger_source,
+        responses=responses,
     )

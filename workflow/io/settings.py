@@ -21,6 +21,7 @@ if TYPE_CHECKING:
 
 
 __all__ = [
+    "Seed",
     "AnalysisSettings",
     "DecaySettings",
     "ModeSearchSettings",
@@ -43,6 +44,23 @@ def _even(order: int) -> int:
     return order
 
 
+def _frequency_range(range_hz: tuple[float, float] | None) -> tuple[float, float] | None:
+    if range_hz is not None and not 0.0 < range_hz[0] < range_hz[1]:
+        raise ValueError(f"must be [low, high] Hz with 0 < low < high, got {list(range_hz)}")
+    return range_hz
+
+
+Seed = Annotated[int, Ge(0), Lt(2**63)]
+"""A random generator's seed: NumPy takes only non-negative integers, and the outputs that
+record it hold a signed 64-bit integer."""
+
+
+# Upper bounds: every count, iteration and sample number has one, so that a setting cannot
+# take the machine (2 cores, 24 GiB, shared) for hours or allocate what it does not have;
+# each bound sits where more no longer changes a result the physics or the statistics can
+# resolve, with the cost at the bound stated beside it.
+
+
 @dataclass(frozen=True)
 class AnalysisSettings:
     """How each ring-down is turned into damping and frequency vs amplitude."""
@@ -57,7 +75,7 @@ class AnalysisSettings:
     """When campaign.yaml gives no ``band_hz``: band = mode * (1 -/+ this).
     0.2 around 125 Hz gives the paper's [100, 150] Hz."""
 
-    mode_search_hz: tuple[float, float] | None = None
+    mode_search_hz: Annotated[tuple[float, float] | None, After(_frequency_range)] = None
     """Frequency range searched for the first mode when campaign.yaml gives no
     ``mode_hz``; None searches from 5 Hz to 0.4 * sample rate."""
 
@@ -70,13 +88,16 @@ class AnalysisSettings:
     segment_overlap: Annotated[float, Ge(0.0), Lt(0.95)] = 0.5
     """Fraction by which consecutive segments overlap."""
 
-    noise_floor_factor: Annotated[float, Ge(1.0)] = 10.0
+    # 1e6 (120 dB) is a 24-bit recorder's dynamic range: above it no segment is ever kept.
+    noise_floor_factor: Annotated[float, Ge(1.0), Le(1e6)] = 10.0
     """A segment is kept only while its smallest envelope value exceeds this
     factor times the in-band noise floor (the rms envelope of the in-band noise,
     measured on the residual of a decaying phasor fitted window by window:
     docs/decay_analysis.md). 10 keeps segments 20 dB above the floor."""
 
-    edge_time_constants: Annotated[float, Ge(0.0)] = 3.0
+    # After 20 time constants the filter's transient is e^-20 = 2e-9 of the step, below any
+    # recorder's resolution: more drops segments for nothing.
+    edge_time_constants: Annotated[float, Ge(0.0), Le(20.0)] = 3.0
     """Segments closer than this many filter time constants (the band-pass
     envelope settling time, 1 / (pi * bandwidth)) to the excitation peak or to
     the end of the record are dropped as filter end effects."""
@@ -127,35 +148,47 @@ class QualitySettings:
     'at the peak'. 0.9999 keeps a clean sine peak below 2 such samples up to
     about 300 samples per cycle, while a clipped flat top has many."""
 
-    clip_max_samples: Annotated[int, Ge(1)] = 3
+    # A clean sine has about 0.0045 of a cycle within 0.9999 of its peak: 23 samples at the
+    # slowest mode searched (5 Hz) sampled at 25.6 kHz, 900 at 1 MHz; 1000 counts no real
+    # record as clipped.
+    clip_max_samples: Annotated[int, Ge(1), Le(1000)] = 3
     """More samples than this at the peak (a flat top) means the response clipped."""
 
     double_hit_ratio: Annotated[float, Gt(0.0), Lt(1.0)] = 0.3
     """A second force pulse, separated from the first by at least
     ``double_hit_gap_s``, larger than this fraction of the first is a double hit."""
 
-    double_hit_gap_s: Annotated[float, Gt(0.0)] = 0.005
+    # A hammer's rebound follows within milliseconds; a pulse a second later is another test.
+    double_hit_gap_s: Annotated[float, Gt(0.0), Le(1.0)] = 0.005
 
-    min_peak_force_lbf: Annotated[float, Ge(0.0)] = 1.0
+    # 5000 lbf (22 kN) is the range of the largest modal sledge hammers.
+    min_peak_force_lbf: Annotated[float, Ge(0.0), Le(5000.0)] = 1.0
     """Peak hammer force below this (the original trigger level) means no real hit."""
 
-    min_snr_db: float = 20.0
+    # 144 dB is a 24-bit recorder's dynamic range: no record has more.
+    min_snr_db: Annotated[float, Ge(0.0), Le(144.0)] = 20.0
     """Peak in-band envelope over the noise floor, in dB, below which a run is
     too noisy for a decrement."""
 
-    min_segments: Annotated[int, Ge(1)] = 3
+    # A 60 s record of a 125 Hz mode in 10-cycle segments overlapping by half has 1500
+    # segments, of which the noise floor keeps a few hundred: 1000 excludes every real run.
+    min_segments: Annotated[int, Ge(1), Le(1000)] = 3
     """A run that yields fewer usable segments than this is excluded."""
 
-    trigger_tolerance_samples: Annotated[int, Ge(0)] = 5
+    # A hammer pulse rises in under 1 ms: 1000 samples at 1 MHz.
+    trigger_tolerance_samples: Annotated[int, Ge(0), Le(1000)] = 5
     """How far the force's first crossing of the 1 lbf trigger level may sit from
     the stated pre-trigger length: the recorder triggers on its own copy of the
     signal, and the hammer pulse rises over a few samples."""
 
-    min_record_cycles: Annotated[float, Gt(0.0)] = 20.0
+    # A ring-down of a lightly damped joint (zeta 1e-4) falls 20 dB in about 3700 cycles;
+    # 1e5 cycles excludes every real run.
+    min_record_cycles: Annotated[float, Gt(0.0), Le(1e5)] = 20.0
     """Shortest record, in cycles of the mode: three 10-cycle segments overlapping
     by half, plus margin."""
 
-    min_mode_prominence: Annotated[float, Ge(1.0)] = 2.0
+    # 1e4 (80 dB) is above any resonance over its search range's ends (40-170 x measured).
+    min_mode_prominence: Annotated[float, Ge(1.0), Le(1e4)] = 2.0
     """Least ratio of the spectral peak taken as the mode to the spectrum at either
     end of the search range: a resonance inside the range stands 40-170 x above
     both ends (virtual lab and real campaigns), the flank of a mode outside it about
@@ -175,12 +208,15 @@ class DampingFitSettings:
     log_amplitude: bool = True
     """Fit against log10(velocity amplitude) (amplitudes span decades)."""
 
-    bootstrap_samples: Annotated[int, Ge(50)] = 400
+    # The Monte Carlo error of the band's 2.5 % quantile with B resamples is
+    # sqrt(0.025 * 0.975 / B) in coverage: 0.16 % at 10000, far below what 2-200 runs
+    # resolve; 10000 curves on the grid take a few MB and seconds (1e9 took 447 GiB).
+    bootstrap_samples: Annotated[int, Ge(50), Le(10_000)] = 400
     """Bootstrap resamples over runs for confidence bands."""
 
     confidence: Annotated[float, Gt(0.5), Lt(1.0)] = 0.95
 
-    seed: int = 20040614
+    seed: Seed = 20040614
 
 
 @dataclass(frozen=True)
@@ -189,7 +225,9 @@ class ModelSettings:
 
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
 
-    global_samples: Annotated[int, Ge(4)] = 4
+    # Each is one simulated ring-down; 256 is 64 times the default's cost, and the best of 16
+    # was never chosen on 28 fits.
+    global_samples: Annotated[int, Ge(4), Le(256)] = 4
     """Parameter sets tried in the global (quasi-random) stage of each time-domain
     fit, beside the optimum of the averaged model (which has its own global search
     and is far cheaper); they guard against a poor averaged start. Each costs one
@@ -198,18 +236,23 @@ class ModelSettings:
     the best of 16 had 3 to 874 times the averaged start's cost and was never chosen
     (docs/performance.md)."""
 
-    local_starts: Annotated[int, Ge(1)] = 1
+    # Each refined start costs local_iterations batched simulations: 16 is 16 times the default.
+    local_starts: Annotated[int, Ge(1), Le(16)] = 1
     """Best candidates refined by the local optimiser."""
 
-    local_iterations: Annotated[int, Ge(1)] = 4
+    # Each costs one batched simulation; from the averaged start 4 suffice, and 50 (12 times
+    # the default's cost) is far past where Levenberg-Marquardt stops improving.
+    local_iterations: Annotated[int, Ge(1), Le(50)] = 4
     """Levenberg-Marquardt iterations of the time-domain refinement (each costs
     one batched simulation of every parameter perturbation)."""
 
-    steps_per_period: Annotated[int, Ge(8)] = 16
+    # RK4's error falls as h^4: 128 steps (8 x the default) bring the envelope error below
+    # 1e-3 / 8^4 = 2.4e-7, under any recorder's noise, at 8 times the cost (1e9 ran past 300 s).
+    steps_per_period: Annotated[int, Ge(8), Le(128)] = 16
     """Fixed RK4 steps per period of the mode (16 keeps the envelope error below
     1e-3 against a tight-tolerance reference: bench/bench_integrator.py)."""
 
-    seed: int = 1976
+    seed: Seed = 1976
 
 
 @dataclass(frozen=True)
@@ -218,18 +261,25 @@ class DiscoverySettings:
 
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
 
-    global_samples: Annotated[int, Ge(16)] = 256
+    # Rounded up to a power of two (a Sobol set); 4096 points place a sample within a quarter
+    # of each range of a six-parameter box (4096^(-1/6)), at 16 times the default's cost.
+    global_samples: Annotated[int, Ge(16), Le(4096)] = 256
     """Quasi-random parameter sets in the global stage of each averaged-model fit."""
 
-    local_starts: Annotated[int, Ge(1)] = 4
+    # Each start is one local fit, in every fold and resample: 32 is 8 times the default.
+    local_starts: Annotated[int, Ge(1), Le(32)] = 4
     """Best global candidates refined locally."""
 
-    folds: Annotated[int, Ge(2)] = 5
+    # K = min(folds, number of runs); 50 is more runs than a campaign's configuration
+    # holds (the demo's limit is 200 in all), at 10 times the default's cost.
+    folds: Annotated[int, Ge(2), Le(50)] = 5
     """Folds over runs for the held-out error (contiguous amplitude blocks with one run)."""
 
-    seed: int = 1976
+    seed: Seed = 1976
 
-    resamples: Annotated[int, Ge(10)] = 100
+    # Each resample repeats the decision; a confidence's Monte Carlo error is at most
+    # 0.5 / sqrt(B): 5 % at the default, 1.6 % at 1000, at 10 times the cost.
+    resamples: Annotated[int, Ge(10), Le(1000)] = 100
     """Bootstrap resamples of the runs (of amplitude blocks with one run) behind each
     verdict's ``confidence``."""
 
@@ -241,7 +291,8 @@ class DemoSettings:
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
 
     path: str = "results/demo_campaign"
-    seed: int = 2004
+    seed: Seed = 2004
+    # 200 runs in each of the demo's three configurations: 600 run files to generate and analyse.
     runs_per_configuration: Annotated[int, Ge(1), Le(200)] = 10
     frequency_spread: Annotated[float, Ge(0.0), Le(0.01)] = 3e-4
     """Run-to-run relative standard deviation of the natural frequency (the virtual lab's
@@ -265,6 +316,7 @@ class WorkflowConfig:
     """True: a run that cannot be read or fails a quality check stops the workflow.
     False: it is excluded from fits and listed with its reason in runs.parquet."""
 
+    # Runs are analysed one after the other (memory is one run's); 1000 is a 60 s job.
     runs_per_job: Annotated[int, Ge(1), Le(1000)] = 10
     """Run files analysed (read, checked, band-passed, segmented) by one job. Each
     job spends about 0.25 s starting (Python, Snakemake's script preamble, NumPy)

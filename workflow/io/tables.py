@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, SI_TWIN_COLUMNS, UnitSystem
+from workflow.io.units import MODEL_PARAMETER_UNITS, SI_TWIN_COLUMNS
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -50,6 +50,7 @@ COLUMN_UNITS: dict[str, str] = {
     "zeta": "1 (fraction of critical damping)",
     "bearing_area_in2": "in^2",
     "mode_hz": "Hz",
+    "nominal_mode_hz": "Hz",
     "band_low_hz": "Hz",
     "band_high_hz": "Hz",
     "fit_rms": "1 (rms residual of ln envelope)",
@@ -166,10 +167,12 @@ def write_table(
     frame: pd.DataFrame,
     path: Path | str,
     units: Mapping[str, str] | None = None,
-    *,
-    unit_system: UnitSystem = INCH_SECOND,
 ) -> None:
-    """Write ``frame`` as Parquet with each column's unit as field metadata.
+    """Write ``frame`` as Parquet with each column's unit as field metadata, and the SI
+    columns of :func:`with_si_columns` beside the inch-second ones.
+
+    The table is the same whatever config ``units`` says: that choice is how results are
+    shown (figures, report), so changing it re-runs no analysis.
 
     Parameters
     ----------
@@ -179,16 +182,13 @@ def write_table(
         Target file; written atomically.
     units : mapping, optional
         Extra ``column -> unit`` entries beside :data:`COLUMN_UNITS`.
-    unit_system : UnitSystem
-        Config ``units``: in SI the table gains the SI columns of :func:`with_si_columns`.
     """
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     all_units = {**COLUMN_UNITS, **(units or {})}
-    if unit_system.name == "si":
-        frame = with_si_columns(frame)
-        all_units.update({twin: unit for twin, unit, _ in SI_TWIN_COLUMNS.values()})
+    frame = with_si_columns(frame)
+    all_units.update({twin: unit for twin, unit, _ in SI_TWIN_COLUMNS.values()})
     table = pa.Table.from_pandas(frame.reset_index(drop=True), preserve_index=False)
     fields = [
         field.with_metadata({"unit": all_units[field.name]}) if field.name in all_units else field

@@ -32,6 +32,7 @@ __all__ = [
     "UNIT_SYSTEMS",
     "SI_TWIN_COLUMNS",
     "MODEL_PARAMETER_UNITS",
+    "response_in_units",
 ]
 
 
@@ -285,3 +286,30 @@ MODEL_PARAMETER_UNITS: dict[str, tuple[str, str, float]] = {
 }
 """Dahl / LuGre parameter (results/tables/model_fits.parquet) -> (unit as fitted, SI
 unit, factor to SI)."""
+
+
+_SI_RESPONSE_UNITS: dict[str, str] = {"acceleration": "m/s²", "velocity": "m/s", "displacement": "m"}
+
+
+def response_in_units(
+    values: ArrayLike, quantity: str, unit: str, units: UnitSystem
+) -> tuple[NDArray[np.float64], str]:
+    """A recorded response as shown in ``units``: SI converts it (g -> m/s², in/s -> m/s,
+    in -> m); the inch-second system keeps the campaign's own unit.
+
+    Returns
+    -------
+    (ndarray, str)
+        The values and their unit label.
+
+    Examples
+    --------
+    >>> values, label = response_in_units([1.0], "acceleration", "g", SI)
+    >>> round(float(values[0]), 5), label
+    (9.80665, 'm/s²')
+    >>> response_in_units([2.0], "acceleration", "g", INCH_SECOND)[1]
+    'g'
+    """
+    if units.name != "si":
+        return np.asarray(values, dtype=np.float64), unit
+    return to_internal(values, quantity, unit) * INCH_M, _SI_RESPONSE_UNITS[quantity]

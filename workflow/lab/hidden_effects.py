@@ -17,6 +17,7 @@ by a sensor placed elsewhere on the beam (:func:`placed_sensor`).
 from __future__ import annotations
 
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -198,22 +199,31 @@ def generate_case(
     *,
     settings: LabSettings | None = None,
     integrator: str | None = None,
-    mode1_gain: float = 1.0,
+    mode1_gain: float | tuple[float, ...] = 1.0,
     noise_stream: int = 0,
 ) -> tuple[dict, Path]:
     """Generate one hidden-effect campaign in ``work_dir``; (drawn case, campaign folder).
 
     ``settings`` (default ``LabSettings()``, run-to-run variability on) and ``integrator``
     (default :func:`case_integrator`) are passed to
-    :func:`workflow.lab.virtual_lab.generate_campaign`; the campaign is recorded by one
+    :func:`workflow.lab.virtual_lab.generate_campaign`. The campaign is recorded by a
     sensor that sees mode 1 at ``mode1_gain`` times the reference accelerometer
     (:func:`placed_sensor`) with noise stream ``noise_stream``: the same case seen by
-    another sensor has the same physics, hits and run-to-run variations.
+    another sensor has the same physics, hits and run-to-run variations. A tuple of
+    gains records one hit by several sensors: columns ``acc1``, ``acc2``, ... of every
+    run file (noise streams ``noise_stream``, ``noise_stream + 1``, ...), each the column
+    a one-sensor campaign of that gain and stream would hold. The case's ``sensors``
+    lists each sensor's position, noise floor and mode-1 shape ratio to the accelerometer.
     """
     case = draw_case(cause, seed)
     settings = settings if settings is not None else LabSettings()
-    sensor = placed_sensor(case["bearing_area_in2"], mode1_gain, seed, settings)
-    out = Path(work_dir) / f"{cause}_{seed}_sensor{noise_stream}"
+    several = isinstance(mode1_gain, tuple)
+    gains = mode1_gain if several else (mode1_gain,)
+    sensors = tuple(placed_sensor(case["bearing_area_in2"], gain, seed, settings) for gain in gains)
+    if several:
+        sensors = tuple(replace(sensor, name=f"acc{i + 1}") for i, sensor in enumerate(sensors))
+    label = f"sensors{noise_stream}-{noise_stream + len(gains) - 1}" if several else f"sensor{noise_stream}"
+    out = Path(work_dir) / f"{cause}_{seed}_{label}"
     integrator = case_integrator(cause, integrator)
     truth = generate_campaign(
         out,
@@ -225,18 +235,23 @@ def generate_case(
         configurations={"joint": case["bearing_area_in2"]},
         settings=settings,
         integrator=integrator,
-        sensors=(sensor,),
+        sensors=sensors,
         noise_stream=noise_stream,
     )
     configuration = truth["configurations"]["joint"]
-    channel = next(iter(configuration["channels"].values()))
     case = {
         **case,
         "causes": truth["causes"],
         "integrator": integrator,
-        "mode1_gain": mode1_gain,
-        "sensor_position_in": channel["position_in"],
-        "sensor_noise_g": channel["noise_g"],
-        "sensor_mode1_ratio": abs(channel["participation"] / configuration["accelerometer_participation"]),
+        "sensors": [
+            {
+                "name": name,
+                "mode1_gain": gain,
+                "position_in": channel["position_in"],
+                "noise_g": channel["noise_g"],
+                "mode1_ratio": abs(channel["participation"] / configuration["accelerometer_participation"]),
+            }
+            for gain, (name, channel) in zip(gains, configuration["channels"].items(), strict=True)
+        ],
     }
     return case, out

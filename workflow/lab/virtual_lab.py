@@ -17,8 +17,14 @@ joint's equation of motion in time (contact patches: :func:`patch_mode_response_
 Dahl: :func:`workflow.models.ringdown.simulate_ringdown`) instead of the averaged equations, so that the discovery is not tested only on the
 model it fits.
 
+Sensors (:class:`Sensor`) stand at points of the beam and see every mode at its own
+shape value there, each with its own noise; several sensors are columns of one run file
+(or variables of one MAT file). The contact patches may carry a second mechanism (a
+velocity-squared loss, a stiffness term) and may act on mode 2 as well.
+
 The campaign folder follows ``campaign-format.md``; the truth is written
-beside it as ``<campaign_dir>.truth.json``, never inside.
+beside it as ``<campaign_dir>.truth.json`` (mode 2's as ``<campaign_dir>.mode2.truth.json``),
+never inside.
 """
 
 from __future__ import annotations
@@ -542,6 +548,11 @@ def mode_table(
     )
     omega0 = setup.omega0_rad_s * run.frequency_factor
     zeta, omega = contact.equivalent_damping(a, omega0, run.zeta0, d, loss)
+    _, cubic = effect_coefficients(setup, effect, effect_size)
+    if cubic:
+        # Energy balance: a cubic spring's energy at amplitude a grows as
+        # (omega^2 + k3 a^2 / 4) a da, not omega^2 a da (omega^2 holds only 3/4 k3 a^2)
+        zeta = zeta * omega**2 / (omega**2 + 0.25 * cubic * a**2)
     return ModeTable.build(a, zeta, omega)
 
 
@@ -1137,7 +1148,9 @@ def _campaign_yaml(name, configurations, modes_hz, sample_rate_hz, channels=None
         f"sample_rate_hz: {sample_rate_hz:g}",
         f"pretrigger_samples: {PRETRIGGER_SAMPLES}",
     ]
-    if len(modes_hz) == 1:
+    if modes_hz == "auto":
+        lines.append("modes_hz: auto")
+    elif len(modes_hz) == 1:
         lines.append(f"mode_hz: {modes_hz[0]:g}")
     else:
         lines.append("modes_hz: [" + ", ".join(f"{f:g}" for f in modes_hz) + "]")
@@ -1176,6 +1189,7 @@ def generate_campaign(
     noise_stream=0,
     nonlinear_modes=1,
     file_format="txt",
+    modes_auto=False,
 ) -> dict:
     """Write a simulated campaign folder and its truth; return mode 1's truth dict.
 
@@ -1227,6 +1241,9 @@ def generate_campaign(
     file_format : {"txt", "mat"}
         Run files as ASCII exports or MATLAB 5 MAT files (``t``, ``force``, one variable
         per sensor).
+    modes_auto : bool
+        campaign.yaml asks for every mode the analysis finds (``modes_hz: auto``) instead
+        of listing the simulated ones.
     """
     if joint not in ("patches", "dahl"):
         raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")
@@ -1301,7 +1318,7 @@ def generate_campaign(
         _campaign_yaml(
             f"virtual-lab-{joint}-{effect or 'baseline'}-{seed}",
             configurations,
-            [round(f) for f in modes_hz],
+            "auto" if modes_auto else [round(f) for f in modes_hz],
             settings.sample_rate_hz,
             channels=names if len(sensors) > 1 else None,
             file_format=file_format,
@@ -1474,3 +1491,37 @@ def sensor_at_gain(
         raise ValueError(f"no point of the beam sees mode 1 at {gain:g} times the accelerometer")
     x_acc = settings.joint.geometry.accelerometer_x_in
     return Sensor(name, float(positions[np.argmin(np.abs(positions - x_acc))]))
+
+
+HIT_SENSOR_GAINS = {"acc1": 1.0, "acc2": 0.05, "acc3": 2.0}
+"""The one-hit record's sensors: mode 1 at each relative to the reference accelerometer
+(acc2 near a node of mode 1, acc3 towards a free end)."""
+
+
+def generate_one_hit(
+    out_dir, *, seed=7, sample_rate_hz=12800.0, duration_s=5.0, bearing_area_in2=1.36
+) -> dict:
+    """One hammer hit recorded by three accelerometers, as one MAT 5 file.
+
+    The shape of a real multi-sensor impact test: a campaign of one configuration
+    (``hit``) and one run, ``hit/run01.mat`` holding ``t``, ``force`` and ``acc1``-``acc3``
+    (``HIT_SENSOR_GAINS``), the joint acting on modes 1 and 2, campaign.yaml asking for
+    every mode (``modes_hz: auto``) and every channel. Returns mode 1's truth (mode 2's
+    is at ``truth_path(out_dir, 2)``).
+    """
+    settings = LabSettings(
+        sample_rate_hz=sample_rate_hz, samples_per_run=int(round(duration_s * sample_rate_hz))
+    )
+    mode = setup_configuration("hit", bearing_area_in2, settings)[0].mode
+    sensors = tuple(sensor_at_gain(mode, settings, gain, name) for name, gain in HIT_SENSOR_GAINS.items())
+    return generate_campaign(
+        out_dir,
+        seed=seed,
+        runs_per_configuration=1,
+        configurations={"hit": bearing_area_in2},
+        settings=settings,
+        sensors=sensors,
+        nonlinear_modes=2,
+        file_format="mat",
+        modes_auto=True,
+    )

@@ -57,6 +57,7 @@ import functools
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from workflow.io.settings import AnalysisSettings
 
@@ -148,21 +149,38 @@ def _check_band(fs_hz: float, band_hz: tuple[float, float], order: int) -> tuple
     return low_hz, high_hz
 
 
+def _fast_fft_length(n: int) -> int:
+    """Smallest ``2**a * 3**b * 5**c`` not below ``n``: a length NumPy's FFT transforms
+    fast (``scipy.fft.next_fast_len`` would do, but importing ``scipy.fft`` costs a
+    run-analysis job 0.1-0.2 s, more than the transforms it would speed up)."""
+    best = 1 << max(0, int(n - 1).bit_length())
+    power5 = 1
+    while power5 < best:
+        power35 = power5
+        while power35 < best:
+            # the smallest power of 2 that brings power35 to n or above
+            candidate = power35 << max(0, int(-(-n // power35) - 1).bit_length())
+            best = min(best, candidate)
+            power35 *= 3
+        power5 *= 5
+    return best
+
+
 def _zero_phase_spectrum(
     x: np.ndarray, fs_hz: float, band_hz: tuple[float, float], order: int
 ) -> tuple[np.ndarray, int, int]:
-    """Spectrum of the odd-extended, zero-padded record times |H|^2.
+    """One-sided spectrum (``rfft``) of the odd-extended, zero-padded record times |H|^2.
 
-    Returns the two-sided filtered spectrum, the extension length and the padded
+    Returns the filtered one-sided spectrum, the extension length and the padded
     length. The record is extended at each end by a point reflection (continuous
     value and slope) of ``3 * (order + 1)`` samples, the length
-    ``scipy.signal.sosfiltfilt`` pads by, then zero-padded by 40 slowest-pole time
-    constants so that the filter's impulse response (down by e^-40 there) does not
-    wrap around. The extension is short on purpose: for an oscillation the point
-    reflection equals the true continuation plus ``2 x_end (1 - cos(omega k))``, an
-    in-band artefact that grows with the extension's length ``k`` (measured on a
-    125 Hz decay: the last segment's damping error was +1.3 % with this length,
-    -7.7 % with 15 time constants).
+    ``scipy.signal.sosfiltfilt`` pads by, then zero-padded by at least 40 slowest-pole
+    time constants (to a length the FFT transforms fast) so that the filter's impulse
+    response (down by e^-40 there) does not wrap around. The extension is short on
+    purpose: for an oscillation the point reflection equals the true continuation plus
+    ``2 x_end (1 - cos(omega k))``, an in-band artefact that grows with the extension's
+    length ``k`` (measured on a 125 Hz decay: the last segment's damping error was
+    +1.3 % with this length, -7.7 % with 15 time constants).
     """
     n = x.size
     tau_samples = slowest_pole_time_constant_s(band_hz, order) * fs_hz
@@ -170,8 +188,8 @@ def _zero_phase_spectrum(
     head = 2.0 * x[0] - x[extension:0:-1]
     tail = 2.0 * x[-1] - x[-2 : -extension - 2 : -1]
     extended = np.concatenate([head, x, tail])
-    padded = 1 << int(np.ceil(np.log2(extended.size + 40.0 * tau_samples)))
-    spectrum = np.fft.fft(extended, padded)
+    padded = _fast_fft_length(int(np.ceil(extended.size + 40.0 * tau_samples)))
+    spectrum = np.fft.rfft(extended, padded)
     del extended
     # In place: a long record's padded spectrum is the largest array of a run's analysis.
     spectrum *= _padded_band_power(padded, float(fs_hz), (float(band_hz[0]), float(band_hz[1])), order)
@@ -180,10 +198,10 @@ def _zero_phase_spectrum(
 
 @functools.lru_cache(maxsize=2)
 def _padded_band_power(padded: int, fs_hz: float, band_hz: tuple[float, float], order: int) -> np.ndarray:
-    """|H|^2 on the FFT grid of ``padded`` samples (read-only). Kept for the next call:
-    the records of a run group or of a fit's simulated batch share their length, rate
-    and band, and this was a quarter of each one's analysis."""
-    frequency_hz = np.abs(np.fft.fftfreq(padded, d=1.0 / fs_hz))
+    """|H|^2 on the one-sided FFT grid of ``padded`` samples (read-only). Kept for the
+    next call: the records of a run group or of a fit's simulated batch share their
+    length, rate and band, and this was a quarter of each one's analysis."""
+    frequency_hz = np.fft.rfftfreq(padded, d=1.0 / fs_hz)
     power = butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order)
     power.flags.writeable = False
     return power
@@ -224,8 +242,8 @@ def bandpass(
     """
     x = np.asarray(x, dtype=float)
     _check_band(fs_hz, band_hz, order)
-    spectrum, extension, _ = _zero_phase_spectrum(x, fs_hz, band_hz, order)
-    return np.fft.ifft(spectrum)[extension : extension + x.size].real
+    spectrum, extension, padded = _zero_phase_spectrum(x, fs_hz, band_hz, order)
+    return np.fft.irfft(spectrum, padded)[extension : extension + x.size]
 
 
 def filter_time_constant_s(band_hz: tuple[float, float]) -> float:
@@ -323,9 +341,14 @@ def analytic_bandpass(
     x = np.asarray(x, dtype=float)
     _check_band(fs_hz, band_hz, order)
     spectrum, extension, padded = _zero_phase_spectrum(x, fs_hz, band_hz, order)
-    spectrum *= _analytic_mask(padded)
-    padded_signal = np.fft.ifft(spectrum)
+    # The analytic signal's spectrum is the one-sided one doubled (DC and Nyquist once),
+    # zero at negative frequencies.
+    two_sided = np.zeros(padded, dtype=complex)
+    two_sided[: spectrum.size] = spectrum
     del spectrum
+    two_sided[1 : (padded + 1) // 2] *= 2.0
+    padded_signal = np.fft.ifft(two_sided)
+    del two_sided
     # A copy of the record's part, so that the padded signal is freed on return.
     return padded_signal[extension : extension + x.size].copy()
 
@@ -371,28 +394,39 @@ def segment_bounds(
     return starts, starts + length
 
 
-def _line_fits(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Least-squares ``y = a + b t`` of each row of ``t``, ``y`` (shape (K, L)), t
-    centred per row; returns (a at centre, b, rms residual), each of shape (K,)."""
-    t_centred = t - t.mean(axis=1, keepdims=True)
+def _centred_times_s(length: int, fs_hz: float) -> np.ndarray:
+    """Sample times of a window of ``length`` samples from its centre, s (mean 0)."""
+    return (np.arange(length) - 0.5 * (length - 1)) / fs_hz
+
+
+def _line_fits(t_centred: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Least-squares ``y = a + b t`` of each row of ``y`` (shape (K, L)) against the
+    times ``t_centred`` (shape (L,), mean 0) shared by every row; returns (a at the
+    centre, b, rms residual), each of shape (K,)."""
     intercept = y.mean(axis=1)
     y_centred = y - intercept[:, None]
-    # a dot product per row (not one einsum): the same sums, to the last bit, as a line
-    # fitted alone
-    slope = np.array([np.dot(a, b) / np.dot(a, a) for a, b in zip(t_centred, y_centred)])
-    residual = y - intercept[:, None] - slope[:, None] * t_centred
-    return intercept, slope, np.sqrt(np.mean(residual**2, axis=1))
-
-
-def _line_fit(t: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """:func:`_line_fits` of one line: (a at centre, b, rms residual)."""
-    intercept, slope, rms = _line_fits(t[None, :], y[None, :])
-    return float(intercept[0]), float(slope[0]), float(rms[0])
+    # Sums along each row (not einsum, whose order depends on the shape, nor np.dot,
+    # a threaded BLAS call that stalls on a loaded machine): a row gives the same
+    # sums, to the last bit, whether fitted alone or beside others.
+    slope = np.sum(y_centred * t_centred, axis=1) / np.sum(t_centred * t_centred)
+    y_centred -= slope[:, None] * t_centred
+    return intercept, slope, np.sqrt(np.mean(y_centred**2, axis=1))
 
 
 SEGMENT_BLOCK_SAMPLES = 2**20
 """Segments are analysed in blocks of at most this many samples (all their samples
 side by side, so that a long record's overlapping segments do not fill memory)."""
+
+
+def _segment_blocks(starts: np.ndarray, stops: np.ndarray):
+    """Yield ``(rows, length)``: indices of segments of one length, at most
+    :data:`SEGMENT_BLOCK_SAMPLES` samples of them at a time."""
+    lengths = np.asarray(stops) - np.asarray(starts)
+    for length in np.unique(lengths):
+        same = np.flatnonzero(lengths == length)
+        per_block = max(1, SEGMENT_BLOCK_SAMPLES // max(int(length), 1))
+        for rows in np.array_split(same, -(-same.size // per_block)):
+            yield rows, int(length)
 
 
 def log_decrement_segments(
@@ -463,26 +497,28 @@ def log_decrement_segments(
             "min_envelope",
         )
     }
-    lengths = stops - starts
-    for length in np.unique(lengths):
-        same = np.flatnonzero(lengths == length)
-        per_block = max(1, SEGMENT_BLOCK_SAMPLES // max(int(length), 1))
-        for rows in np.array_split(same, -(-same.size // per_block)):
-            samples = starts[rows, None] + np.arange(length)
-            t = samples / fs_hz
-            values = envelope[samples]
-            out["t_s"][rows] = t.mean(axis=1)
-            out["amplitude"][rows] = values.mean(axis=1)
-            out["min_envelope"][rows] = values.min(axis=1)
-            # ln undefined where the envelope touches 0: left NaN, flagged invalid_fit
-            # by analyse_decay
-            fit = values.min(axis=1) > 0.0
-            rows, samples, t = rows[fit], samples[fit], t[fit]
-            _, slope, out["fit_rms"][rows] = _line_fits(t, np.log(values[fit]))
-            _, omega_d, out["phase_rms_rad"][rows] = _line_fits(t, phase_rad[samples])
-            out["decay_rate_1_s"][rows] = -slope
-            out["zeta"][rows] = -slope / np.hypot(slope, omega_d)
-            out["frequency_hz"][rows] = omega_d / (2.0 * np.pi)
+    with np.errstate(divide="ignore"):
+        # ln undefined where the envelope touches 0: those segments are left NaN,
+        # flagged invalid_fit by analyse_decay
+        log_envelope = np.log(envelope)
+    for rows, length in _segment_blocks(starts, stops):
+        t_centred = _centred_times_s(length, fs_hz)
+        # every segment of this length as a row of a view (no copy until indexed)
+        envelope_rows, log_rows, phase_rows = (
+            sliding_window_view(values, length) for values in (envelope, log_envelope, phase_rad)
+        )
+        first = starts[rows]
+        values = envelope_rows[first]
+        out["t_s"][rows] = (first + 0.5 * (length - 1)) / fs_hz
+        out["amplitude"][rows] = values.mean(axis=1)
+        out["min_envelope"][rows] = values.min(axis=1)
+        fit = out["min_envelope"][rows] > 0.0
+        rows, first = rows[fit], first[fit]
+        _, slope, out["fit_rms"][rows] = _line_fits(t_centred, log_rows[first])
+        _, omega_d, out["phase_rms_rad"][rows] = _line_fits(t_centred, phase_rows[first])
+        out["decay_rate_1_s"][rows] = -slope
+        out["zeta"][rows] = -slope / np.hypot(slope, omega_d)
+        out["frequency_hz"][rows] = omega_d / (2.0 * np.pi)
     out["start_index"] = starts.copy()
     out["stop_index"] = stops.copy()
     return out
@@ -555,23 +591,29 @@ def noise_floor(
         window_samples = max(2, stop_index - start_index)
     if stop_index - start_index < 2:
         raise ValueError("noise_floor needs at least 2 samples in [start_index, stop_index)")
-    estimates = []
-    for start in range(start_index, stop_index - window_samples + 1, window_samples):
-        values = envelope[start : start + window_samples]
-        level = float(np.sqrt(np.mean(values**2)))
-        if phase_rad is not None and values.min() > 0:
-            t = np.arange(values.size) / fs_hz
-            a, s, _ = _line_fit(t, np.log(values))
-            phi0, omega, _ = _line_fit(t, phase_rad[start : start + window_samples])
-            t_centred = t - t.mean()
-            model = np.exp(a + s * t_centred + 1j * (phi0 + omega * t_centred))
-            data = values * np.exp(1j * phase_rad[start : start + window_samples])
-            residual = float(np.sqrt(np.mean(np.abs(data - model) ** 2)))
+    count = (stop_index - start_index) // window_samples
+    windows = envelope[start_index : start_index + count * window_samples].reshape(count, window_samples)
+    estimates = np.sqrt(np.mean(windows**2, axis=1))
+    if phase_rad is not None:
+        phases = np.asarray(phase_rad, dtype=float)[start_index : start_index + count * window_samples]
+        phases = phases.reshape(count, window_samples)
+        t_centred = _centred_times_s(window_samples, fs_hz)
+        fitted = np.flatnonzero(windows.min(axis=1) > 0)
+        per_block = max(1, SEGMENT_BLOCK_SAMPLES // window_samples)
+        for rows in np.array_split(fitted, -(-fitted.size // per_block)) if fitted.size else ():
+            values, phase = windows[rows], phases[rows]
+            a, s, _ = _line_fits(t_centred, np.log(values))
+            phi0, omega, _ = _line_fits(t_centred, phase)
+            # |v e^(i phase) - m e^(i psi)|^2 = (v - m)^2 + 4 v m sin^2((phase - psi) / 2):
+            # the complex residual without complex exponentials or cancellation
+            model = np.exp(a[:, None] + s[:, None] * t_centred)
+            half_angle = 0.5 * (phase - phi0[:, None] - omega[:, None] * t_centred)
+            squared = (values - model) ** 2 + 4.0 * values * model * np.sin(half_angle) ** 2
+            residual = np.sqrt(np.mean(squared, axis=1))
             if bandwidth_hz is not None:
-                dof = bandwidth_hz * values.size / fs_hz
+                dof = bandwidth_hz * window_samples / fs_hz
                 residual = residual / np.sqrt(max(1.0 - 4.0 / dof, 0.25))
-            level = min(level, residual)
-        estimates.append(level)
+            estimates[rows] = np.minimum(estimates[rows], residual)
     # "lower": an actual window's value, so that with a few windows one clean window
     # is enough (interpolating towards a window spoilt by a transient is not).
     return float(np.quantile(estimates, quantile, method="lower"))
@@ -595,9 +637,9 @@ def envelope_rise(envelope: np.ndarray, starts: np.ndarray, stops: np.ndarray) -
     """
     envelope = np.asarray(envelope, dtype=float)
     rises = np.zeros(len(starts))
-    for k, (start, stop) in enumerate(zip(starts, stops)):
-        values = envelope[start:stop]
-        rises[k] = float(np.max(values - np.minimum.accumulate(values)))
+    for rows, length in _segment_blocks(starts, stops):
+        values = sliding_window_view(envelope, length)[np.asarray(starts)[rows]]
+        rises[rows] = np.max(values - np.minimum.accumulate(values, axis=1), axis=1)
     return rises
 
 
@@ -671,12 +713,13 @@ def _noise_standard_errors(
     sigma = floor / np.sqrt(2.0)
     zeta_std = np.full(starts.size, np.nan)
     frequency_std = np.full(starts.size, np.nan)
-    for k, (start, stop) in enumerate(zip(starts, stops)):
-        duration_s = (stop - start) / fs_hz
-        relative = np.mean((sigma / np.maximum(env[start:stop], 1e-300)) ** 2)
+    relative_power = (sigma / np.maximum(env, 1e-300)) ** 2
+    for rows, length in _segment_blocks(starts, stops):
+        duration_s = length / fs_hz
+        relative = sliding_window_view(relative_power, length)[starts[rows]].mean(axis=1)
         slope_std = np.sqrt(12.0 * relative / (bandwidth_hz * duration_s**3))
-        zeta_std[k] = slope_std / (2.0 * np.pi * frequency_hz[k])
-        frequency_std[k] = slope_std / (2.0 * np.pi)
+        zeta_std[rows] = slope_std / (2.0 * np.pi * frequency_hz[rows])
+        frequency_std[rows] = slope_std / (2.0 * np.pi)
     return zeta_std, frequency_std
 
 

@@ -19,7 +19,31 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["h1_frf", "response_spectrum", "find_mode_hz", "band_around"]
+__all__ = [
+    "h1_frf",
+    "response_spectrum",
+    "find_mode_hz",
+    "band_around",
+    "line_hold_fraction",
+    "forced_line_problem",
+    "find_decaying_modes",
+]
+
+LINE_TRACK_RELATIVE_WIDTH: float = 0.01
+"""Standard deviation of the Gaussian band that tracks one spectral line's amplitude over
+time, as a fraction of the line's frequency: lines 4 % apart (a shaker's 18.000 Hz
+harmonic beside an 18.79 Hz mode) are separated by more than 60 dB, and the track's time
+resolution, 1 / (2 pi 0.01 f), is 16 periods of the line."""
+
+STATIONARY_HOLD_FRACTION: float = 0.5
+"""A spectral line whose amplitude stays within 3 dB of its peak over at least this
+fraction of the analysis window does not decay there: an exponential decay holds 3 dB
+for ln(2) / 2 / sigma, so holding half the window means falling by less than a factor 2
+across all of it. Such a line is forced (a shaker dwell, mains hum), not a mode."""
+
+CLEAR_MODE_OVER_FLOOR: float = 10.0
+"""Least ratio of a mode's spectral amplitude to the spectrum's median amplitude over
+the searched range (20 dB above the noise floor) for ``modes_hz: auto`` to take it."""
 
 
 def _as_runs(runs: Sequence[np.ndarray], name: str) -> list[np.ndarray]:
@@ -259,3 +283,156 @@ def band_around(mode_hz: float, half_width_fraction: float) -> tuple[float, floa
     if not 0 < half_width_fraction < 1:
         raise ValueError(f"half_width_fraction must lie in (0, 1), got {half_width_fraction}")
     return (mode_hz * (1.0 - half_width_fraction), mode_hz * (1.0 + half_width_fraction))
+
+
+def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_hz: float) -> float:
+    """Fraction of the record over which a spectral line stays within 3 dB of its peak.
+
+    Each run's amplitude at ``line_hz`` is tracked over time through a Gaussian band of
+    standard deviation :data:`LINE_TRACK_RELATIVE_WIDTH` x ``line_hz`` (analytic signal
+    from the FFT, no sidelobes); three track time constants at each end are left out.
+    A free decay gives a small fraction (ln 2 / 2 over its decay exponent across the
+    window); a forced line, steady while the record lasts, gives nearly 1.
+
+    Parameters
+    ----------
+    response_runs : sequence of 1-D array_like
+        The analysed part of each run, any unit.
+    fs_hz : float
+        Sample rate, Hz.
+    line_hz : float
+        Frequency of the line, Hz (below ``fs_hz / 2``).
+
+    Returns
+    -------
+    float
+        The median over runs, in [0, 1]; 0 when no run is long enough to track it.
+    """
+    sigma_hz = LINE_TRACK_RELATIVE_WIDTH * line_hz
+    edge_s = 3.0 / (2.0 * np.pi * sigma_hz)
+    fractions = []
+    for run in _as_runs(response_runs, "response_runs"):
+        edge = int(np.ceil(edge_s * fs_hz))
+        if run.size <= 4 * edge:
+            continue
+        frequency_hz = np.fft.fftfreq(run.size, 1.0 / fs_hz)
+        gain = np.exp(-0.5 * ((frequency_hz - line_hz) / sigma_hz) ** 2)
+        track = np.abs(np.fft.ifft(np.fft.fft(run - run.mean()) * gain))[edge:-edge]
+        peak = track.max()
+        fractions.append(float(np.mean(track >= peak / np.sqrt(2.0))) if peak > 0 else 0.0)
+    return float(np.median(fractions)) if fractions else 0.0
+
+
+def forced_line_problem(
+    response_runs: Sequence[np.ndarray],
+    fs_hz: float,
+    line_hz: float,
+    frequency_hz: np.ndarray,
+    magnitude: np.ndarray,
+) -> str | None:
+    """Why the spectral line at ``line_hz`` is not a mode (it does not decay in the
+    analysis window, :func:`line_hold_fraction`), or None when it decays.
+
+    The message names the line and, when it sits at 2 to 5 times a lower line that does
+    not decay either, says which harmonic of that line it is (a shaker dwell's).
+    """
+    hold = line_hold_fraction(response_runs, fs_hz, line_hz)
+    if hold < STATIONARY_HOLD_FRACTION:
+        return None
+    step_hz = float(frequency_hz[1] - frequency_hz[0])
+    harmonic = ""
+    for order in range(2, 6):
+        base_hz = line_hz / order
+        if base_hz < 2 * step_hz:
+            break
+        near = np.abs(frequency_hz - base_hz) <= 1.5 * step_hz
+        if not near.any():
+            continue
+        local = np.asarray(np.abs(magnitude))[near]
+        # a line there: well above the spectrum around it, and steady too
+        around = np.abs(frequency_hz - base_hz) <= 0.1 * base_hz
+        if local.max() < 10.0 * np.median(np.abs(np.asarray(magnitude))[around]):
+            continue
+        if line_hold_fraction(response_runs, fs_hz, base_hz) >= STATIONARY_HOLD_FRACTION:
+            suffix = {2: "nd", 3: "rd"}.get(order, "th")
+            harmonic = f", the {order}{suffix} harmonic of the steady line at {base_hz:.3f} Hz"
+            break
+    return (
+        f"the spectral line at {line_hz:.3f} Hz does not decay in the analysis window: it stays "
+        f"within 3 dB of its peak over {100 * hold:.0f} % of it (a mode's free decay falls by more "
+        f"than half across the window){harmonic}; it is a forced line (a shaker dwell, hum), not a mode"
+    )
+
+
+def _local_peaks(
+    frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tuple[float, float]
+) -> np.ndarray:
+    """Indices of the bins above both neighbours inside the search range, largest first."""
+    inner = np.arange(1, magnitude.size - 1)
+    is_peak = (magnitude[inner] > magnitude[inner - 1]) & (magnitude[inner] >= magnitude[inner + 1])
+    in_range = (frequency_hz[inner] >= search_hz[0]) & (frequency_hz[inner] <= search_hz[1])
+    peaks = inner[is_peak & in_range]
+    return peaks[np.argsort(magnitude[peaks])[::-1]]
+
+
+def find_decaying_modes(
+    response_runs: Sequence[np.ndarray],
+    fs_hz: float,
+    frequency_hz: np.ndarray,
+    magnitude: np.ndarray,
+    search_hz: tuple[float, float],
+    band_half_width: float,
+    min_prominence: float,
+) -> tuple[list[float], list[str]]:
+    """Every clear, decaying mode of a spectrum (``modes_hz: auto``).
+
+    A peak is a clear mode when it is the largest within its own band (``band_half_width``
+    of its frequency on either side), stands ``min_prominence`` times above the spectrum
+    at both band edges, and :data:`CLEAR_MODE_OVER_FLOOR` times above the spectrum's
+    median over ``search_hz``; it is a mode only when it decays in the analysis window
+    (:func:`forced_line_problem`).
+
+    Parameters
+    ----------
+    response_runs : sequence of 1-D array_like
+        The analysed part of each run (and channel).
+    fs_hz : float
+        Sample rate, Hz.
+    frequency_hz, magnitude : ndarray
+        The spectrum (an amplitude: ``|H1|`` or the square root of a PSD).
+    search_hz : (float, float)
+        Where modes are looked for, Hz.
+    band_half_width : float
+        Half width of a mode's band, fraction of its frequency.
+    min_prominence : float
+        Least ratio of a mode's amplitude to the spectrum at its band's edges.
+
+    Returns
+    -------
+    modes_hz : list of float
+        The modes, increasing, each refined as :func:`find_mode_hz` does.
+    left_out : list of str
+        Why each clear peak that is not a mode was left out (a forced line).
+    """
+    frequency_hz = np.asarray(frequency_hz, dtype=float)
+    magnitude = np.abs(np.asarray(magnitude, dtype=float))
+    magnitude = np.where(np.isfinite(magnitude), magnitude, 0.0)
+    in_range = (frequency_hz >= search_hz[0]) & (frequency_hz <= search_hz[1])
+    floor = float(np.median(magnitude[in_range])) if in_range.any() else 0.0
+    modes_hz, left_out = [], []
+    for peak in _local_peaks(frequency_hz, magnitude, search_hz):
+        peak_hz = float(frequency_hz[peak])
+        band = band_around(peak_hz, band_half_width)
+        in_band = (frequency_hz >= band[0]) & (frequency_hz <= band[1])
+        if magnitude[peak] < magnitude[in_band].max() or magnitude[peak] < CLEAR_MODE_OVER_FLOOR * floor:
+            continue
+        edges = np.interp(band, frequency_hz, magnitude)
+        if magnitude[peak] < min_prominence * edges.max():
+            continue
+        mode_hz = find_mode_hz(frequency_hz, magnitude, band)
+        problem = forced_line_problem(response_runs, fs_hz, mode_hz, frequency_hz, magnitude)
+        if problem is not None:
+            left_out.append(problem)
+            continue
+        modes_hz.append(mode_hz)
+    return sorted(modes_hz), left_out

@@ -355,7 +355,9 @@ QC_COLUMNS: list[str] = ["check", "applied", "passed", "value", "threshold", "un
 
 
 def quality_columns(configuration: str, run: str, rows: list[dict]) -> dict[str, np.ndarray]:
-    """One run's quality rows as typed columns, led by ``configuration`` and ``run``.
+    """One run's quality rows as typed columns, led by ``configuration``, ``run``, ``mode``
+    (the index of the configuration's mode, -1 for a record-level check) and ``channel``
+    (empty for a file that could not be read).
 
     A passed check's ``reason`` (None in the rows) is the empty string.
     """
@@ -363,6 +365,8 @@ def quality_columns(configuration: str, run: str, rows: list[dict]) -> dict[str,
     return {
         "configuration": np.full(n, configuration),
         "run": np.full(n, run),
+        "mode": np.array([row.get("mode", -1) for row in rows], dtype=int),
+        "channel": np.array([row.get("channel", "") for row in rows], dtype=str),
         "check": np.array([row["check"] for row in rows], dtype=str),
         "applied": np.array([row["applied"] for row in rows], dtype=bool),
         "passed": np.array([row["passed"] for row in rows], dtype=bool),

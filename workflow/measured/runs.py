@@ -18,8 +18,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from workflow.io import units
-from workflow.io.campaign import RunRecord
+from workflow.io.campaign import SINGLE_CHANNEL_NAME, RunRecord
 from workflow.io.interim import ConfigurationMode, ModeInfo
+from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, quoted, shortened
+from workflow.io.record_rules import rates_agree
 from workflow.io.settings import (
     AnalysisSettings,
     DampingFitSettings,
@@ -36,21 +38,38 @@ if TYPE_CHECKING:
 
 __all__ = [
     "analysis_window",
+    "window_problem",
     "mode_search_range",
+    "WINDOW_ADVICE",
+    "channel_responses",
     "identify_mode",
     "RUN_COLUMNS",
     "SEGMENT_COLUMNS",
     "empty_segments",
     "analyse_run_with_quality",
     "read_with_quality",
+    "labelled",
+    "analyse_every_mode_and_channel",
     "failed_checks",
     "read_and_check",
     "RunAnalysis",
     "analyse_run_file",
     "identify_configuration_mode",
+    "identify_configuration_modes",
+    "find_every_mode",
     "analyse_campaign",
+    "response_unit_label",
+    "nominal_modes_hz",
+    "with_nominal_mode",
+    "first_mode_and_channel",
+    "with_mode_and_channel",
+    "first_mode_rows",
     "collect_tables",
+    "NOTHING_ANALYSED",
+    "nothing_analysed_message",
+    "nothing_analysed_in_tables",
     "fit_damping_curves",
+    "fit_mode_damping_curves",
 ]
 
 
@@ -62,11 +81,32 @@ def analysis_window(record: RunRecord, window_s: tuple[float, float] | None) -> 
     """
     if window_s is None:
         return 0, record.n_samples
-    start = int(round(window_s[0] * record.sample_rate_hz))
-    stop = int(round(window_s[1] * record.sample_rate_hz))
-    start = min(max(start, 0), record.n_samples)
-    stop = min(max(stop, start), record.n_samples)
+    # clamped before rounding: a window end of 1e308 s is past the record, not an overflow
+    start = int(round(min(max(window_s[0] * record.sample_rate_hz, 0.0), record.n_samples)))
+    stop = int(round(min(max(window_s[1] * record.sample_rate_hz, start), record.n_samples)))
     return start, stop
+
+
+def window_problem(record: RunRecord, window_s: tuple[float, float] | None, configuration: str) -> str | None:
+    """Why campaign.yaml's ``window_s`` leaves too little of a record to analyse, or None.
+
+    The window is the part of every run to analyse, in s from the start of the file
+    (campaign-format.md); the part of it inside the record must hold at least
+    :data:`~workflow.io.campaign.MIN_SAMPLES` samples, as a whole run file must.
+    """
+    from workflow.io.campaign import MIN_SAMPLES
+
+    if window_s is None:
+        return None
+    start, stop = analysis_window(record, window_s)
+    if stop - start >= MIN_SAMPLES:
+        return None
+    return (
+        f"campaign.yaml configurations.{configuration}.window_s [{window_s[0]:.6g}, {window_s[1]:.6g}] s "
+        f"holds {stop - start} samples of this record, which spans 0 to "
+        f"{record.n_samples / record.sample_rate_hz:.6g} s ({record.n_samples} samples at "
+        f"{record.sample_rate_hz:.6g} Hz); the part of the run to analyse needs at least {MIN_SAMPLES} samples"
+    )
 
 
 def mode_search_range(
@@ -84,6 +124,36 @@ def mode_search_range(
     if mode_search_hz is not None:
         return mode_search_hz
     return 5.0, 0.4 * sample_rate_hz
+
+
+WINDOW_ADVICE = (
+    "give the configuration window_s: [start, end] in campaign.yaml, the seconds of every run "
+    "where the free decay is (after the excitation stops)"
+)
+"""What a message about a line that does not decay asks the user for."""
+
+
+def channel_responses(
+    records: list[RunRecord], windows: list[tuple[int, int]]
+) -> tuple[list[np.ndarray], list[tuple[RunRecord, tuple[int, int]]]]:
+    """The analysed part of every response channel of every run, for the mode search, and
+    the run and window each comes from. With several channels each is divided by its RMS
+    over every run, so that a sensor in a larger unit (or nearer an antinode) does not
+    hide the modes the others see; one channel is left as recorded."""
+    parts, owners, names = [], [], []
+    for record, (start, stop) in zip(records, windows):
+        for channel in record.responses or (None,):
+            values = record.response if channel is None else channel.values
+            parts.append(values[start:stop])
+            owners.append((record, (start, stop)))
+            names.append(None if channel is None else channel.name)
+    if len(set(names)) > 1:
+        for name in set(names):
+            mine = [i for i, other in enumerate(names) if other == name]
+            rms = np.sqrt(np.mean(np.concatenate([parts[i] for i in mine]) ** 2))
+            for i in mine:
+                parts[i] = parts[i] / rms if rms > 0 else parts[i]
+    return parts, owners
 
 
 def identify_mode(
@@ -107,10 +177,10 @@ def identify_mode(
         raise ValueError("no readable run to identify the mode from")
     sample_rate_hz = records[0].sample_rate_hz
     search_hz = mode_search_range(sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction)
-    responses = [record.response[start:stop] for record, (start, stop) in zip(records, windows)]
+    responses, owners = channel_responses(records, windows)
     coherence_at_mode = None
     if all(record.force_lbf is not None for record in records):
-        forces = [record.force_lbf[start:stop] for record, (start, stop) in zip(records, windows)]
+        forces = [owner.force_lbf[start:stop] for owner, (start, stop) in owners]
         frequency_hz, h1, coherence = modal_id.h1_frf(forces, responses, sample_rate_hz)
         mode_hz = modal_id.find_mode_hz(frequency_hz, np.abs(h1), search_hz)
         coherence_at_mode = float(np.interp(mode_hz, frequency_hz, coherence))
@@ -127,6 +197,13 @@ def identify_mode(
     )
     if not_a_resonance:
         raise ValueError(not_a_resonance)
+    if not np.isfinite(mode_hz):
+        raise ValueError(f"the {method} spectrum of the runs gives no finite peak frequency")
+    if coherence_at_mode is not None and not np.isfinite(coherence_at_mode):
+        coherence_at_mode = None  # no force energy at the mode: no coherence estimate
+    forced = modal_id.forced_line_problem(responses, sample_rate_hz, mode_hz, frequency_hz, amplitude)
+    if forced is not None:
+        raise ValueError(f"{forced}; {WINDOW_ADVICE}")
     if campaign_band_hz is not None:
         band_hz = (float(campaign_band_hz[0]), float(campaign_band_hz[1]))
     else:
@@ -154,6 +231,8 @@ file states none; :mod:`workflow.io.recording_time`)."""
 SEGMENT_COLUMNS = [
     "configuration",
     "run",
+    "mode",
+    "channel",
     "t_s",
     "response_amplitude",
     "velocity_amplitude_in_s",
@@ -165,7 +244,14 @@ SEGMENT_COLUMNS = [
 ]
 
 
-_SEGMENT_DTYPES = {"configuration": str, "run": str, "kept": bool, "reject_reason": str}
+_SEGMENT_DTYPES = {
+    "configuration": str,
+    "run": str,
+    "mode": int,
+    "channel": str,
+    "kept": bool,
+    "reject_reason": str,
+}
 
 
 def empty_segments() -> dict[str, np.ndarray]:
@@ -264,12 +350,20 @@ def read_with_quality(
         reason = str(error)
     except Exception as error:  # a fault of the reader on one file must not stop the others
         logging.getLogger(__name__).exception("%s: not read", path)
-        reason = (
-            f"{(Path(campaign_dir) / path).as_posix()}: not read: {type(error).__name__}: {error} "
-            "(an error of the reader, not a known fault of the file: the job's log has the trace)"
-        )
+        reason = _fault_reason(campaign_dir, path, "read", error)
     else:
-        return record, quality.quality_rows(record, quality_settings, mode_hz=campaign.mode_hz)
+        requested_hz = [mode_hz for mode_hz, _ in campaign.mode_requests() if mode_hz is not None]
+        names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
+        rows = []
+        for name in names:
+            # the lowest mode asks the most of a record's length in cycles
+            mine = quality.quality_rows(
+                record.for_channel(name) if record.responses else record,
+                quality_settings,
+                mode_hz=min(requested_hz, default=None),
+            )
+            rows += [labelled(row, name, len(names) > 1) for row in mine]
+        return record, rows
     return None, [
         {
             "check": "read",
@@ -281,6 +375,69 @@ def read_with_quality(
             "reason": reason,
         }
     ]
+
+
+def labelled(row: dict, channel: str, several: bool, mode: int = -1, mode_hz: float | None = None) -> dict:
+    """A quality row with the channel and mode (index, -1 for a record-level check) it
+    belongs to; with several channels (or modes) its reason names them."""
+    reason = row["reason"]
+    if reason:
+        where = [f"channel {quoted(channel)}"] if several else []
+        where += [f"mode {mode_hz:.6g} Hz"] if mode_hz is not None else []
+        reason = f"{', '.join(where)}: {reason}" if where else reason
+    return {**row, "reason": reason, "channel": channel, "mode": mode}
+
+
+def _window_problems(
+    campaign_dir, run_path: str, record: RunRecord, campaign, configuration: str
+) -> list[str]:
+    """The window problem of one read run (:func:`window_problem`) as a message naming the file."""
+    problem = window_problem(record, campaign.configurations[configuration].window_s, configuration)
+    return [] if problem is None else [f"{(Path(campaign_dir) / run_path).as_posix()}: {problem}"]
+
+
+def _fault_reason(campaign_dir, path: str, step: str, error: Exception) -> str:
+    """The exclusion reason of a run whose reading or analysis raised an unexpected error."""
+    stage = "reader" if step == "read" else "analysis"
+    return (
+        f"{(Path(campaign_dir) / path).as_posix()}: not {step}: {type(error).__name__}: "
+        f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the {stage}, not a known fault "
+        "of the file: the job's log has the trace)"
+    )
+
+
+def analyse_every_mode_and_channel(
+    record: RunRecord,
+    *,
+    configuration: str,
+    run: str,
+    mode: ConfigurationMode,
+    window: tuple[int, int],
+    decay_settings: DecaySettings,
+    quality_settings: QualitySettings,
+) -> tuple[dict[str, np.ndarray], list[dict]]:
+    """:func:`analyse_run_with_quality` for every mode of the configuration on every
+    response channel of the run: the segments (with ``mode``, the mode's index, and
+    ``channel``) and the decay-level quality rows (:func:`labelled`)."""
+    names = record.channel_names() or (SINGLE_CHANNEL_NAME,)
+    several = len(names) > 1 or len(mode.modes) > 1
+    parts, decay_rows = [], []
+    for index, info in enumerate(mode.modes):
+        for name in names:
+            columns, mine = analyse_run_with_quality(
+                record.for_channel(name) if record.responses else record,
+                configuration=configuration,
+                run=run,
+                mode=info,
+                window=window,
+                decay_settings=decay_settings,
+                quality_settings=quality_settings,
+            )
+            n = len(columns["t_s"])
+            parts.append({**columns, "mode": np.full(n, index), "channel": np.full(n, name)})
+            mode_hz = info.mode_hz if len(mode.modes) > 1 else None
+            decay_rows += [labelled(row, name, several, index, mode_hz) for row in mine]
+    return {key: np.concatenate([part[key] for part in parts]) for key in SEGMENT_COLUMNS}, decay_rows
 
 
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
@@ -352,20 +509,27 @@ def analyse_run_file(
     record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
     problems = failed_checks(run_path, rows)
     if record is not None and not problems:
+        problems = _window_problems(campaign_dir, run_path, record, campaign, configuration)
+    if record is not None and not problems:
         if mode.mode is None:
             problems = [mode.error]
         else:
-            segments, decay_rows = analyse_run_with_quality(
-                record,
-                configuration=configuration,
-                run=run,
-                mode=mode.mode,
-                window=analysis_window(record, campaign.configurations[configuration].window_s),
-                decay_settings=decay_settings,
-                quality_settings=quality_settings,
-            )
-            rows += decay_rows
-            problems = failed_checks(run_path, decay_rows)
+            try:
+                segments, decay_rows = analyse_every_mode_and_channel(
+                    record,
+                    configuration=configuration,
+                    run=run,
+                    mode=mode,
+                    window=analysis_window(record, campaign.configurations[configuration].window_s),
+                    decay_settings=decay_settings,
+                    quality_settings=quality_settings,
+                )
+            except Exception as error:  # a fault on one run must not stop the others
+                logging.getLogger(__name__).exception("%s: not analysed", run_path)
+                problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
+            else:
+                rows += decay_rows
+                problems = failed_checks(run_path, decay_rows)
     status = {
         "configuration": configuration,
         "run": run,
@@ -373,6 +537,7 @@ def analyse_run_file(
         "status": "excluded" if problems else "used",
         "reason": "; ".join(problems),
         "record_start": "" if record is None else record.record_start,
+        "response_units": {} if record is None else {c.name: c.unit for c in record.responses},
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
 
@@ -411,30 +576,134 @@ def identify_configuration_mode(
     from pathlib import PurePosixPath
 
     window_s = campaign.configurations[configuration].window_s
-    records, windows, skipped = [], [], {}
+    records, windows, run_paths_used, skipped = [], [], [], {}
     for run_path in run_paths:
         record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
+        if not problems:
+            problems = _window_problems(campaign_dir, run_path, record, campaign, configuration)
         if problems:
             skipped[PurePosixPath(run_path).stem] = problems
             continue
         records.append(record)
         windows.append(analysis_window(record, window_s))
-    try:
-        mode = identify_mode(
-            records,
-            windows=windows,
-            campaign_mode_hz=campaign.mode_hz,
-            campaign_band_hz=campaign.band_hz,
-            band_half_width=mode_search.band_half_width,
-            mode_search_hz=mode_search.mode_search_hz,
-            mode_search_fraction=mode_search.mode_search_fraction,
-            min_mode_prominence=quality_settings.min_mode_prominence,
-        )
-    except ValueError as error:
+        run_paths_used.append(run_path)
+    if not records:
+        reasons = [problem for problems in skipped.values() for problem in problems]
+        if len(reasons) > MAX_QUOTED_PROBLEMS:
+            hidden = len(reasons) - MAX_QUOTED_PROBLEMS
+            reasons = [*reasons[:MAX_QUOTED_PROBLEMS], f"and {hidden} more (runs.parquet lists every reason)"]
         return ConfigurationMode(
-            None, f"configuration {configuration}: first mode not found: {error}", skipped
+            None,
+            f"configuration {configuration}: first mode not found: every run of the configuration is "
+            f"excluded ({len(skipped)} of {len(run_paths)}): " + "; ".join(reasons),
+            skipped,
         )
-    return ConfigurationMode(mode, "", skipped)
+    common_hz = _common_sample_rate_hz([record.sample_rate_hz for record in records])
+    for index in reversed(range(len(records))):
+        rate_hz = records[index].sample_rate_hz
+        if not rates_agree(rate_hz, common_hz):
+            # one spectrum grid for all: a run at another rate would be read at the wrong frequencies
+            skipped[PurePosixPath(run_paths_used[index]).stem] = [
+                f"{run_paths_used[index]}: left out of the mode search only: sample rate {rate_hz:.9g} Hz "
+                f"differs from the {common_hz:.9g} Hz of most runs of the configuration"
+            ]
+            del records[index], windows[index]
+    try:
+        return identify_configuration_modes(
+            records, windows, configuration, campaign, mode_search, quality_settings, skipped
+        )
+    except Exception as error:  # a fault of the search must not stop the other configurations
+        logging.getLogger(__name__).exception("configuration %s: mode search failed", configuration)
+        return ConfigurationMode(
+            None,
+            f"configuration {configuration}: first mode not found: {type(error).__name__}: "
+            f"{shortened(str(error), 10 * QUOTED_CHARACTERS)} (an error of the mode search, not a known "
+            "fault of the files: the job's log has the trace)",
+            skipped,
+        )
+
+
+def identify_configuration_modes(
+    records: list[RunRecord],
+    windows: list[tuple[int, int]],
+    configuration: str,
+    campaign,
+    mode_search: ModeSearchSettings,
+    quality_settings: QualitySettings,
+    skipped: dict[str, list[str]],
+) -> ConfigurationMode:
+    """Every mode campaign.yaml asks of one configuration's readable runs (``modes_hz``,
+    ``mode_hz`` or ``auto``, :meth:`~workflow.io.campaign.Campaign.mode_requests`); a mode
+    that is not found is the configuration's error, naming it."""
+    options = {
+        "windows": windows,
+        "band_half_width": mode_search.band_half_width,
+        "mode_search_hz": mode_search.mode_search_hz,
+        "mode_search_fraction": mode_search.mode_search_fraction,
+        "min_mode_prominence": quality_settings.min_mode_prominence,
+    }
+    left_out: list[str] = []
+    requests = campaign.mode_requests()
+    if campaign.auto_modes:
+        try:
+            found_hz, left_out = find_every_mode(records, **options)
+        except ValueError as error:
+            return ConfigurationMode(None, f"configuration {configuration}: no mode found: {error}", skipped)
+        requests = tuple((mode_hz, None) for mode_hz in found_hz)
+        # each found mode is the largest peak of its own band: search no wider
+        options["mode_search_fraction"] = min(mode_search.mode_search_fraction, mode_search.band_half_width)
+    modes = []
+    for index, (mode_hz, band_hz) in enumerate(requests):
+        which = "first mode" if index == 0 else f"mode {mode_hz:.6g} Hz"
+        try:
+            modes.append(
+                identify_mode(records, campaign_mode_hz=mode_hz, campaign_band_hz=band_hz, **options)
+            )
+        except ValueError as error:
+            return ConfigurationMode(
+                None,
+                f"configuration {configuration}: {which} not found: {error}",
+                skipped,
+                left_out=tuple(left_out),
+            )
+    return ConfigurationMode(modes[0], "", skipped, tuple(modes[1:]), tuple(left_out))
+
+
+def find_every_mode(
+    records: list[RunRecord],
+    *,
+    windows: list[tuple[int, int]],
+    band_half_width: float,
+    mode_search_hz: tuple[float, float] | None,
+    mode_search_fraction: float,
+    min_mode_prominence: float,
+) -> tuple[list[float], list[str]]:
+    """Every clear, decaying mode of a configuration's runs (``modes_hz: auto``), Hz,
+    from the spectrum of every channel (:func:`channel_responses`), searched below
+    0.4 x the sample rate (or in config ``mode_search_hz``); and why each clear peak
+    left out is not a mode. Raises ValueError when there is none."""
+    if not records:
+        raise ValueError("no readable run to find the modes in")
+    sample_rate_hz = records[0].sample_rate_hz
+    search_hz = mode_search_range(sample_rate_hz, None, mode_search_hz, mode_search_fraction)
+    responses, _ = channel_responses(records, windows)
+    frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
+    found, left_out = modal_id.find_decaying_modes(
+        responses, sample_rate_hz, frequency_hz, np.sqrt(psd), search_hz, band_half_width, min_mode_prominence
+    )
+    if not found:
+        reasons = "".join(f"; {reason}" for reason in left_out)
+        advice = f"; {WINDOW_ADVICE}" if left_out else ""
+        raise ValueError(
+            f"no clear, decaying mode in {search_hz[0]:.4g}-{search_hz[1]:.4g} Hz{reasons}{advice}"
+        )
+    return found, left_out
+
+
+def _common_sample_rate_hz(rates_hz: list[float]) -> float:
+    """The sample rate that most of the rates agree with (the first of equals)."""
+    agreeing = [sum(rates_agree(rate, other) for other in rates_hz) for rate in rates_hz]
+    return rates_hz[int(np.argmax(agreeing))]
 
 
 def analyse_campaign(
@@ -475,6 +744,86 @@ def analyse_campaign(
     return pd.concat(frames, ignore_index=True)
 
 
+def response_unit_label(campaign, statuses: list[dict]) -> str:
+    """The unit of the tables' ``response_amplitude``, for the Parquet metadata:
+    campaign.yaml's response unit, else the one the run files record (each channel's
+    when they differ), with the quantity; e.g. ``m/s (velocity)``."""
+    quantity = campaign.response.quantity
+    if campaign.response.unit is not None:
+        return f"{campaign.response.unit} ({quantity})"
+    found: dict[str, set[str]] = {}
+    for status in statuses:
+        for channel, unit in status.get("response_units", {}).items():
+            found.setdefault(channel, set()).add(unit)
+    every = sorted(set().union(*found.values())) if found else []
+    if len(every) == 1:
+        return f"{every[0]} ({quantity})"
+    if not every:
+        return f"unit of the run files ({quantity})"
+    return f"{quantity}, per channel: " + "; ".join(
+        f"{name} {', '.join(sorted(units_))}" for name, units_ in found.items()
+    )
+
+
+def nominal_modes_hz(campaign, configurations_modes: list[tuple[ModeInfo, ...]]) -> list[float]:
+    """The nominal frequency of each analysed mode (the tables' ``mode_hz``), Hz, in the
+    configurations' mode order: campaign.yaml's (``modes_hz`` or ``mode_hz``) when it
+    gives one, else the median over the configurations of the frequency found for the
+    mode of that rank."""
+    count = max((len(modes) for modes in configurations_modes), default=0)
+    requested = [mode_hz for mode_hz, _ in campaign.mode_requests()]
+    nominal = []
+    for index in range(count):
+        given = requested[index] if index < len(requested) else None
+        found = [modes[index].mode_hz for modes in configurations_modes if index < len(modes)]
+        nominal.append(float(given) if given is not None else float(np.median(found)))
+    return nominal
+
+
+def with_nominal_mode(table: pd.DataFrame, nominal_hz: list[float]) -> pd.DataFrame:
+    """The table with its ``mode`` index column replaced by ``mode_hz`` (the nominal mode
+    frequency; NaN for a row of no mode), placed with ``channel`` after ``run``."""
+    lookup = np.array([*nominal_hz, np.nan])
+    index = table["mode"].to_numpy(dtype=int)
+    table = table.drop(columns=["mode"])
+    table.insert(2, "mode_hz", lookup[np.where(index >= 0, index, len(nominal_hz))] if len(index) else [])
+    channel = table.pop("channel")
+    table.insert(3, "channel", channel)
+    return table
+
+
+def first_mode_and_channel(table: pd.DataFrame, channel: str) -> pd.DataFrame:
+    """The rows of the first (lowest) mode and of ``channel``: the paper's models, the
+    diagnosis and the paper's figures analyse this one mode and sensor. A table without
+    ``mode_hz`` or ``channel`` columns is returned whole."""
+    if "mode_hz" in table and len(table):
+        first_hz = table["mode_hz"].min()
+        table = (
+            table[table["mode_hz"].isna() | (table["mode_hz"] == first_hz)]
+            if not np.isnan(first_hz)
+            else table
+        )
+    if "channel" in table:
+        table = table[table["channel"] == channel]
+    return table
+
+
+def with_mode_and_channel(table: pd.DataFrame, mode_hz: float | None, channel: str) -> pd.DataFrame:
+    """The table of one mode and channel with ``mode_hz`` and ``channel`` columns right
+    after ``configuration`` (or first): the tables every campaign's outputs share."""
+    table = table.copy()
+    at = table.columns.get_loc("configuration") + 1 if "configuration" in table else 0
+    table.insert(at, "mode_hz", np.nan if mode_hz is None else float(mode_hz))
+    table.insert(at + 1, "channel", channel)
+    return table
+
+
+def first_mode_rows(modes: pd.DataFrame) -> pd.DataFrame:
+    """The modes table's rows of the first mode (and of configurations where none was found)."""
+    first_hz = modes["nominal_mode_hz"].min()
+    return modes[modes["nominal_mode_hz"].isna() | (modes["nominal_mode_hz"] == first_hz)]
+
+
 def collect_tables(
     *, segment_paths, quality_paths, status_paths, mode_paths, campaign, excluded_paths=()
 ) -> dict[str, pd.DataFrame]:
@@ -500,7 +849,8 @@ def collect_tables(
     from workflow.io.interim import read_mode, read_run_statuses
     from workflow.io.tables import read_columns
 
-    statuses = pd.DataFrame(read_run_statuses(status_paths) + list(excluded_paths))
+    status_rows = read_run_statuses(status_paths)
+    statuses = pd.DataFrame(status_rows + list(excluded_paths))
     statuses = statuses.reindex(columns=RUN_COLUMNS).fillna({"record_start": ""})
     runs = statuses.reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
@@ -522,35 +872,126 @@ def collect_tables(
     segments = all_segments[keep].drop(columns=["kept", "reject_reason"]).copy()
     segments["bearing_area_in2"] = segments["configuration"].map(areas).astype(float)
 
+    found_modes = {Path(path).stem: read_mode(path) for path in mode_paths}
+    nominal_hz = nominal_modes_hz(campaign, [found.modes for found in found_modes.values()])
     mode_rows = []
-    for path in mode_paths:
-        name = Path(path).stem
-        found = read_mode(path)
-        mode = found.mode
-        mode_rows.append(
-            {
-                "configuration": name,
-                "mode_hz": mode.mode_hz if mode else np.nan,
-                "band_low_hz": mode.band_hz[0] if mode else np.nan,
-                "band_high_hz": mode.band_hz[1] if mode else np.nan,
-                "method": mode.method if mode else "not found",
-                "sample_rate_hz": mode.sample_rate_hz if mode else np.nan,
-                "record_duration_s": mode.record_duration_s if mode else np.nan,
-                "coherence_at_mode": (mode.coherence_at_mode if mode else None) or np.nan,
-                "bearing_area_in2": areas.get(name, np.nan),
-                "error": found.error,
-            }
-        )
+    for name, found in found_modes.items():
+        for index, mode in enumerate(found.modes or (None,)):
+            mode_rows.append(
+                {
+                    "configuration": name,
+                    "nominal_mode_hz": nominal_hz[index] if mode else np.nan,
+                    "mode_hz": mode.mode_hz if mode else np.nan,
+                    "band_low_hz": mode.band_hz[0] if mode else np.nan,
+                    "band_high_hz": mode.band_hz[1] if mode else np.nan,
+                    "method": mode.method if mode else "not found",
+                    "sample_rate_hz": mode.sample_rate_hz if mode else np.nan,
+                    "record_duration_s": mode.record_duration_s if mode else np.nan,
+                    "coherence_at_mode": (mode.coherence_at_mode if mode else None) or np.nan,
+                    "bearing_area_in2": areas.get(name, np.nan),
+                    "error": found.error,
+                }
+            )
+    quality_table = pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True)
     return {
-        "segments": segments.reset_index(drop=True),
-        "rejected": rejected.reset_index(drop=True),
+        "segments": with_nominal_mode(segments, nominal_hz).reset_index(drop=True),
+        "rejected": with_nominal_mode(rejected, nominal_hz).reset_index(drop=True),
         "runs": runs,
-        "quality": pd.concat([pd.DataFrame(read_columns(path)) for path in quality_paths], ignore_index=True),
+        "quality": with_nominal_mode(quality_table, nominal_hz),
         "modes": pd.DataFrame(mode_rows),
+        "response_unit": response_unit_label(
+            campaign, [row for row in status_rows if row["status"] == "used"]
+        ),
     }
 
 
+NOTHING_ANALYSED = "nothing could be analysed"
+"""How :func:`nothing_analysed_message` begins."""
+
+
+def nothing_analysed_message(runs: pd.DataFrame, n_kept_segments: int, rejected: pd.DataFrame) -> str | None:
+    """Why nothing of a campaign could be analysed (no kept segment at all), or None.
+
+    Parameters
+    ----------
+    runs : DataFrame
+        The runs table (:data:`RUN_COLUMNS`): every run file, used or excluded with its reason.
+    n_kept_segments : int
+        Rows of the segments table (kept segments of used runs).
+    rejected : DataFrame
+        The rejected segments, with ``configuration``, ``run`` and ``reject_reason``.
+
+    Returns
+    -------
+    str or None
+        Which runs, why (the first reasons, each naming its file or campaign.yaml key) and
+        what to change, for the last lines a user reads; None when some segment was kept.
+    """
+    if n_kept_segments > 0:
+        return None
+    used = runs[runs["status"] == "used"]
+    excluded = runs[runs["status"] != "used"]
+    lines = [f"{NOTHING_ANALYSED}: no run of the campaign gives a usable segment."]
+    if len(excluded):
+        lines.append(f"{len(excluded)} of {len(runs)} run files (or globs) are excluded:")
+        for row in excluded.head(MAX_QUOTED_PROBLEMS).itertuples():
+            name = f"{row.configuration}/{row.run}" if row.run else row.path
+            lines.append(f"  {name}: {shortened(str(row.reason), 10 * QUOTED_CHARACTERS)}")
+        if len(excluded) > MAX_QUOTED_PROBLEMS:
+            lines.append(f"  and {len(excluded) - MAX_QUOTED_PROBLEMS} more")
+    if len(used):
+        counts = rejected["reject_reason"].value_counts().head(3)
+        reasons = "; ".join(f"{count} x {shortened(str(reason))}" for reason, count in counts.items())
+        lines.append(
+            f"{len(used)} run(s) were read but every segment of them was rejected"
+            + (f" ({reasons})" if reasons else " (none was long enough to measure)")
+        )
+    lines.append(
+        "What to change: each reason names the file (and line) or the campaign.yaml key at fault; "
+        "correct those, or choose the channel, window_s, band_hz or mode_hz that fit the records "
+        "(docs/input-format.md). Every run and its reason: results/tables/runs.csv"
+    )
+    return "\n".join(lines)
+
+
+def nothing_analysed_in_tables(runs_path, segments_path, rejected_path) -> str | None:
+    """:func:`nothing_analysed_message` of the tables rule ``collect_tables`` wrote."""
+    from workflow.io.tables import read_table
+
+    return nothing_analysed_message(
+        read_table(runs_path), len(read_table(segments_path)), read_table(rejected_path)
+    )
+
+
 def fit_damping_curves(
+    segments: pd.DataFrame,
+    areas_in2: dict[str, float | None],
+    settings: DampingFitSettings,
+    *,
+    grid_points: int = 60,
+    area_amplitudes: int = 5,
+) -> dict[str, pd.DataFrame]:
+    """:func:`fit_mode_damping_curves` for each (mode, channel) of the segments (their
+    ``mode_hz`` and ``channel`` columns, led by the first mode), each table with the two
+    columns after ``configuration``. A table without the two columns is one mode and
+    channel."""
+    import pandas as pd
+
+    if "mode_hz" not in segments or "channel" not in segments or segments.empty:
+        return fit_mode_damping_curves(
+            segments, areas_in2, settings, grid_points=grid_points, area_amplitudes=area_amplitudes
+        )
+    parts: dict[str, list[pd.DataFrame]] = {}
+    for (mode_hz, channel), part in segments.groupby(["mode_hz", "channel"], sort=False):
+        tables = fit_mode_damping_curves(
+            part, areas_in2, settings, grid_points=grid_points, area_amplitudes=area_amplitudes
+        )
+        for name, table in tables.items():
+            parts.setdefault(name, []).append(with_mode_and_channel(table, mode_hz, str(channel)))
+    return {name: pd.concat(tables, ignore_index=True) for name, tables in parts.items()}
+
+
+def fit_mode_damping_curves(
     segments: pd.DataFrame,
     areas_in2: dict[str, float | None],
     settings: DampingFitSettings,

@@ -625,7 +625,7 @@ def damping_curve_slope(
     A change of the joint's friction limit moves its damping curve along ``ln V`` (the
     slip velocity scales with it, the linear damping stays), so ``-slope`` is the change of
     ``ln zeta`` per unit change of ``ln Fc``: the shape a run-to-run change of the joint
-    leaves in the residuals (:func:`run_order_trend`). Central differences along each
+    leaves in the residuals (:func:`~workflow.discovery.misfit.run_order_trend`). Central differences along each
     run's segments sorted by amplitude (one-sided at the ends); 0 where a run has fewer
     than two distinct amplitudes.
     """

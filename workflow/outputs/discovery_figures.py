@@ -23,7 +23,9 @@ import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
+from workflow.outputs.escape import plot_text  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
+from workflow.outputs.plain_words import left_out_caveat  # noqa: E402
 
 __all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
 
@@ -162,7 +164,7 @@ def residuals_figure(
         axes[0].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
         axes[-1].set_xlabel(velocity_label(units))
         ratio = f", gain ratio {gain:.2f}" if gain is not None else ""
-        fig.suptitle(f"{configuration}: cause {cause}{ratio}")
+        fig.suptitle(f"{plot_text(configuration)}: cause {cause}{ratio}")
         lay_out(fig)
     return fig
 
@@ -242,7 +244,9 @@ def candidates_figure(document: Mapping) -> plt.Figure:
                 ax.text(0.5, 0.5, "no candidate scored", ha="center", va="center", transform=ax.transAxes)
             ax.set_yticks(positions, labels)
             ax.set_ylim(-0.6, len(causes) - 0.4)
-            ax.set_title(f"{name}: verdict {entry.get('cause', '?')} (large outlined dot)", loc="left")
+            ax.set_title(
+                f"{plot_text(name)}: verdict {entry.get('cause', '?')} (large outlined dot)", loc="left"
+            )
         axes[-1].set_xlabel(ERROR_LABEL + "; dashed: baseline")
         lay_out(fig)
     return fig
@@ -296,7 +300,7 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
                 ax.plot([position, position], values, color="0.6", lw=1, zorder=0)
         ax.axhspan(0, 2, color="0.85", alpha=0.6, lw=0, label="within ±2 scatter")
         areas = [units.per_in2 * (configs[n].get("bearing_area_in2") or float("nan")) for n in names]
-        ax.set_xticks(x, [f"{n}\n{area:.3g} {units.area}" for n, area in zip(names, areas)])
+        ax.set_xticks(x, [f"{plot_text(n)}\n{area:.3g} {units.area}" for n, area in zip(names, areas)])
         ax.set_xlim(-0.5, len(names) - 0.5)
         ax.set_yscale("log")
         plain_log_axis(ax.yaxis)
@@ -312,13 +316,7 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
             title += f"\nextended / baseline mean error = {ratio:.2f}"
         ax.set_title(title, loc="left")
         ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-        notes = []
-        if finite.size and finite.min() > 10:
-            notes.append(
-                "Both predictions miss every left-out configuration by more than "
-                f"{plain_number(finite.min())} "
-                "times the measured scatter: neither model predicts a new bearing area, and the "
-                "ratio of their errors says little."
-            )
+        caveat = left_out_caveat(np.concatenate(worst)) if worst else None
+        notes = [caveat] if caveat else []
         lay_out(fig, notes, width=100)
     return fig

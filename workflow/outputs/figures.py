@@ -37,6 +37,8 @@ __all__ = [
     "damping_misfit",
     "frequency_misfit",
     "frequency_vs_amplitude",
+    "CHANNEL_MARKERS",
+    "modes_and_channels",
     "area_fits",
     "PARAMETER_SYMBOLS",
     "parameter_text",
@@ -53,6 +55,7 @@ from matplotlib import ticker  # noqa: E402
 from matplotlib.backend_bases import DrawEvent  # noqa: E402
 
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
+from workflow.outputs.escape import plot_text  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 if TYPE_CHECKING:  # tables come in as DataFrames; figures 7-8 are drawn without pandas
@@ -300,7 +303,7 @@ def _plot_runs(
             markersize=markersize,
             color=colours[run],
             alpha=alpha,
-            label=run if labels else None,
+            label=plot_text(run) if labels else None,
         )
     return runs
 
@@ -457,6 +460,60 @@ def frequency_vs_amplitude(
     return figure
 
 
+CHANNEL_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+"""One marker per configuration on the figure of every mode and channel."""
+
+
+def modes_and_channels(
+    segments: pd.DataFrame, *, title: str, channels: Sequence[str], units: UnitSystem = INCH_SECOND
+) -> plt.Figure:
+    """Damping and frequency against velocity amplitude of every mode, one row a mode, each
+    channel in its own colour (configurations by marker): whether the sensors of a hit
+    agree shows at once.
+
+    Parameters
+    ----------
+    segments : DataFrame
+        ``results/tables/segments.parquet`` (its ``mode_hz`` and ``channel`` columns).
+    title : str
+        The figure's title.
+    channels : sequence of str
+        The channels in campaign.yaml's order (the colours' order).
+    units : UnitSystem
+        Config ``units``.
+    """
+    modes_hz = sorted(segments["mode_hz"].dropna().unique())
+    colours = dict(zip(channels, plt.get_cmap("tab10").colors))
+    configurations = list(dict.fromkeys(segments["configuration"]))
+    with plt.rc_context(STYLE):
+        figure, axes = plt.subplots(
+            max(1, len(modes_hz)), 2, figsize=(11.0, 2.0 + 2.6 * max(1, len(modes_hz))), squeeze=False
+        )
+        for row, mode_hz in zip(axes, modes_hz):
+            mode = segments[segments["mode_hz"] == mode_hz]
+            for (column, scale), label, axis in zip(
+                (("zeta", 100.0), ("frequency_hz", 1.0)), (DAMPING_LABEL, FREQUENCY_LABEL), row
+            ):
+                for (configuration, channel), part in mode.groupby(["configuration", "channel"], sort=False):
+                    marker = CHANNEL_MARKERS[configurations.index(configuration) % len(CHANNEL_MARKERS)]
+                    axis.plot(
+                        velocity(part, units),
+                        scale * part[column].to_numpy(float),
+                        marker,
+                        markersize=3.5,
+                        alpha=0.7,
+                        color=colours.get(channel, "0.4"),
+                        label=channel if len(configurations) == 1 else f"{channel} ({configuration})",
+                    )
+                amplitude_axis(axis, units)
+                axis.set_ylabel(label)
+                axis.set_title(f"mode {mode_hz:.5g} Hz")
+            legend_beside(row[1], fontsize=8)
+        figure.suptitle(title)
+        lay_out(figure)
+    return figure
+
+
 def area_fits(
     curves: pd.DataFrame, area_table: pd.DataFrame, *, title: str, units: UnitSystem = INCH_SECOND
 ) -> plt.Figure:
@@ -512,6 +569,9 @@ def area_fits(
                 )
             else:
                 right.plot(area, 100 * part["zeta"], "o-", color=colour, label=label)
+        # areas in m² are small numbers (1e-4): few ticks at round steps, as plain numbers
+        right.xaxis.set_major_locator(ticker.MaxNLocator(4, steps=[1, 2, 5, 10]))
+        right.xaxis.set_major_formatter(ticker.FuncFormatter(lambda value, _: f"{value:.6g}"))
         right.set_xlabel(f"bearing area ({units.area})")
         right.set_ylabel(DAMPING_LABEL)
         right.set_title("damping vs bearing area at common amplitudes")

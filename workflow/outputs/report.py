@@ -15,7 +15,6 @@ writes them to ``results/report/`` and ``rules/report.smk`` marks them for
 
 from __future__ import annotations
 
-import html
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -25,8 +24,17 @@ import numpy as np
 import pandas as pd
 
 from workflow.discovery.confidence import verdict_key
+from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.recording_time import run_order
-from workflow.io.units import INCH_SECOND, UnitSystem
+from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem
+from workflow.outputs.escape import display_text, html_text, rst_strong, rst_text
+from workflow.outputs.plain_words import (
+    left_out_caveat,
+    percent_of,
+    uncertainty_note,
+    unidentified_parameters,
+    unidentified_sentence,
+)
 
 __all__ = [
     "CAUSE_WORDS",
@@ -36,6 +44,7 @@ __all__ = [
     "CAUSE_NAMES",
     "MODEL_NAMES",
     "ERROR_UNIT",
+    "ONE_RUN_ERROR_UNIT",
     "CSS",
     "fmt",
     "ratio",
@@ -53,11 +62,15 @@ __all__ = [
     "threshold_sentences",
     "margin_words",
     "gain_words",
+    "END_SEGMENTS",
     "measured_trends",
     "trend_sentence",
     "campaign_headline",
+    "discrepancy_text",
+    "hypotheses_in_units",
     "hypothesis_summary",
     "excluded_runs",
+    "modes_section",
     "verdict_html",
     "hypotheses_html",
     "runs_in_recorded_order",
@@ -66,7 +79,6 @@ __all__ = [
     "model_fits_html",
     "candidates_html",
     "rejected_segments_html",
-    "rst_escape",
     "verdict_rst",
     "landing_rst",
     "quality_html",
@@ -125,6 +137,10 @@ ERROR_UNIT = (
     "runs repeat each other)"
 )
 
+ONE_RUN_ERROR_UNIT = (
+    "; with one run, amplitude ranges of that run are left out and the scatter is the segments' own"
+)
+
 CSS = """
 body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; font-size: 15px;
        line-height: 1.45; color: #1d1d1f; margin: 0 auto; padding: 0.5em 1.2em 2em 1.2em;
@@ -167,7 +183,16 @@ def _number(value: Any) -> float | str:
 
 
 def fmt(value: Any, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits; '-' for missing or non-finite."""
+    """A number with ``digits`` significant digits; '-' for missing or non-finite.
+
+    Plain below ``10**(digits + 2)`` (``100``, never ``1e+02``), in exponent form above
+    it and below 0.001.
+
+    Examples
+    --------
+    >>> fmt(100.0, 2), fmt(1234.0), fmt(0.0795), fmt(2.5e-4), fmt(None)
+    ('100', '1230', '0.0795', '2.50e-04', '–')
+    """
     number = _number(value)
     if isinstance(number, str):
         return number
@@ -175,6 +200,9 @@ def fmt(value: Any, digits: int = 3) -> str:
         return "–"
     if number != 0 and (abs(number) >= 10 ** (digits + 2) or abs(number) < 1e-3):
         return f"{number:.{digits - 1}e}"
+    if abs(number) >= 10**digits:
+        # the g format would write 100 as 1e+02 at two digits
+        return f"{round(number, digits - 1 - int(math.floor(math.log10(abs(number))))):.0f}"
     return f"{number:.{digits}g}"
 
 
@@ -187,7 +215,8 @@ def ratio(value: Any) -> str:
 
 
 def esc(text: Any) -> str:
-    return html.escape(str(text), quote=True)
+    """Text (the campaign's or ours) as HTML (:func:`workflow.outputs.escape.html_text`)."""
+    return html_text(text)
 
 
 def model_name(model_id: str | None) -> str:
@@ -386,42 +415,93 @@ def gain_words(gain_ratio: float | None, margin_ratio: float | None, confidence:
     return "better"
 
 
-def measured_trends(segments: pd.DataFrame, share: float = 0.15) -> dict[str, dict]:
-    """Damping and frequency at the low and the high end of each configuration's amplitudes.
+END_SEGMENTS = 3
+"""Fewest segments whose median stands for an end of the measured range: an end bin with
+fewer is widened inward by quarter decades until it has them."""
+
+
+def _end_bin(codes: np.ndarray, counts: np.ndarray, from_top: bool) -> np.ndarray:
+    """The quarter-decade codes making up one end of the range (at least :data:`END_SEGMENTS`)."""
+    order = codes[::-1] if from_top else codes
+    taken, total = [], 0
+    for code, count in zip(order, counts[::-1] if from_top else counts):
+        taken.append(code)
+        total += count
+        if total >= END_SEGMENTS:
+            break
+    return np.asarray(taken)
+
+
+def measured_trends(segments: pd.DataFrame, per_decade: int = 4) -> dict[str, dict]:
+    """What the measured damping and frequency do over each configuration's full range of
+    amplitudes, from the segments figures 10-12 and the backbones plot.
+
+    The range is that of every kept segment (the figures' horizontal extent). Each end's
+    damping and frequency are the medians of the segments in its ``1/per_decade`` decade
+    (widened inward until it holds :data:`END_SEGMENTS`), so that a few runs reaching
+    further than the others set the top end as they do on the figure; the medians of
+    the bins between give the lowest and highest damping on the way.
 
     Parameters
     ----------
     segments : DataFrame
-        results/tables/segments.parquet (``configuration``, ``velocity_amplitude_in_s``,
-        ``zeta``, ``frequency_hz``).
-    share : float
-        Fraction of a configuration's segments (lowest and highest amplitudes) whose
-        medians stand for each end: medians of many segments, not single noisy points.
+        results/tables/segments.parquet (``configuration``, ``run``,
+        ``velocity_amplitude_in_s``, ``zeta``, ``frequency_hz``).
+    per_decade : int
+        Amplitude bins per decade.
 
     Returns
     -------
     dict
-        Configuration -> ``amplitude_low_in_s``, ``amplitude_high_in_s`` (medians of each
-        end), ``zeta_low``, ``zeta_high`` (fraction of critical), ``frequency_low_hz``,
-        ``frequency_high_hz``; configurations with fewer than 6 segments are left out.
+        Configuration -> ``amplitude_low_in_s``, ``amplitude_high_in_s`` (the smallest and
+        largest segment amplitude), ``n_segments``, ``n_runs``; per end (``low``/``high``)
+        ``end_<end>_low_in_s``/``end_<end>_high_in_s`` (its amplitudes), ``runs_<end>``,
+        ``zeta_<end>`` (fraction of critical) and ``frequency_<end>_hz``; ``zeta_min``,
+        ``zeta_max`` and ``zeta_min_in_s``/``zeta_max_in_s`` over the bins' medians.
+        Configurations with fewer than ``2 * END_SEGMENTS`` segments are left out.
+
+    Examples
+    --------
+    >>> frame = pd.DataFrame({"configuration": "a", "run": ["r1"] * 6 + ["r2"] * 2,
+    ...     "velocity_amplitude_in_s": [0.1, 0.11, 0.12, 0.5, 0.6, 1.0, 4.0, 4.4],
+    ...     "zeta": [1e-3] * 6 + [2e-3] * 2, "frequency_hz": 100.0})
+    >>> trend = measured_trends(frame)["a"]
+    >>> trend["amplitude_high_in_s"], trend["zeta_high"], trend["runs_high"]
+    (4.4, 0.002, 2)
     """
     trends = {}
     if segments is None or segments.empty:
         return trends
     for name, part in segments.groupby("configuration", sort=False):
-        part = part.sort_values("velocity_amplitude_in_s")
-        count = max(int(round(share * len(part))), 3)
-        if len(part) < 2 * count:
+        part = part[part["velocity_amplitude_in_s"] > 0]
+        if len(part) < 2 * END_SEGMENTS:
             continue
-        low, high = part.iloc[:count], part.iloc[-count:]
-        trends[str(name)] = {
-            "amplitude_low_in_s": float(low["velocity_amplitude_in_s"].median()),
-            "amplitude_high_in_s": float(high["velocity_amplitude_in_s"].median()),
-            "zeta_low": float(low["zeta"].median()),
-            "zeta_high": float(high["zeta"].median()),
-            "frequency_low_hz": float(low["frequency_hz"].median()),
-            "frequency_high_hz": float(high["frequency_hz"].median()),
+        velocity = part["velocity_amplitude_in_s"].to_numpy(float)
+        code = np.floor(per_decade * np.log10(velocity)).astype(int)
+        codes, counts = np.unique(code, return_counts=True)
+        trend = {
+            "amplitude_low_in_s": float(velocity.min()),
+            "amplitude_high_in_s": float(velocity.max()),
+            "n_segments": len(part),
+            "n_runs": int(part["run"].nunique()) if "run" in part else 1,
         }
+        for end, from_top in (("low", False), ("high", True)):
+            inside = np.isin(code, _end_bin(codes, counts, from_top))
+            chosen = part[inside]
+            trend[f"end_{end}_low_in_s"] = float(velocity[inside].min())
+            trend[f"end_{end}_high_in_s"] = float(velocity[inside].max())
+            trend[f"runs_{end}"] = int(chosen["run"].nunique()) if "run" in chosen else 1
+            trend[f"zeta_{end}"] = float(chosen["zeta"].median())
+            trend[f"frequency_{end}_hz"] = float(chosen["frequency_hz"].median())
+        by_bin = part.groupby(code)
+        medians = by_bin["zeta"].median()[by_bin.size() >= END_SEGMENTS]
+        at = by_bin["velocity_amplitude_in_s"].median()
+        if medians.empty:
+            medians = pd.Series([trend["zeta_low"], trend["zeta_high"]])
+            at = pd.Series([trend["amplitude_low_in_s"], trend["amplitude_high_in_s"]])
+        trend["zeta_min"], trend["zeta_min_in_s"] = float(medians.min()), float(at[medians.idxmin()])
+        trend["zeta_max"], trend["zeta_max_in_s"] = float(medians.max()), float(at[medians.idxmax()])
+        trends[str(name)] = trend
     return trends
 
 
@@ -432,28 +512,93 @@ def _direction(low: float, high: float, flat: float) -> str:
     return "rises" if change > 0 else "falls"
 
 
+def _end_words(trend: Mapping, end: str, units: UnitSystem) -> str:
+    """``the median of 12 segments at 0.05-0.07 in/s`` (and how many runs reach the top)."""
+    where = amplitude_range(trend[f"end_{end}_low_in_s"], trend[f"end_{end}_high_in_s"], units)
+    runs = trend[f"runs_{end}"]
+    verb = "reaches" if runs == 1 else "reach"
+    reach = (
+        f", {runs} of {trend['n_runs']} runs {verb} it" if end == "high" and runs < trend["n_runs"] else ""
+    )
+    return f"at {where}{reach}"
+
+
 def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
-    """What the measured damping and frequency do from low to high amplitude, in words
-    taken from the numbers (direction, both ends, the frequency's relative change)."""
+    """What the measured damping and frequency do over the full measured range, in words
+    taken from the numbers of :func:`measured_trends` (direction, both ends, the damping's
+    low or high point on the way when it lies beyond both ends, the frequency's relative
+    change)."""
     zeta = _direction(trend["zeta_low"], trend["zeta_high"], FLAT_CHANGE)
     frequency_change = trend["frequency_high_hz"] / trend["frequency_low_hz"] - 1.0
     # a joint's frequency moves by a fraction of a percent: 0.1 % is already a trend
     frequency = _direction(trend["frequency_low_hz"], trend["frequency_high_hz"], 1e-3)
+    ends = (trend["zeta_low"], trend["zeta_high"])
+    on_the_way = ""
+    if trend["zeta_min"] < (1 - FLAT_CHANGE) * min(ends):
+        on_the_way = (
+            f", through a low of {fmt(100 * trend['zeta_min'])} % near "
+            f"{fmt(units.per_in_s * trend['zeta_min_in_s'])} {units.velocity}"
+        )
+    elif trend["zeta_max"] > (1 + FLAT_CHANGE) * max(ends):
+        on_the_way = (
+            f", through a high of {fmt(100 * trend['zeta_max'])} % near "
+            f"{fmt(units.per_in_s * trend['zeta_max_in_s'])} {units.velocity}"
+        )
     return (
         f"Measured from {fmt(units.per_in_s * trend['amplitude_low_in_s'])} to "
-        f"{fmt(units.per_in_s * trend['amplitude_high_in_s'])} {units.velocity}, "
-        f"the damping {zeta} ({fmt(100 * trend['zeta_low'])} % to {fmt(100 * trend['zeta_high'])} %) "
-        f"and the frequency {frequency} ({fmt(trend['frequency_low_hz'], 5)} Hz to "
-        f"{fmt(trend['frequency_high_hz'], 5)} Hz, {100 * frequency_change:+.2f} %)."
+        f"{fmt(units.per_in_s * trend['amplitude_high_in_s'])} {units.velocity} "
+        f"({trend['n_segments']} segments, {runs_words(trend['n_runs'])}), "
+        f"the damping {zeta} from {fmt(100 * trend['zeta_low'])} % {_end_words(trend, 'low', units)} "
+        f"to {fmt(100 * trend['zeta_high'])} % {_end_words(trend, 'high', units)}{on_the_way} "
+        f"(medians of the segments there), and the frequency {frequency} from "
+        f"{fmt(trend['frequency_low_hz'], 5)} Hz to {fmt(trend['frequency_high_hz'], 5)} Hz "
+        f"({100 * frequency_change:+.2f} %)."
     )
 
 
-def _flags(entry: Mapping) -> list[str]:
-    """Warnings on the fitted parameters (at a bound, unidentifiable), when the diagnosis gives them."""
-    flags = []
-    for role, key in (("baseline", "baseline"), ("extended model", "extended_model")):
-        flags += [f"{role}: {flag}" for flag in (entry.get(key) or {}).get("flags") or []]
-    return flags
+def discrepancy_text(entry: Mapping, units: UnitSystem = INCH_SECOND) -> str:
+    """A configuration's discrepancy sentence (diagnosis.json, amplitudes in in/s) with its
+    amplitudes in ``units``: rebuilt from the binned residuals and the run-order trend
+    the diagnosis keeps as evidence, so that the page speaks one unit. Kept as written
+    when the evidence does not rebuild it (the sentence is then in in/s)."""
+    text = entry.get("discrepancy", "")
+    evidence = entry.get("evidence") or {}
+    bins = evidence.get("binned_residuals")
+    model = (entry.get("baseline") or {}).get("model")
+    if units.velocity == INCH_SECOND.velocity or bins is None or not model:
+        return text
+    trend = evidence.get("run_order_trend")
+    runs = evidence.get("n_runs", 0)
+    as_written = discrepancy_sentence(model, bins, trend, runs)
+    if not text.endswith(as_written):
+        return text
+    return text[: len(text) - len(as_written)] + discrepancy_sentence(model, bins, trend, runs, units)
+
+
+def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
+    """The parameters of the baseline and the extended model that the data do not
+    determine (their ``flags``), each once (:func:`~workflow.outputs.plain_words.unidentified_parameters`)."""
+    return unidentified_parameters(
+        (("the baseline", entry.get("baseline")), ("the extended model", entry.get("extended_model"))),
+        units,
+    )
+
+
+def _unidentified_tag(entry: Mapping) -> str:
+    """A short tag pointing to the sentence on the parameters the data do not determine."""
+    count = len(_unidentified(entry))
+    if not count:
+        return ""
+    return " " + tag(
+        f"{count} fitted parameter{'s' if count > 1 else ''} not determined by the data (see How sure we are)",
+        "flag",
+    )
+
+
+def _n_runs(entry: Mapping) -> int:
+    """Runs behind a configuration's diagnosis (2 when the document does not say)."""
+    runs = (entry.get("evidence") or {}).get("n_runs")
+    return int(runs) if runs is not None else 2
 
 
 def campaign_headline(document: Mapping) -> str:
@@ -487,7 +632,8 @@ def campaign_headline(document: Mapping) -> str:
     text = (
         f"The paper's friction model (the better of Dahl and LuGre) falls short in "
         f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
-        f"({which}): a model with the missing physics predicts runs held out of the fit "
+        f"({which}): a model with the missing physics predicts "
+        f"{'runs' if all(_n_runs(entries[n]) > 1 for n in failing) else 'data'} held out of the fit "
         f"{word}. "
     )
     ratios = [
@@ -500,11 +646,14 @@ def campaign_headline(document: Mapping) -> str:
     text += f"The cause: {CAUSE_WORDS.get(cause, cause)}."
     if extended and ratios:
         best = min(ratios)
+        held_out = (
+            "predicts runs it was not fitted to"
+            if all(_n_runs(entries[n]) > 1 for n in failing)
+            else "predicts amplitude ranges held out of the fit (with one run, no run could be held out)"
+        )
         text += (
-            f" The extended model, {model_name(extended[0])}, predicts runs it was not "
-            f"fitted to with {ratio(best)} of the baseline's error"
-            + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "")
-            + "."
+            f" The extended model, {model_name(extended[0])}, {held_out} with {ratio(best)} of "
+            "the baseline's error" + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "") + "."
         )
     return text
 
@@ -541,10 +690,17 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
     items = []
     runs, segments = evidence.get("n_runs"), evidence.get("n_segments")
     if runs is not None:
-        items.append(
-            f"Based on {runs} runs and {segments} segments "
+        text = (
+            f"Based on {runs_words(runs)} and {segments} segments "
             f"({evidence.get('effective_observations', '?')} effectively independent)."
         )
+        if runs == 1:
+            text += (
+                " With one run, held out means a range of amplitudes of that run held out of the "
+                "fit, and the scatter is the segments' own: nothing here says how a second run of "
+                "the joint would differ."
+            )
+        items.append(text)
     baselines = evidence.get("baselines") or {}
     if baselines:
         parts = [f"{model_name(m)} {fmt(b.get('heldout_error'))}" for m, b in baselines.items()]
@@ -586,7 +742,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
             )
         elif margin["ratio"] >= 1:
             confidence = (entry.get("confidence") or {}).get(verdict_key(entry.get("causes") or [cause]))
-            sure = f"; its confidence is {fmt(100 * confidence, 2)} %" if confidence is not None else ""
+            sure = f"; its confidence is {percent_of(confidence)}" if confidence is not None else ""
             items.append(
                 f"The verdict is {margin_words(margin['ratio'], confidence)} the next-best candidate, "
                 f"{candidate_name(margin['next'])}: its held-out error ({fmt(margin['next_score'])}) is "
@@ -601,8 +757,9 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"{evidence.get('decision_rule', 'see the decision rule')}."
             )
     items.extend(threshold_sentences(entry, units))
-    for flag in _flags(entry):
-        items.append(f"Fitted parameter to read with care, {flag}.")
+    unidentified = unidentified_sentence(_unidentified(entry, units))
+    if unidentified:
+        items.append(unidentified)
     items.extend(explains_sentences(entry, units))
     trend = evidence.get("run_order_trend") or {}
     if trend.get("p") is not None:
@@ -619,11 +776,51 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
     return [esc(item) for item in items]
 
 
+_NUMBER = r"\d+(?:\.\d+)?(?:e[+-]?\d+)?"
+_IN_S = re.compile(rf"({_NUMBER})(?:-({_NUMBER}))? in/s")
+
+
+def hypotheses_in_units(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> pd.DataFrame:
+    """The hypotheses table (results/tables/hypotheses.parquet, in/s and in²) as shown in
+    ``units``: the amplitudes in each ``statistic`` converted, and the estimates and
+    intervals of a slope per in² (H2, ``1/in^2``) per ``units.area``.
+
+    Examples
+    --------
+    >>> from workflow.io.units import SI
+    >>> table = pd.DataFrame({"statistic": ["slope of fitted zeta vs bearing area at velocity "
+    ...     "amplitude 0.63 in/s, 1/in^2"], "estimate": [0.00064516], "ci_low": [0.0], "ci_high": [0.0]})
+    >>> row = hypotheses_in_units(table, SI).iloc[0]
+    >>> row["statistic"], round(float(row["estimate"]), 6)
+    ('slope of fitted zeta vs bearing area at velocity amplitude 0.016 m/s, 1/m²', 1.0)
+    """
+    if units.velocity == INCH_SECOND.velocity or hypotheses is None or hypotheses.empty:
+        return hypotheses
+
+    def amplitudes(match: re.Match) -> str:
+        low = f"{float(match[1]) * units.per_in_s:.3g}"
+        high = f"-{float(match[2]) * units.per_in_s:.3g}" if match[2] else ""
+        return f"{low}{high} {units.velocity}"
+
+    shown = hypotheses.copy()
+    per_area = shown["statistic"].astype(str).str.contains("1/in^2", regex=False)
+    for column in ("estimate", "ci_low", "ci_high"):
+        shown[column] = shown[column].where(~per_area, shown[column] / units.per_in2)
+    shown["statistic"] = (
+        shown["statistic"]
+        .astype(str)
+        .str.replace(_IN_S, amplitudes, regex=True)
+        .str.replace("1/in^2", f"1/{units.area}", regex=False)
+    )
+    return shown
+
+
 def hypothesis_summary(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> list[list[str]]:
-    """One row per hypothesis and configuration: verdicts over the amplitudes tested."""
+    """One row per hypothesis and configuration: verdicts over the amplitudes tested, in ``units``."""
     rows = []
     if hypotheses is None or hypotheses.empty:
         return rows
+    hypotheses = hypotheses_in_units(hypotheses, units)
     for (hypothesis, configuration), part in hypotheses.groupby(["hypothesis", "configuration"], sort=False):
         counts = part["verdict"].value_counts()
         if len(part) == 1:
@@ -655,7 +852,7 @@ def hypothesis_summary(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND
             )
         statistic = (
             re.sub(
-                r" at velocity amplitude [0-9.eE+-]+ in/s",
+                rf" at velocity amplitude [0-9.eE+-]+ {re.escape(units.velocity)}",
                 " at each amplitude",
                 str(part["statistic"].iloc[0]),
             )
@@ -683,6 +880,60 @@ def excluded_runs(runs: pd.DataFrame) -> pd.DataFrame:
     if runs is None or runs.empty:
         return pd.DataFrame(columns=["configuration", "run", "path", "reason"])
     return runs[runs["status"] == "excluded"]
+
+
+def _confidence_text(confidence: Mapping | None) -> str:
+    """``microslip (power law) 0.93, none 0.05``: the largest shares, escaped."""
+    shares = sorted((confidence or {}).items(), key=lambda item: -item[1])[:3]
+    return esc(", ".join(f"{cause_name(cause)} {share:.2f}" for cause, share in shares))
+
+
+def modes_section(document: Mapping) -> list[str]:
+    """The verdict page's section on every mode and channel (diagnosis.json ``modes`` and
+    ``channels``): a verdict per mode, and per configuration each channel's own; nothing
+    for a campaign of one mode and one channel."""
+    modes = document.get("modes") or []
+    several_channels = any(
+        entry.get("channels") for mode in modes for entry in mode.get("configurations", {}).values()
+    )
+    if len(modes) < 2 and not several_channels:
+        return []
+    parts = ["<h2>Every mode</h2>"]
+    for mode in modes:
+        mode_hz = mode.get("mode_hz")
+        heading = f"mode {mode_hz:.5g} Hz" if isinstance(mode_hz, int | float) else "mode not found"
+        parts.append(
+            f"<h3>{esc(heading)}: {esc(cause_name(mode.get('cause')))}</h3>"
+            f"<p>confidence: {_confidence_text(mode.get('confidence'))}</p>"
+        )
+        rows = []
+        for name, entry in mode.get("configurations", {}).items():
+            channels = entry.get("channels") or {}
+            seen = "; ".join(
+                f"{channel}: {cause_name(own.get('cause'))}" for channel, own in channels.items()
+            )
+            rows.append(
+                [
+                    esc(name),
+                    esc(cause_name(entry.get("cause"))),
+                    _confidence_text(entry.get("confidence")),
+                    esc(fmt(entry.get("gain", {}).get("ratio"))),
+                    esc(seen),
+                ]
+            )
+        parts.append(
+            html_table(
+                ["configuration", "cause", "confidence", "ratio", "each channel's own verdict"],
+                rows,
+                numeric=(3,),
+            )
+        )
+    parts.append(
+        '<p class="note">Each mode is diagnosed on its own. With several channels a '
+        "configuration's verdict is the cause most channels name, its confidence the "
+        "channels' mean; the paper's figures and models are the first mode's, on the first channel.</p>"
+    )
+    return parts
 
 
 def verdict_html(
@@ -724,6 +975,7 @@ def verdict_html(
     across = document.get("across_configurations") or {}
     if not areas:
         areas = {n: c.get("bearing_area_in2") for n, c in (across.get("configurations") or {}).items()}
+    one_run = any(_n_runs(entry) == 1 for entry in entries.values())
     parts = [f"<h1>Verdict: campaign {esc(document.get('campaign', '?'))}</h1>"]
     kind = "none" if cause == "none" else ("unknown" if cause == "unknown" else "")
     parts.append(
@@ -738,9 +990,9 @@ def verdict_html(
             "<ul>"
             + "".join(
                 f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
-                f"{esc(e.get('discrepancy', ''))}"
+                f"{esc(discrepancy_text(e, units))}"
                 + (f" {esc(trend_sentence(trends[n], units))}" if n in trends else "")
-                + "".join(f" {tag('check: ' + flag, 'flag')}" for flag in _flags(e))
+                + _unidentified_tag(e)
                 + "</li>"
                 for n, e in entries.items()
             )
@@ -748,10 +1000,9 @@ def verdict_html(
         )
     if entries and units.velocity != INCH_SECOND.velocity:
         parts.append(
-            '<p class="note">The first sentence of each line quotes diagnosis.json, whose '
-            f"amplitudes are in in/s (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} {units.velocity}), "
-            "as do the statistics of the hypotheses, which are defined on in/s; the rest of this "
-            f"page is in {units.velocity}.</p>"
+            f'<p class="note">Shown in {units.velocity} and {units.area}; diagnosis.json and the '
+            f"tables keep in/s and in² (1 in/s = {INCH_SECOND.per_in_s * units.per_in_s:g} "
+            f"{units.velocity}).</p>"
         )
     skipped = document.get("skipped_configurations") or {}
     if skipped:
@@ -782,7 +1033,7 @@ def verdict_html(
         )
     )
     parts.append(
-        f'<p class="note">{esc(ERROR_UNIT)}. Ratio: extended / baseline held-out error; below 1 '
+        f'<p class="note">{esc(ERROR_UNIT)}{esc(ONE_RUN_ERROR_UNIT) if one_run else ""}. Ratio: extended / baseline held-out error; below 1 '
         "the extended model predicts better; with cause none the extended model is the "
         "baseline and the ratio is 1. Last column: the best other candidate's held-out error "
         "and how many times the verdict's it is.</p>"
@@ -792,6 +1043,8 @@ def verdict_html(
             parts.append(
                 f"<p><b>{esc(name)}</b>, the cause: {esc(CAUSE_WORDS.get(entry['cause'], entry['cause']))}.</p>"
             )
+
+    parts.extend(modes_section(document))
 
     # how sure
     parts.append("<h2>How sure we are</h2>")
@@ -813,6 +1066,13 @@ def verdict_html(
                 f"{esc(model_name(models.get('extended')))} (ratio {ratio(across.get('ratio'))}), "
                 "in units of the run-to-run scatter.</p>"
             )
+            caveat = left_out_caveat(
+                error
+                for c in (across.get("configurations") or {}).values()
+                for error in (c.get("baseline_error"), c.get("extended_error"))
+            )
+            if caveat:
+                parts.append(f"<p>{esc(caveat)}</p>")
         else:
             parts.append(f"<p>Not applicable: {esc(across.get('reason', 'no reason given'))}.</p>")
 
@@ -862,8 +1122,9 @@ def verdict_html(
 
 
 # ------------------------------------------------------------------ tables
-def hypotheses_html(hypotheses: pd.DataFrame) -> str:
-    """Every hypothesis test, one row per configuration and amplitude."""
+def hypotheses_html(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> str:
+    """Every hypothesis test, one row per configuration and amplitude, in ``units``."""
+    hypotheses = hypotheses_in_units(hypotheses, units)
     rows = [
         [
             esc(r.hypothesis),
@@ -873,7 +1134,7 @@ def hypotheses_html(hypotheses: pd.DataFrame) -> str:
             fmt(r.estimate),
             f"{fmt(r.ci_low)} – {fmt(r.ci_high)}",
             fmt(100 * r.confidence, 3),
-            esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s)),
+            esc(amplitude_range(r.amplitude_low_in_s, r.amplitude_high_in_s, units)),
             str(r.n_runs),
             esc(r.note or ""),
         ]
@@ -1004,14 +1265,26 @@ def damping_fits_html(fits: pd.DataFrame) -> str:
     return page("Damping fits", body)
 
 
-def model_fits_html(fits: pd.DataFrame) -> str:
-    """Dahl and LuGre parameters per configuration, value ± one sigma, fit quality."""
+def _parameter_line(name: str, value: float, std: float, units: UnitSystem) -> str:
+    """``sigma = 2891 ± 61 lbf/in`` (HTML), in ``units``, with a word when the uncertainty
+    leaves the value undetermined (:func:`~workflow.outputs.plain_words.uncertainty_note`)."""
+    unit, unit_si, factor_si = MODEL_PARAMETER_UNITS.get(name, ("", "", 1.0))
+    if units.name == "si":
+        unit, value, std = unit_si, value * factor_si, std * factor_si
+    unit = "" if unit in ("", "1") else f" {unit}"
+    note = uncertainty_note(value, std)
+    return f"{esc(name)} = {fmt(value, 4)} ± {fmt(std, 2)}{esc(unit)}" + (
+        f" <i>({esc(note)})</i>" if note else ""
+    )
+
+
+def model_fits_html(fits: pd.DataFrame, units: UnitSystem = INCH_SECOND) -> str:
+    """Dahl and LuGre parameters per configuration, value ± one sigma with its unit (in
+    ``units``), fit quality."""
     rows = []
     for (configuration, model), part in fits.groupby(["configuration", "model"], sort=False):
         first = part.iloc[0]
-        params = "<br>".join(
-            f"{esc(p.parameter)} = {fmt(p.value, 4)} ± {fmt(p.std, 2)}" for p in part.itertuples()
-        )
+        params = "<br>".join(_parameter_line(p.parameter, p.value, p.std, units) for p in part.itertuples())
         rows.append(
             [
                 esc(configuration),
@@ -1126,20 +1399,13 @@ def rejected_segments_html(rejected: pd.DataFrame) -> str:
 
 
 # ------------------------------------------------------------------ the first page (rst)
-_RST_SPECIAL = re.compile(r"([\\`*_|])")
-
-
-def rst_escape(text: Any) -> str:
-    """Plain text made safe for reStructuredText inline markup."""
-    return _RST_SPECIAL.sub(r"\\\1", str(text))
-
-
 def verdict_rst(
     document: Mapping,
     *,
     runs: pd.DataFrame | None = None,
     hypotheses: pd.DataFrame | None = None,
     segments: pd.DataFrame | None = None,
+    units: UnitSystem = INCH_SECOND,
 ) -> str:
     """The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
@@ -1150,19 +1416,24 @@ def verdict_rst(
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
     trends = measured_trends(segments) if segments is not None else {}
-    title = f"Verdict: {cause_name(cause)}"
-    lines = [title, "=" * len(title), "", rst_escape(campaign_headline(document)), ""]
+    title = rst_text(f"Verdict: {cause_name(cause)}")
+    lines = [title, "=" * len(title), ""]
+    if document.get("campaign"):
+        lines += [f"Campaign {rst_strong(document['campaign'])}.", ""]
+    # whole sentences are not shortened: only the campaign's text in them is (display_text)
+    lines += [rst_text(campaign_headline(document), limit=None), ""]
     for name, entry in entries.items():
         gain = entry.get("gain") or {}
         base = model_name(entry.get("baseline", {}).get("model"))
         if entry.get("cause") == "none":
             text = f"{base} fits within the run-to-run scatter (held-out error {fmt(gain.get('baseline'))})."
         else:
-            text = entry.get("discrepancy", "")
+            text = discrepancy_text(entry, units)
             if entry.get("cause") != "unknown":
                 text += (
                     f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
-                    f"held-out runs with {ratio(gain.get('ratio'))} of {base}'s error "
+                    f"{'held-out runs' if _n_runs(entry) > 1 else 'held-out amplitude ranges of the one run'} "
+                    f"with {ratio(gain.get('ratio'))} of {base}'s error "
                     f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))})."
                 )
                 margin = candidate_margin(entry)
@@ -1174,16 +1445,18 @@ def verdict_rst(
                         "its error."
                     )
         if name in trends:
-            text += " " + trend_sentence(trends[name])
-        for flag in _flags(entry):
-            text += f" Check the fitted {flag}."
+            text += " " + trend_sentence(trends[name], units)
+        unidentified = unidentified_sentence(_unidentified(entry, units))
+        if unidentified:
+            text += " " + unidentified
         lines += [
-            f"* **{rst_escape(name)}**: *{rst_escape(cause_name(entry.get('cause')))}*. " + rst_escape(text),
+            f"* {rst_strong(name)}: *{rst_text(cause_name(entry.get('cause')))}*. "
+            + rst_text(text, limit=None),
             "",
         ]
     skipped = document.get("skipped_configurations") or {}
     for name, reason in skipped.items():
-        lines += [f"* **{rst_escape(name)}**: not diagnosed ({rst_escape(reason)}).", ""]
+        lines += [f"* {rst_strong(name)}: not diagnosed ({rst_text(reason)}).", ""]
     if hypotheses is not None and not hypotheses.empty:
         parts = []
         for hypothesis, part in hypotheses.groupby("hypothesis", sort=False):
@@ -1197,15 +1470,16 @@ def verdict_rst(
                         ", ".join(f"{v} at {c} of {len(sub)} amplitudes" for v, c in counts.items())
                     )
             parts.append(f"{hypothesis}: {'; '.join(verdicts)}.")
-        lines += ["**The paper's hypotheses.** " + rst_escape(" ".join(parts)), ""]
+        lines += ["**The paper's hypotheses.** " + rst_text(" ".join(parts), limit=None), ""]
     if runs is not None and not runs.empty:
         excluded = excluded_runs(runs)
         text = f"{int((runs['status'] == 'used').sum())} of {len(runs)} run files used"
         if len(excluded):
             text += "; excluded: " + "; ".join(
-                f"{r.configuration}/{r.run} ({r.reason})" for r in excluded.itertuples()
+                f"{display_text(r.configuration)}/{display_text(r.run)} ({display_text(r.reason)})"
+                for r in excluded.itertuples()
             )
-        lines += ["**Runs.** " + rst_escape(text + "."), ""]
+        lines += ["**Runs.** " + rst_text(text + ".", limit=None), ""]
     lines += [
         "The evidence (held-out errors of every candidate, margins, residual tests) is on "
         "the page verdict.html_ in category `1 Verdict`_; the figures and tables are in "
@@ -1218,20 +1492,13 @@ def verdict_rst(
 def landing_rst(verdict: str, description: str) -> str:
     """The report's first page: the verdict, then the workflow description.
 
-    ``verdict`` is protected from Snakemake's Jinja rendering of the page;
-    ``description`` (report/workflow.rst) keeps its Jinja expressions.
+    ``verdict`` (:func:`verdict_rst`) holds the campaign's text only as
+    :func:`~workflow.outputs.escape.rst_text`, in which no Jinja tag can form, so it goes
+    through Snakemake's Jinja rendering of the page as it is; ``description``
+    (report/workflow.rst) keeps its Jinja expressions.
     """
     heading = "About this study"
-    return (
-        "{% raw %}\n"
-        + verdict
-        + "\n{% endraw %}\n\n"
-        + heading
-        + "\n"
-        + "=" * len(heading)
-        + "\n\n"
-        + description
-    )
+    return verdict + "\n\n" + heading + "\n" + "=" * len(heading) + "\n\n" + description
 
 
 def quality_html(quality: pd.DataFrame) -> str:

@@ -8,7 +8,9 @@ from collections.abc import Mapping
 
 import pandas as pd
 
+from workflow.outputs.escape import terminal_text
 from workflow.outputs.report import cause_name
+from workflow.outputs.report_command import REPORT_COMMAND_FILE
 
 __all__ = [
     "REASONS_SHOWN",
@@ -43,24 +45,28 @@ def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> s
     str
         Lines ending in a newline.
     """
-    lines = [f"lapjoint: campaign {document.get('campaign', '?')}"]
-    lines.append(f"Verdict: {cause_name(document.get('cause'))} ({document.get('cause')})")
+    # the campaign's text reaches the console only through terminal_text; a reason's
+    # whitespace runs are folded to one space first (its line breaks are layout, not content)
+    lines = [f"lapjoint: campaign {terminal_text(document.get('campaign', '?'))}"]
+    cause = document.get("cause")
+    lines.append(f"Verdict: {terminal_text(cause_name(cause))} ({terminal_text(cause)})")
     for name, entry in document.get("configurations", {}).items():
         gain = (entry.get("gain") or {}).get("ratio")
         gain_text = f", held-out error ratio {gain:.2f}" if isinstance(gain, int | float) else ""
-        lines.append(f"  {name}: {cause_name(entry.get('cause'))}{gain_text}")
+        lines.append(f"  {terminal_text(name)}: {terminal_text(cause_name(entry.get('cause')))}{gain_text}")
     for name, reason in (document.get("skipped_configurations") or {}).items():
-        lines.append(_within(f"  {name}: not diagnosed ({' '.join(str(reason).split())})", width))
+        reason = terminal_text(" ".join(str(reason).split()))
+        lines.append(_within(f"  {terminal_text(name)}: not diagnosed ({reason})", width))
     used = runs[runs["status"] == "used"]
     excluded = runs[runs["status"] != "used"]
     lines.append(f"Runs: {len(used)} used, {len(excluded)} excluded (of {len(runs)} files)")
     for row in excluded.head(REASONS_SHOWN).itertuples():
-        reason = " ".join(str(row.reason).split())
-        lines.append(_within(f"  excluded {row.path}: {reason}", width))
+        reason = terminal_text(" ".join(str(row.reason).split()))
+        lines.append(_within(f"  excluded {terminal_text(row.path)}: {reason}", width))
     if len(excluded) > REASONS_SHOWN:
         lines.append(f"  ... and {len(excluded) - REASONS_SHOWN} more")
     if len(excluded):
         lines.append("  every run and its reason: results/tables/runs.csv")
     lines.append("Report: results/report/verdict.html (verdict page)")
-    lines.append("  one-file report: snakemake --report results/report.html")
+    lines.append(f"  one-file report: the command in {REPORT_COMMAND_FILE} (works from any folder)")
     return "\n".join(lines) + "\n"

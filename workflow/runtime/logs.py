@@ -11,6 +11,8 @@ import time
 from pathlib import Path
 from types import TracebackType
 
+from workflow.outputs.escape import terminal_lines
+
 __all__ = [
     "COST_LINE",
     "ScriptStop",
@@ -53,6 +55,15 @@ def peak_resident_mb() -> float:
     return peak / 2**20 if sys.platform == "darwin" else peak / 2**10
 
 
+class TerminalSafeFormatter(logging.Formatter):
+    """Log lines with every character a terminal acts on written out as its escape
+    (:func:`workflow.outputs.escape.terminal_lines`): messages name the campaign's runs,
+    channels and paths, and the job's log is echoed to the console."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return terminal_lines(super().format(record))
+
+
 def setup_script_logging(log_path: str | Path | None, name: str) -> logging.Logger:
     """Send log records (and any uncaught exception) to ``log_path`` and stderr;
     at exit, log the script's cost (:data:`COST_LINE`) and end the process.
@@ -77,12 +88,9 @@ def setup_script_logging(log_path: str | Path | None, name: str) -> logging.Logg
     if log_path:
         Path(log_path).parent.mkdir(parents=True, exist_ok=True)
         handlers.append(logging.FileHandler(log_path, mode="w"))
-    logging.basicConfig(
-        level=logging.INFO,
-        format="%(asctime)s %(name)s %(levelname)s %(message)s",
-        handlers=handlers,
-        force=True,
-    )
+    logging.basicConfig(level=logging.INFO, handlers=handlers, force=True)
+    for handler in handlers:
+        handler.setFormatter(TerminalSafeFormatter("%(asctime)s %(name)s %(levelname)s %(message)s"))
     logger = logging.getLogger(name)
     failed = False
 

@@ -8,6 +8,8 @@ Decisions where the contract leaves room:
   rules (``t`` is time too).
 - ``channel: <index>`` counts every channel of the file from 0, in file order, as the
   error messages list them.
+- ``response.channels`` names several response channels; each must be in the file, once,
+  with as many samples and the same sample interval as the others.
 - Without ``response.channel`` the response is the one response channel of the file; when
   there is none, the one channel with no role (a plain MAT file of ``t`` and ``x``).
   Without ``force.channel`` the force is the one force channel, if any (as in ASCII, a
@@ -28,12 +30,14 @@ from numpy.typing import NDArray
 from workflow.io import units
 from workflow.io.campaign import (
     MIN_SAMPLES,
-    TIME_STEP_REL_TOLERANCE,
     Campaign,
     CampaignFormatError,
+    ResponseChannel,
     RunRecord,
+    response_unit,
 )
-from workflow.io.record_rules import column_role, rates_agree
+from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
+from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
 
 __all__ = [
@@ -43,8 +47,11 @@ __all__ = [
     "channel_role",
     "describe_channels",
     "assemble_record",
+    "LISTED_CHANNELS",
 ]
 
+LISTED_CHANNELS: int = 32
+"""Most channels an error message lists (a file may hold thousands)."""
 
 _EMPTY_UNIT_LABELS = {"", "none", "-", "n/a", "unknown", "eu"}
 _TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
@@ -133,9 +140,11 @@ def channel_role(channel: Channel) -> str | None:
 def describe_channels(channels: list[Channel]) -> str:
     """``[0] 't' (s), [1] 'x', ...``: the listing error messages give."""
     parts = []
-    for index, channel in enumerate(channels):
+    for index, channel in enumerate(channels[:LISTED_CHANNELS]):
         unit = unit_label(channel.unit)
-        parts.append(f"[{index}] {channel.name!r}" + (f" ({unit})" if unit else ""))
+        parts.append(f"[{index}] {quoted(channel.name)}" + (f" ({shortened(unit)})" if unit else ""))
+    if len(channels) > LISTED_CHANNELS:
+        parts.append(f"and {len(channels) - LISTED_CHANNELS} more")
     return ", ".join(parts)
 
 
@@ -168,17 +177,28 @@ def _by_reference(
 
 def _select_channels(
     file_channels: FileChannels, campaign: Campaign, shown: str
-) -> tuple[Channel, Channel | None]:
-    """The response channel and the force channel (or None) of the file."""
+) -> tuple[list[Channel], Channel | None]:
+    """The response channels (campaign.yaml's order) and the force channel (or None)."""
     channels, name = file_channels.channels, file_channels.format_name
     if not channels:
         raise CampaignFormatError(shown, None, f"no channels of samples in the {name} file")
+    for index, channel in enumerate(channels):
+        long_name = name_length_problem(f"channel [{index}]: name", channel.name)
+        if long_name is not None:
+            raise CampaignFormatError(shown, None, long_name)
     roles = {id(c): channel_role(c) for c in channels}
     force = None
     if campaign.force is not None and campaign.force.channel is not None:
         force = _by_reference(channels, campaign.force.channel, "force.channel", shown, name)
-    if campaign.response.channel is not None:
-        response = _by_reference(channels, campaign.response.channel, "response.channel", shown, name)
+    references = campaign.response.references()
+    if references != (None,):
+        key = "response.channels" if campaign.response.channels is not None else "response.channel"
+        responses = [_by_reference(channels, ref, key, shown, name) for ref in references]
+        repeated = [c for i, c in enumerate(responses) if any(c is d for d in responses[:i])]
+        if repeated:
+            raise CampaignFormatError(
+                shown, None, f"campaign.yaml {key} names {repeated[0].record} more than once"
+            )
     else:
         others = [c for c in channels if c is not force]
         candidates = [c for c in others if roles[id(c)] == "response"]
@@ -188,16 +208,16 @@ def _select_channels(
                 shown,
                 None,
                 f"{'no' if not candidates else len(candidates)} response channels in the {name} file; "
-                "say which one with response: {channel: NAME or INDEX} in campaign.yaml; "
-                f"its channels: {describe_channels(channels)}",
+                "say which with response: {channel: NAME or INDEX} (or channels: [...] for several) "
+                f"in campaign.yaml; its channels: {describe_channels(channels)}",
             )
-        response = candidates[0]
-    if force is response:
+        responses = candidates
+    if force is not None and any(force is c for c in responses):
         raise CampaignFormatError(
-            shown, None, f"campaign.yaml names {response.record} as both the response and the force"
+            shown, None, f"campaign.yaml names {force.record} as both a response and the force"
         )
     if force is None:
-        candidates = [c for c in channels if roles[id(c)] == "force" and c is not response]
+        candidates = [c for c in channels if roles[id(c)] == "force" and not any(c is r for r in responses)]
         if len(candidates) > 1:
             raise CampaignFormatError(
                 shown,
@@ -206,7 +226,7 @@ def _select_channels(
                 f"force: {{channel: NAME or INDEX}} in campaign.yaml; its channels: {describe_channels(channels)}",
             )
         force = candidates[0] if candidates else None
-    return response, force
+    return responses, force
 
 
 def _checked_samples(channel: Channel, shown: str) -> NDArray[np.float64]:
@@ -231,15 +251,21 @@ def _checked_samples(channel: Channel, shown: str) -> NDArray[np.float64]:
     return values
 
 
-def _response_unit_check(channel: Channel, campaign: Campaign, shown: str) -> None:
-    unit = unit_label(channel.unit)
-    if unit is not None and units.normalize_unit(unit) != campaign.response.unit:
-        raise CampaignFormatError(
-            shown,
-            None,
-            f"{channel.record}: unit {unit!r} in the file disagrees with campaign.yaml response "
-            f"unit {campaign.response.unit!r} ({campaign.response.quantity})",
-        )
+def _checked_magnitude(channel: Channel, values: NDArray[np.float64], shown: str) -> NDArray[np.float64]:
+    """The samples of a force or response channel, refused when the analysis cannot square
+    them (:mod:`workflow.io.limits`), naming the sample."""
+    problem = magnitude_problem(values, channel.record)
+    if problem is not None:
+        raise CampaignFormatError(shown, None, f"{problem[1]} (sample {problem[0]}, 0-based)")
+    return values
+
+
+def _response_unit(channel: Channel, campaign: Campaign, shown: str) -> str:
+    """The channel's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
+    try:
+        return response_unit(unit_label(channel.unit), campaign, channel.record)
+    except ValueError as error:
+        raise CampaignFormatError(shown, None, str(error)) from None
 
 
 def _force_factor_lbf(channel: Channel, campaign: Campaign, shown: str) -> float:
@@ -277,19 +303,16 @@ def _rate_from_time(channel: Channel, shown: str) -> tuple[NDArray[np.float64], 
         )
     time_s = np.ascontiguousarray(np.asarray(channel.values, dtype=np.float64).ravel() * factor_s)
     steps = np.diff(time_s)
-    mean_step_s = (time_s[-1] - time_s[0]) / (time_s.size - 1)
-    uneven = np.flatnonzero(
-        ~(np.abs(steps - mean_step_s) <= TIME_STEP_REL_TOLERANCE * abs(mean_step_s)) | (steps <= 0)
-    )
-    if uneven.size:
-        i = int(uneven[0])
+    bad = first_bad_time_step(steps)
+    if bad is not None:
+        i, typical_s = bad
         raise CampaignFormatError(
             shown,
             None,
             f"{channel.record}: time not increasing in uniform steps: step {steps[i]:.6g} s after "
-            f"sample {i} (0-based), mean step {mean_step_s:.6g} s",
+            f"sample {i} (0-based), typical step {typical_s:.6g} s",
         )
-    return time_s, 1.0 / mean_step_s
+    return time_s, (time_s.size - 1) / (time_s[-1] - time_s[0])
 
 
 def assemble_record(file_channels: FileChannels, relative: str, shown: str, campaign: Campaign) -> RunRecord:
@@ -318,19 +341,29 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         lengths or sample intervals, a missing sample interval, a unit or sample rate or
         pre-trigger that contradicts campaign.yaml.
     """
-    response, force = _select_channels(file_channels, campaign, shown)
-    response_values = _checked_samples(response, shown)
-    n_samples = response_values.size
-    _response_unit_check(response, campaign, shown)
-    force_lbf = None
-    if force is not None:
-        force_values = _checked_samples(force, shown)
-        if force_values.size != n_samples:
+    selected, force = _select_channels(file_channels, campaign, shown)
+    response = selected[0]
+    # every channel read has as many samples as the first response channel
+    samples = {
+        id(c): _checked_magnitude(c, _checked_samples(c, shown), shown)
+        for c in (*selected, force)
+        if c is not None
+    }
+    n_samples = samples[id(response)].size
+    for channel in (*selected, force):
+        if channel is not None and samples[id(channel)].size != n_samples:
             raise CampaignFormatError(
                 shown,
                 None,
-                f"{force.record} has {force_values.size} samples but {response.record} has {n_samples}",
+                f"{channel.record} has {samples[id(channel)].size} samples but {response.record} has {n_samples}",
             )
+    responses = [
+        ResponseChannel(name, samples[id(channel)], _response_unit(channel, campaign, shown), channel.name)
+        for name, channel in zip(campaign.response.channel_names(), selected)
+    ]
+    force_lbf = None
+    if force is not None:
+        force_values = samples[id(force)]
         force_lbf = force_values * _force_factor_lbf(force, campaign, shown)
 
     # Sample rate: campaign.yaml, the file's sample interval, the file's time vector;
@@ -339,7 +372,7 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
     if campaign.sample_rate_hz is not None:
         sources.append(("campaign.yaml sample_rate_hz", campaign.sample_rate_hz))
     start_s = response.start_s
-    for channel in (response, force):
+    for channel in (*selected, force):
         if channel is not None and channel.sample_interval_s is not None:
             if not channel.sample_interval_s > 0:
                 raise CampaignFormatError(
@@ -401,6 +434,8 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
 
     record_start = response.record_start or (force.record_start if force is not None else None)
     header = {"format": file_channels.format_name, "response channel": response.name}
+    if len(selected) > 1:
+        header["response channels"] = ", ".join(channel.name for channel in selected)
     if force is not None:
         header["force channel"] = force.name
     if start_s is not None:
@@ -411,13 +446,14 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         pretrigger_samples=int(pretrigger_samples),
         time_s=time_s,
         force_lbf=None if force_lbf is None else np.ascontiguousarray(force_lbf),
-        response=response_values,
+        response=responses[0].values,
         response_quantity=campaign.response.quantity,
-        response_unit=campaign.response.unit,
+        response_unit=responses[0].unit,
         header=header,
         n_samples=int(n_samples),
         column_names=tuple(c.name for c in file_channels.channels),
         sample_rate_source=sample_rate_source,
         pretrigger_source=pretrigger_source,
         record_start=iso_text(record_start),
+        responses=tuple(responses),
     )

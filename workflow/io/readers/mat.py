@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
+from workflow.io.limits import quoted
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import parse_clock_time
 
@@ -76,11 +77,46 @@ def _read_mat73(path: Path, shown: str) -> dict[str, Any]:
 
     try:
         with h5py.File(path, "r") as handle:
-            return {name: _hdf5_value(handle, handle[name]) for name in handle if not name.startswith("#")}
+            outside = _outside_reference(handle)
+            if outside is None:
+                return {
+                    name: _hdf5_value(handle, handle[name]) for name in handle if not name.startswith("#")
+                }
     except Exception as error:  # h5py raises OSError, KeyError, ... for damaged files
         raise CampaignFormatError(
             shown, None, f"cannot read as a MATLAB 7.3 (HDF5) file ({type(error).__name__}: {error})"
         ) from None
+    raise CampaignFormatError(
+        shown,
+        None,
+        f"{outside}: refused, it would read another file (every file read lies in the campaign folder)",
+    )
+
+
+def _outside_reference(handle: Any) -> str | None:
+    """The first object of an HDF5 file whose data lie in another file (an external link,
+    a dataset stored in external files, a virtual dataset), or None. MATLAB never writes
+    them; h5py would follow them out of the campaign folder."""
+    import h5py
+
+    found: list[str] = []
+
+    def link(name: str, info: Any) -> bool | None:
+        if isinstance(info, h5py.ExternalLink):
+            found.append(f"{quoted(name)} is a link to another file")
+            return True
+        return None
+
+    def dataset(name: str, node: Any) -> bool | None:
+        if isinstance(node, h5py.Dataset) and (node.external or node.is_virtual):
+            found.append(f"{quoted(name)} holds data stored in other files")
+            return True
+        return None
+
+    handle.visititems_links(link)
+    if not found:
+        handle.visititems(dataset)
+    return found[0] if found else None
 
 
 def _hdf5_value(handle: Any, node: Any) -> Any:
@@ -119,6 +155,19 @@ def _number(value: Any) -> float | None:
     return None
 
 
+def _stated_number(group: dict[str, Any], where: str, shown: str, *keys: str) -> float | None:
+    """The finite number at ``keys`` of a Test.Lab struct, None when the field is absent;
+    a field that holds anything else is an error (never silently replaced)."""
+    value = _field(group, *keys)
+    if value is None:
+        return None
+    number = _number(value)
+    if number is None or not np.isfinite(number):
+        text = quoted(value) if isinstance(value, str) else f"of type {type(value).__name__}"
+        raise CampaignFormatError(shown, None, f"{where}: {'.'.join(keys)} is {text}, not a finite number")
+    return number
+
+
 def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[Channel]:
     """The channels of one Test.Lab export struct."""
     where = f"variable {variable!r}"
@@ -135,7 +184,7 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
             f"{where}: function_record.name gives {len(names)} channel name(s) but y_values.values "
             f"has {len(columns)} column(s) of {values.shape[0]} samples",
         )
-    declared = _number(_field(group, "x_values", "number_of_values"))
+    declared = _stated_number(group, where, shown, "x_values", "number_of_values")
     if declared is not None and declared != columns[0].size:
         raise CampaignFormatError(
             shown,
@@ -143,11 +192,11 @@ def _testlab_channels(variable: str, group: dict[str, Any], shown: str) -> list[
             f"{where}: x_values.number_of_values says {declared:.0f} samples but y_values.values "
             f"holds {columns[0].size} (truncated or mislabelled export)",
         )
-    interval_s = _number(_field(group, "x_values", "increment"))
-    start_s = _number(_field(group, "x_values", "start_value"))
+    interval_s = _stated_number(group, where, shown, "x_values", "increment")
+    start_s = _stated_number(group, where, shown, "x_values", "start_value")
     label = _field(group, "y_values", "quantity", "label")
-    factor = _number(_field(group, "y_values", "quantity", "unit_transformation", "factor"))
-    offset = _number(_field(group, "y_values", "quantity", "unit_transformation", "offset"))
+    factor = _stated_number(group, where, shown, "y_values", "quantity", "unit_transformation", "factor")
+    offset = _stated_number(group, where, shown, "y_values", "quantity", "unit_transformation", "offset")
     factor = 1.0 if factor is None else factor
     offset = 0.0 if offset is None else offset
     created = _field(group, "function_record", "creation_time")
@@ -198,12 +247,17 @@ def channels_from_variables(variables: dict[str, Any], format_name: str, shown: 
             channels += _testlab_channels(name, value, shown)
             testlab = True
             continue
-        scalar = _number(value) if not isinstance(value, (str, dict)) else None
-        if scalar is not None:
-            if name.lower() in _RATE_NAMES_HZ and scalar > 0:
-                rates.append((name, scalar))
-            elif name.lower() in _INTERVAL_NAMES_S and scalar > 0:
-                rates.append((name, 1.0 / scalar))
+        if name.lower() in _RATE_NAMES_HZ | _INTERVAL_NAMES_S:
+            scalar = _number(value) if not isinstance(value, (str, dict)) else None
+            if scalar is None or not 0 < scalar < np.inf:
+                text = quoted(value) if isinstance(value, str) else f"{value!r:.60}"
+                unit = "Hz" if name.lower() in _RATE_NAMES_HZ else "s"
+                raise CampaignFormatError(
+                    shown, None, f"variable {name!r} is {text}, not a positive number (in {unit})"
+                )
+            rates.append((name, scalar if name.lower() in _RATE_NAMES_HZ else 1.0 / scalar))
+            continue
+        if not isinstance(value, (str, dict)) and _number(value) is not None:
             continue
         array = value if isinstance(value, np.ndarray) else None
         if array is not None and array.ndim == 1 and array.size > 1 and np.issubdtype(array.dtype, np.number):

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from workflow.io.campaign import CampaignFormatError
+from workflow.io.limits import quoted
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import utc_from_datetime64
 
@@ -43,6 +44,23 @@ def _date_time_property(properties: dict) -> datetime | None:
     return None
 
 
+def _stated_number(properties: dict, key: str, channel: str, shown: str) -> float | None:
+    """A channel's numeric property, None when absent; any other value is an error
+    naming the channel (never silently replaced)."""
+    value = properties.get(key)
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = None
+    if number is None or isinstance(value, (str, bytes)) or not np.isfinite(number):
+        raise CampaignFormatError(
+            shown, None, f"channel {quoted(channel)}: {key} is {quoted(str(value))}, not a finite number"
+        )
+    return number
+
+
 def read_tdms_channels(path: Path, shown: str) -> FileChannels:
     """Channels of a TDMS file.
 
@@ -58,9 +76,12 @@ def read_tdms_channels(path: Path, shown: str) -> FileChannels:
     logger = logging.getLogger("nptdms")
     logger.addHandler(warnings)
     try:
-        tdms = TdmsFile.read(path)
-        groups = [(group, group.channels()) for group in tdms.groups()]
-        arrays = [[channel[:] for channel in group_channels] for _, group_channels in groups]
+        # From an open file, npTDMS does not look for a '.tdms_index' file beside it
+        # (which could be a link out of the campaign folder).
+        with open(path, "rb") as handle:  # read-only: raw files are never modified
+            tdms = TdmsFile.read(handle)
+            groups = [(group, group.channels()) for group in tdms.groups()]
+            arrays = [[channel[:] for channel in group_channels] for _, group_channels in groups]
     except Exception as error:  # npTDMS raises ValueError, EOFError, struct.error, ...
         raise CampaignFormatError(
             shown, None, f"cannot read as a TDMS file ({type(error).__name__}: {error})"
@@ -77,18 +98,18 @@ def read_tdms_channels(path: Path, shown: str) -> FileChannels:
             if not (isinstance(values, np.ndarray) and np.issubdtype(values.dtype, np.number)):
                 continue  # strings and timestamps are not samples
             properties = channel.properties
-            increment = properties.get("wf_increment")
-            start = properties.get("wf_start_offset")
             name = f"{group.name}/{channel.name}"
+            increment = _stated_number(properties, "wf_increment", name, shown)
+            start = _stated_number(properties, "wf_start_offset", name, shown)
             channels.append(
                 Channel(
                     name=name,
                     values=values,
                     record=f"channel {name!r}",
                     unit=properties.get("unit_string"),
-                    sample_interval_s=None if increment is None else float(increment),
+                    sample_interval_s=increment,
                     interval_source="wf_increment",
-                    start_s=None if start is None else float(start),
+                    start_s=start,
                     aliases=(channel.name,),
                     record_start=utc_from_datetime64(properties.get("wf_start_time")) or group_start,
                 )

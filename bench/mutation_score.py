@@ -1,0 +1,131 @@
+"""Mutation score of the modules that decide numbers, with mutmut.
+
+Run: ``pip install -e '.[mutation]'`` once, then
+``PYTHONPATH=$PWD .venv/bin/python bench/mutation_score.py [--children N] [TARGET ...]``
+(targets below; default ``units``). For each target, the project's tracked files are
+copied to a temporary folder, mutmut mutates that one module and runs only the tests that
+exercise it (every mutant: one small change of an operator, a constant, a string or a
+call), and the bench prints the mutants killed, survived and otherwise (timeouts,
+suspicious), the score (killed over all) and each survivor's diff. A survivor is a change
+no test notices: kill it with a test, or argue in the test file why it is equivalent.
+
+Each mutant costs one run of the target's tests: ``units`` about 1.5 minutes on one core,
+``decide`` about as long, ``decay`` far longer.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+TARGETS = {
+    "units": (
+        "workflow/io/units.py",
+        ["tests/test_units.py", "tests/test_unit_spellings.py", "tests/test_column_grammar.py"],
+        "",
+    ),
+    "record_rules": (
+        "workflow/io/record_rules.py",
+        ["tests/test_column_grammar.py", "tests/test_campaign.py", "tests/test_system_formats.py"],
+        "",
+    ),
+    "decay": ("workflow/measured/decay.py", ["tests/test_decay.py", "tests/test_analysis_truth.py"], ""),
+    # Segment layout only (the decay's other functions take hours of mutants on one core).
+    "segment_bounds": (
+        "workflow/measured/decay.py:segment_bounds",
+        ["tests/test_decay.py", "tests/test_analysis_truth.py"],
+        "segment or overlap",
+    ),
+    # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
+    # by the diagnosis tests, minutes per mutant.
+    "decide": ("workflow/discovery/decision.py:decide", ["tests/test_decision_rules.py"], "not named_none"),
+}
+"""Target -> (the module mutated, ``:function`` to mutate one function of it only; the tests
+run against each mutant; a pytest ``-k`` expression selecting among them, or "")."""
+
+
+def mutmut_config(module: str, tests: list[str], selection: str) -> str:
+    """setup.cfg of the copy: mutate ``module`` only, run ``tests`` only."""
+    lines = [
+        "[mutmut]",
+        "source_paths = workflow",
+        f"only_mutate = {module}",
+        "pytest_add_cli_args_test_selection =",
+    ]
+    lines += [f"    {test}" for test in tests]
+    lines += ["pytest_add_cli_args =", "    -p", "    no:cacheprovider"]
+    lines += ["    -k", f"    {selection}"] if selection else []
+    return "\n".join(lines + [""])
+
+
+def copy_project(destination: Path) -> None:
+    """The tracked files of the checkout (no results, no virtual environment)."""
+    tracked = (
+        subprocess.run(["git", "ls-files", "-z"], cwd=REPO, capture_output=True, check=True)
+        .stdout.decode()
+        .split("\0")
+    )
+    for relative in filter(None, tracked):
+        source = REPO / relative
+        if source.is_file() and not relative.startswith(("results/", "docs/")):
+            target = destination / relative
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(source, target)
+
+
+def mutmut(folder: Path, *args: str) -> str:
+    return subprocess.run(
+        [sys.executable, "-m", "mutmut", *args], cwd=folder, capture_output=True, text=True, check=True
+    ).stdout
+
+
+def score(target: str, children: int) -> None:
+    where, tests, selection = TARGETS[target]
+    module, _, function = where.partition(":")
+    with tempfile.TemporaryDirectory(prefix="mutation-") as tmp:
+        folder = Path(tmp)
+        copy_project(folder)
+        (folder / "setup.cfg").write_text(mutmut_config(module, tests, selection))
+        # mutmut names a mutant module.x_function__mutmut_N
+        names = [f"{module[:-3].replace('/', '.')}.x_{function}__mutmut_*"] if function else []
+        mutmut(folder, "run", "--max-children", str(children), *names)
+        outcomes: dict[str, list[str]] = {}
+        for line in mutmut(folder, "results", "--all", "true").splitlines():
+            name, _, outcome = line.strip().rpartition(": ")
+            if name and (not function or f".x_{function}__mutmut_" in name):
+                outcomes.setdefault(outcome, []).append(name)
+        killed = len(outcomes.get("killed", []))
+        total = sum(len(names) for names in outcomes.values())
+        others = ", ".join(
+            f"{len(names)} {outcome}" for outcome, names in outcomes.items() if outcome != "killed"
+        )
+        print(f"{target} ({where}; tests: {' '.join(tests)}{' -k ' + repr(selection) if selection else ''})")
+        print(f"  mutants {total}: killed {killed}{', ' + others if others else ''}")
+        print(f"  mutation score {killed / max(total, 1):.1%}")
+        for name in outcomes.get("survived", []):
+            print(mutmut(folder, "show", name))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("targets", nargs="*", default=["units"], choices=sorted(TARGETS))
+    parser.add_argument(
+        "--children", type=int, default=1, help="mutants tested at once (the machine is shared)"
+    )
+    arguments = parser.parse_args()
+    try:
+        import mutmut  # noqa: F401
+    except ImportError:
+        sys.exit("mutmut is not installed: pip install -e '.[mutation]'")
+    for target in arguments.targets:
+        score(target, arguments.children)
+
+
+if __name__ == "__main__":
+    main()
