@@ -776,7 +776,7 @@ def test_unidentified_parameters_said_once_in_words(document):
     assert "the baseline and the extended model: 3" in page
     assert "151 m/s" in page and "slip_velocity_in_s" not in page  # 5960 in/s in SI
     assert "2 fitted parameters not determined by the data" in page
-    assert "100 % of the resamples" in page and "1e+02" not in page
+    assert "its confidence is 100 %" in page and "1e+02" not in page
 
 
 def test_one_run_campaign_is_not_said_to_predict_runs(document):
