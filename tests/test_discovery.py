@@ -780,6 +780,29 @@ def test_discrepancy_sentence_names_both_curves():
     assert "over the 40 segments of the one run" in text and "1 runs" not in text
 
 
+def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range():
+    # the demo's no_washer: damping significant at 0.465-1.47 in/s only, while the residual
+    # figure shows the baseline 2.8 % too low above 1.47 in/s over the 7 runs reaching it
+    significant = {
+        **_bin("damping", -0.0517, -6.7, 9.2e-5, significant=True, p_limit=6.3e-4),
+        "v_low_in_s": 0.465,
+        "v_high_in_s": 1.47,
+    }
+    above = {**_bin("damping", 0.0279, 1.4, 0.22, p_limit=6.3e-4), "v_low_in_s": 1.47, "v_high_in_s": 4.65}
+    above["n_runs"] = 7
+    below = {**_bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4), "v_low_in_s": 0.147, "v_high_in_s": 0.465}
+    text = discrepancy_sentence("lugre", [below, significant, above], None, 10)
+    assert "differs from the lugre fit between 0.465 and 1.47 in/s, by up to -5.0 %" in text
+    assert (
+        "the largest damping misfit outside that range, where the measured damping lies 2.8 % above "
+        "the lugre fit at 1.47-4.65 in/s, is larger than the 2 % in damping" in text
+    )
+    assert "|t| = 1.4 over 7 runs" in text
+    # a bin within the models' accuracy outside the range is not named
+    assert "0.147-0.465" not in text and "0.85 %" not in text
+    assert "outside that range" not in discrepancy_sentence("lugre", [below, significant], None, 10)
+
+
 def test_one_significance_rule():
     # |t| alone decides nothing: 6.5 over 3 runs is not significant where 6.7 over 10 is
     assert not misfit_significant(0.0013, 0.00083, 0.05, MODEL_ACCURACY_LN_ZETA)
