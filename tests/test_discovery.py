@@ -262,6 +262,22 @@ def test_binned_discrepancy_flags_a_consistent_misfit_only():
     assert not any(r["significant"] for r in binned_discrepancy(data, res))
 
 
+def test_misfit_bins_span_only_measured_amplitudes():
+    # PFF: the verdict said "Measured from 0.101 in/s" and placed a frequency misfit at
+    # 0.0674-0.213 in/s, the half-decade edge below the lowest segment
+    data, res = _data_with_offset(0.05)  # amplitudes 0.1-3 in/s, half decades down from 3
+    three_scatters = np.full(data.velocity_in_s.size, 3.0)  # every bin fails explains_data
+    failing = explains_data(data, {"z_noise": three_scatters, "f_noise": three_scatters})["failing_bins"]
+    for rows in (binned_discrepancy(data, res), failing):
+        assert min(r["v_low_in_s"] for r in rows) == pytest.approx(0.1)  # the edge is 3e-1.5 = 0.095
+        assert max(r["v_high_in_s"] for r in rows) == pytest.approx(3.0)
+        for r in rows:
+            in_bin = data.velocity_in_s[
+                (data.velocity_in_s >= r["v_low_in_s"]) & (data.velocity_in_s <= r["v_high_in_s"])
+            ]
+            assert in_bin.size >= r["n_segments"]
+
+
 def test_run_order_trend():
     data, res = _data_with_offset(0.0, n_runs=8)
     res["ln_zeta"] = res["ln_zeta"] + 0.02 * data.run_index
