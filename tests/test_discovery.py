@@ -773,7 +773,10 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
     # a real misfit: its size with its sign, and a drift with the order it was measured in
     trend = {"significant": True, "change_over_sequence": -0.3, "t": -6.2, "order": RECORD_START_ORDER}
     text = discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
-    assert text.startswith("The measured damping differs from the lugre fit") and "by up to -26 %" in text
+    assert (
+        text.startswith("The measured damping differs from the lugre fit")
+        and "at 1-3.16 in/s, by -26 %" in text
+    )
     assert "shifts with run order (recording start times in the files) by -26 %" in text
 
 
@@ -808,7 +811,6 @@ def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range
     above["n_runs"] = 7
     below = {**_bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4), "v_low_in_s": 0.147, "v_high_in_s": 0.465}
     text = discrepancy_sentence("lugre", [below, significant, above], None, 10)
-    assert "differs from the lugre fit between 0.465 and 1.47 in/s, by up to -5.0 %" in text
     assert (
         "the largest damping misfit outside that range, where the measured damping lies 2.8 % above "
         "the lugre fit at 1.47-4.65 in/s, is larger than the 2 % in damping" in text
@@ -817,6 +819,9 @@ def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range
     # a bin within the models' accuracy outside the range is not named
     assert "0.147-0.465" not in text and "0.85 %" not in text
     assert "outside that range" not in discrepancy_sentence("lugre", [below, significant], None, 10)
+    # one significant bin: its range once, not "between A and B ... at A-B"
+    assert "differs from the lugre fit at 0.465-1.47 in/s, by -5.0 % (|t| = 6.7" in text
+    assert "between" not in text
 
 
 def test_one_significance_rule():

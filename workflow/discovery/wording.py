@@ -137,12 +137,15 @@ def discrepancy_sentence(
         lo = min(b["v_low_in_s"] for b in sig)
         hi = max(b["v_high_in_s"] for b in sig)
         worst = max(sig, key=lambda b: abs(b["mean"]))
-        parts.append(
-            f"the measured {curve} differs from the {model_name} fit between "
-            f"{_span(lo, hi, units, ' and ')}, by up to "
-            f"{format_percent(_misfit_percent(curve, worst['mean']))} "
-            f"({statistic_words(worst)}) at {_span(worst['v_low_in_s'], worst['v_high_in_s'], units)}"
-        )
+        size = f"{format_percent(_misfit_percent(curve, worst['mean']))} ({statistic_words(worst)})"
+        if len(sig) == 1:
+            where = f"at {_span(lo, hi, units)}, by {size}"
+        else:
+            where = (
+                f"between {_span(lo, hi, units, ' and ')}, by up to {size} "
+                f"at {_span(worst['v_low_in_s'], worst['v_high_in_s'], units)}"
+            )
+        parts.append(f"the measured {curve} differs from the {model_name} fit {where}")
         outside = [
             b
             for b in rows
