@@ -517,8 +517,33 @@ def test_damping_low_point_on_the_way_is_said():
             "frequency_hz": 100.0,
         }
     )
-    sentence = report.trend_sentence(report.measured_trends(segments)["c"])
-    assert "the damping stays level" in sentence and "through a low of 0.1" in sentence
+    trend = report.measured_trends(segments)["c"]
+    sentence = report.trend_sentence(trend)
+    assert f"the damping falls from {report.fmt(100 * trend['zeta_low'])} %" in sentence
+    assert "to a low of 0.1" in sentence and 100 * trend["zeta_min"] == pytest.approx(0.1, rel=0.02)
+    assert f"in/s, then rises to {report.fmt(100 * trend['zeta_high'])} %" in sentence
+    assert "damping stays level" not in sentence
+
+
+def test_damping_hump_is_said_as_a_rise_then_a_fall():
+    # UNESP t5nm: "the damping stays level from 0.499 % to 0.523 %, through a high of
+    # 0.653 % near 0.0445 in/s" beside a figure where it climbs to 0.65 % and falls to 0.48 %
+    amplitude = np.logspace(np.log10(0.0223), np.log10(31.0), 300)
+    x = np.log10(amplitude / 0.0445)
+    zeta = 0.005 + 0.0015 * np.exp(-(x**2) / 0.1)  # 0.5 % at both ends, 0.65 % at 0.0445 in/s
+    segments = pd.DataFrame(
+        {"configuration": "t5nm", "run": "r", "velocity_amplitude_in_s": amplitude, "zeta": zeta}
+    ).assign(frequency_hz=19.0)
+    trend = report.measured_trends(segments)["t5nm"]
+    sentence = report.trend_sentence(trend)
+    x_drawn, y_drawn = _plotted_points(figures.damping_vs_amplitude(segments, title="t"))
+    peak = float(y_drawn.max())  # the figure's highest point, in %
+    assert peak == pytest.approx(0.65, rel=0.01)
+    assert f"the damping rises from {report.fmt(100 * trend['zeta_low'])} %" in sentence
+    assert f"to a high of {report.fmt(100 * trend['zeta_max'])} % near" in sentence
+    assert 100 * trend["zeta_max"] == pytest.approx(peak, rel=0.02)
+    assert f", then falls to {report.fmt(100 * trend['zeta_high'])} %" in sentence
+    assert "stays level" not in sentence.split("frequency")[0]
 
 
 def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
