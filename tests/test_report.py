@@ -734,7 +734,8 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
     entry["evidence"]["threshold_distribution"]["adopted"] = False
     assert "the power law stays the extended model" in report.threshold_sentences(entry)[0]
     assert report.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []
-    assert report.model_name("iwan_cells_6") == "Iwan micro-slip, slip thresholds from the data"
+    # no comma inside the name: "The extended model, NAME, predicts" and "NAME predicts" both read
+    assert report.model_name("iwan_cells_6") == "Iwan micro-slip with slip thresholds from the data"
 
 
 def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_aside():

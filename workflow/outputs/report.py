@@ -221,7 +221,7 @@ def esc(text: Any) -> str:
 
 def model_name(model_id: str | None) -> str:
     if model_id and model_id.startswith("iwan_cells_"):
-        return "Iwan micro-slip, slip thresholds from the data"
+        return "Iwan micro-slip with slip thresholds from the data"
     return MODEL_NAMES.get(model_id or "", model_id or "?")
 
 
