@@ -1,7 +1,7 @@
-"""The decision: ``none``, a named cause, or ``unknown``, and how often resamples agree.
+"""The decision: ``none``, a named cause, or ``unknown``, and how sure the data let one be.
 
 :func:`decide` is the rule; :func:`evaluate_decision` computes what it needs (held-out
-errors, BIC, the baseline's misfit tests) on all segments or on a resample of runs;
+errors, BIC, the baseline's misfit tests) on all segments;
 :func:`confidence_draws` re-takes it, softly, on Bayesian-bootstrap reweightings of the
 runs for the confidence (:mod:`workflow.discovery.confidence`).
 """
