@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from browser import audit_page, chromium
+from browser import audit_page, needs_chromium
 from helpers import CHEAP, REPO, run_snakemake
 from system_format_files import write_tdms
 
@@ -268,9 +268,6 @@ def test_another_campaign_in_the_same_results_is_refused_naming_both(hostile, tm
     assert f"holds the results of the campaign in {root / FOLDER}" in message
     assert f"this run is for {other}" in message and "-d FOLDER" in message and "remove results/" in message
     assert sorted(path.relative_to(workdir) for path in (workdir / "results").rglob("*")) == before
-
-
-needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium on this machine")
 
 
 @needs_chromium

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from browser import WINDOW_WIDTH_PX, audit_page, chromium
+from browser import WINDOW_WIDTH_PX, audit_page, needs_chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
 from workflow.discovery.wording import discrepancy_sentence
@@ -639,14 +639,6 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
 
 
 # ------------------------------------------------------------------ in a real browser
-def needs_chromium(test):
-    """Skipped without Chromium; a failure then with LAPJOINT_REQUIRE_CHROMIUM=1 (tests/conftest.py)."""
-    test = pytest.mark.skipif(
-        chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
-    )(test)
-    return pytest.mark.group("chromium")(test)
-
-
 @needs_chromium
 @pytest.mark.parametrize("page", ["results/report.html", "results/report/verdict.html"])
 def test_page_renders_in_chromium_without_errors_or_overflow(built_report, page, tmp_path):
