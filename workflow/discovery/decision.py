@@ -228,7 +228,7 @@ def evaluate_decision(
     """
     view = data
     n_runs_view = view.n_runs
-    weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s)
+    weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s, view.n_channels)
     n_eff = effective_observations(view)
     units = heldout_units(view)
     n_units = int(units.max()) + 1 if units.size else 0

@@ -204,7 +204,7 @@ def run_order_trend(
     """
     x = np.arange(data.n_runs, dtype=float)
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
-    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
+    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
     if "calibration" in residuals:
         w = w * ~residuals["calibration"]
     if "scatter_ln_zeta" in residuals:
