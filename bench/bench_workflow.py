@@ -317,6 +317,8 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
                 workdir = root / f"run{index}"
                 shutil.rmtree(workdir, ignore_errors=True)
                 shutil.copytree(root / f"template{index}", workdir, symlinks=True)
+                # the copy's results/ is for the campaign copied with it, not the template's
+                (workdir / "results" / "interim" / "campaign_folder.txt").unlink(missing_ok=True)
                 for kind in kinds:
                     wall_and_cpu_s = timed_run(workdir, target, repo=repo)
                     if repeat:  # the first pair is the warm-up
