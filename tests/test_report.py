@@ -495,6 +495,37 @@ def test_trend_sentence_says_what_the_damping_figure_shows():
     assert 1.7 < trend["zeta_high"] / trend["zeta_low"] < 2.1 and "the damping rises" in sentence
 
 
+def test_runs_at_levels_of_their_own_are_not_said_as_a_trend():
+    # the demo's small washer: every run flat at its own level, the two lowest reaching the
+    # top amplitudes, so the ends' medians fall 7 % though no run's damping changes
+    rng = np.random.default_rng(5)
+    levels = 0.0008 * np.exp(np.linspace(-0.06, 0.06, 10))
+    rows = []
+    for run, level in enumerate(levels):
+        top = 6.0 if run < 2 else 1.5
+        amplitude = np.logspace(np.log10(0.12), np.log10(top), 60)
+        zeta = level * np.exp(0.01 * rng.standard_normal(amplitude.size))
+        rows.append(
+            pd.DataFrame(
+                {
+                    "configuration": "small_washer",
+                    "run": f"run{run:02d}",
+                    "velocity_amplitude_in_s": amplitude,
+                }
+            ).assign(zeta=zeta, frequency_hz=116.0)
+        )
+    segments = pd.concat(rows, ignore_index=True)
+    trend = report.measured_trends(segments)["small_washer"]
+    assert trend["zeta_high"] / trend["zeta_low"] < 0.95  # the ends' medians differ by the runs' levels
+    # each run's own change is zero within 3 standard errors; 1 % scatter per segment over
+    # the dozen segments of each end bin makes that error a few tenths of a percent
+    assert abs(trend["zeta_change_within_runs"]) < 3 * trend["zeta_change_error"]
+    assert trend["zeta_change_error"] < 0.005
+    sentence = report.trend_sentence(trend)
+    assert "the damping stays level within each run" in sentence and "falls" not in sentence
+    assert report.fmt(100 * trend["zeta_low"]) in sentence and "2 of 10 runs reach it" in sentence
+
+
 def test_trend_sentence_says_what_the_backbone_shows():
     segments = few_runs_reach_further()
     sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"], SI)

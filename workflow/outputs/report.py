@@ -35,6 +35,7 @@ from workflow.outputs.plain_words import (
     unidentified_parameters,
     unidentified_sentence,
 )
+from workflow.outputs.run_levels import within_run_change
 
 __all__ = [
     "CAUSE_WORDS",
@@ -485,8 +486,15 @@ def measured_trends(segments: pd.DataFrame, per_decade: int = 4) -> dict[str, di
             "n_segments": len(part),
             "n_runs": int(part["run"].nunique()) if "run" in part else 1,
         }
-        for end, from_top in (("low", False), ("high", True)):
-            inside = np.isin(code, _end_bin(codes, counts, from_top))
+        end_bins = {
+            end: _end_bin(codes, counts, from_top) for end, from_top in (("low", False), ("high", True))
+        }
+        runs = part["run"].to_numpy() if "run" in part else np.zeros(len(part))
+        trend["zeta_change_within_runs"], trend["zeta_change_error"] = within_run_change(
+            runs, code, np.log(part["zeta"].to_numpy(float)), end_bins["low"], end_bins["high"]
+        )
+        for end in ("low", "high"):
+            inside = np.isin(code, end_bins[end])
             chosen = part[inside]
             trend[f"end_{end}_low_in_s"] = float(velocity[inside].min())
             trend[f"end_{end}_high_in_s"] = float(velocity[inside].max())
@@ -529,6 +537,11 @@ def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
     low or high point on the way when it lies beyond both ends, said as a turn: "rises
     from A to a high of M near V, then falls to B"; the frequency's relative change)."""
     zeta = _direction(trend["zeta_low"], trend["zeta_high"], FLAT_CHANGE)
+    within = trend.get("zeta_change_within_runs", math.nan)
+    # a difference of the ends that each run's own change does not show is the runs' levels
+    levels_differ = zeta != "stays level" and abs(within) < max(
+        2 * trend["zeta_change_error"], math.log1p(FLAT_CHANGE)
+    )
     frequency_change = trend["frequency_high_hz"] / trend["frequency_low_hz"] - 1.0
     # a joint's frequency moves by a fraction of a percent: 0.1 % is already a trend
     frequency = _direction(trend["frequency_low_hz"], trend["frequency_high_hz"], 1e-3)
@@ -542,7 +555,13 @@ def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
         turn = ("rises", "a high", trend["zeta_max"], trend["zeta_max_in_s"], "falls")
     else:
         turn = None
-    if turn is None:
+    if turn is None and levels_differ:
+        damping = (
+            f"the damping stays level within each run ({100 * math.expm1(within):+.1f} % from end to end, "
+            f"runs' own levels removed), the runs reaching each end sitting at levels of their own: "
+            f"{low_end} and {high_end}"
+        )
+    elif turn is None:
         damping = f"the damping {zeta} from {low_end} to {high_end}"
     else:
         first, point, value, at_in_s, then = turn
