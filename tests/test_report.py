@@ -26,6 +26,7 @@ from workflow.discovery.wording import discrepancy_sentence
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.io.units import SI
 from workflow.lab.virtual_lab import generate_campaign
+from workflow.measured import curves
 from workflow.outputs import figures, report
 
 REPO = Path(__file__).resolve().parents[1]
@@ -524,6 +525,24 @@ def test_runs_at_levels_of_their_own_are_not_said_as_a_trend():
     sentence = report.trend_sentence(trend)
     assert "the damping stays level within each run" in sentence and "falls" not in sentence
     assert report.fmt(100 * trend["zeta_low"]) in sentence and "2 of 10 runs reach it" in sentence
+
+
+@pytest.mark.parametrize("n_runs", [1, 3])
+def test_damping_figure_legend_lists_the_band_only_when_drawn(n_runs):
+    # PFF (one run): the legend showed "95 % band (bootstrap over runs)" with no band drawn
+    segments = few_runs_reach_further()
+    segments = segments[segments["run"].isin([f"run{run:02d}" for run in range(n_runs)])]
+    v, zeta, run = (segments[c].to_numpy() for c in ("velocity_amplitude_in_s", "zeta", "run"))
+    grid = np.geomspace(v.min(), v.max(), 20)
+    low, centre, high = curves.bootstrap_band(v, zeta, run, 2, grid, n_boot=50, seed=1)
+    curve = pd.DataFrame(
+        {"velocity_amplitude_in_s": grid, "zeta": centre, "zeta_low": low, "zeta_high": high}
+    )
+    figure = figures.damping_vs_amplitude(segments, title="t", curve=curve)
+    labels = [text.get_text() for text in figure.axes[0].get_legend().get_texts()]
+    assert "polynomial fit" in labels
+    assert ("95 % band (bootstrap over runs)" in labels) == (n_runs > 1)
+    assert len(figure.axes[0].collections) == (n_runs > 1)  # the band is the one filled area
 
 
 def test_trend_sentence_says_what_the_backbone_shows():

@@ -379,7 +379,8 @@ def damping_vs_amplitude(
         _plot_runs(axis, segments, "zeta", scale=100, units=units)
         notes = []
         fitted = {}
-        if curve is not None and len(curve):
+        # with one run there is nothing to bootstrap over: no band, and none in the legend
+        if curve is not None and np.isfinite(curve["zeta_low"]).any():
             axis.fill_between(
                 velocity(curve, units),
                 100 * curve["zeta_low"],
@@ -388,6 +389,7 @@ def damping_vs_amplitude(
                 alpha=0.12,
                 label="95 % band (bootstrap over runs)",
             )
+        if curve is not None and len(curve):
             axis.plot(
                 velocity(curve, units),
                 100 * curve["zeta"],
