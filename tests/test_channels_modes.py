@@ -563,9 +563,9 @@ def two_sensor_campaign(root: Path) -> Path:
     """Three lab hits, each seen by two accelerometers (acc2 at half acc1's mode-1 shape),
     written as one ASCII file per hit with the two response columns by name (units in the
     names, none in campaign.yaml) and ``modes_hz: auto``."""
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.campaigns import generate_sensor_campaigns
 
-    vl.generate_sensor_campaigns(
+    generate_sensor_campaigns(
         root / "sensors",
         {"acc1": 1.0, "acc2": 0.5},
         seed=4,

@@ -434,7 +434,7 @@ snakemake = functools.partial(run_snakemake, timeout=600)
 
 @pytest.fixture(scope="module")
 def lab_campaign(tmp_path_factory):
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     base = tmp_path_factory.mktemp("hostile_workflow")
     campaign = base / "campaign"

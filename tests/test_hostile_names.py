@@ -74,7 +74,7 @@ def short_run_text() -> str:
 @pytest.fixture(scope="module")
 def hostile(tmp_path_factory):
     """The campaign analysed (``all``) and reported (``--report``): workdir, both results."""
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     root = tmp_path_factory.mktemp("hostile_names")
     campaign = root / FOLDER / SUBFOLDER
@@ -242,7 +242,7 @@ def test_printed_report_command_builds_the_report_from_another_folder(hostile, t
 
 
 def test_another_campaign_in_the_same_results_is_refused_naming_both(hostile, tmp_path):
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     root, workdir, _, _ = hostile
     other = tmp_path / "other"

@@ -277,7 +277,7 @@ def mode_of(root: Path, paths: list[str], configuration: str = "cfg"):
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory) -> Path:
     """A virtual-lab campaign of two configurations, two runs each."""
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     campaign = tmp_path_factory.mktemp("lab") / "campaign"
     generate_campaign(

@@ -64,7 +64,7 @@ def test_runs_read_whose_every_segment_is_rejected_are_said_with_the_commonest_r
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     campaign = tmp_path_factory.mktemp("nothing_usable") / "campaign"
     generate_campaign(

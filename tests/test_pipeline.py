@@ -8,7 +8,7 @@ import pytest
 from workflow.io.campaign import list_runs, load_campaign
 from workflow.io.interim import ConfigurationMode
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaigns import generate_campaign
 from workflow.measured.runs import analyse_run_file, identify_configuration_mode
 
 

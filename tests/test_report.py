@@ -25,7 +25,7 @@ from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 from workflow.discovery.wording import discrepancy_sentence
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.io.units import SI
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaigns import generate_campaign
 from workflow.outputs import figures, report
 
 REPO = Path(__file__).resolve().parents[1]

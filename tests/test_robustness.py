@@ -24,11 +24,12 @@ import pandas as pd
 import pytest
 from helpers import CHEAP, checksums, run_snakemake, write_run_with_bad_cell
 
-from workflow.lab import virtual_lab
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaign_files import format_run
+from workflow.lab.campaigns import generate_campaign
+from workflow.lab.settings import PRETRIGGER_SAMPLES, SAMPLE_RATE_HZ
 
-FS_HZ = virtual_lab.SAMPLE_RATE_HZ
-PRETRIGGER = virtual_lab.PRETRIGGER_SAMPLES
+FS_HZ = SAMPLE_RATE_HZ
+PRETRIGGER = PRETRIGGER_SAMPLES
 HEADER_LINES = 4  # title, sample rate, pre-trigger, column names: data start on line 5
 GOOD_CONFIGURATIONS = {"no_washer": 1.36, "small_washer": 0.17}
 OFF_MODE = "large_washer"  # readable runs whose mode lies far outside the search range
@@ -66,7 +67,7 @@ def read_columns(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def write_columns(path: Path, time_s, force_lbf, response_g) -> None:
-    path.write_text(virtual_lab.format_run(time_s, force_lbf, response_g))
+    path.write_text(format_run(time_s, force_lbf, response_g))
 
 
 def replace_cell(lines: list[str], line: int, column: int, text: str) -> list[str]:

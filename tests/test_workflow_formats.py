@@ -15,8 +15,8 @@ from system_format_files import FIRST_RECORDING, convert_run, write_mixed_format
 from workflow.discovery.campaign import diagnose_campaign
 from workflow.io.campaign import list_runs, load_campaign, read_run
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
+from workflow.lab.campaigns import generate_campaign
 from workflow.lab.hidden_effects import generate_case
-from workflow.lab.virtual_lab import generate_campaign
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 

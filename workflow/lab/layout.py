@@ -1,6 +1,6 @@
 """The paper's campaign layout: configurations, bearing areas and run names.
 
-The built-in demo campaign follows it. Kept apart from :mod:`workflow.lab.virtual_lab`
+The built-in demo campaign follows it. Kept apart from :mod:`workflow.lab.campaigns`
 (which simulates the runs) because the workflow plans the demo's DAG from it at parse
 time, and every ``snakemake`` call would otherwise import the simulator's SciPy.
 """
@@ -24,7 +24,7 @@ def run_name(index: int) -> str:
 
 
 def planned_run_files(runs_per_configuration: int, configurations=None) -> list:
-    """The run files :func:`workflow.lab.virtual_lab.generate_campaign` writes, known
+    """The run files :func:`workflow.lab.campaigns.generate_campaign` writes, known
     before it runs.
 
     The workflow plans the demo campaign's DAG from this list, so the campaign
