@@ -89,7 +89,7 @@ STARTED_S = time.time()
 def nothing_analysed_this_run():
     """Why nothing could be analysed, when rule usable_segments stopped for it in this run,
     else None."""
-    from workflow.measured.runs import NOTHING_ANALYSED, nothing_analysed_in_tables
+    from workflow.measured.campaign_tables import NOTHING_ANALYSED, nothing_analysed_in_tables
 
     log = Path("results/logs/usable_segments.log")
     # a second of slack: some file systems keep whole seconds

@@ -2,7 +2,7 @@
 
 from workflow.io.interim import read_campaign
 from workflow.io.tables import atomic_write_bytes, write_table
-from workflow.measured.runs import collect_tables
+from workflow.measured.campaign_tables import collect_tables
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "collect_tables")

@@ -13,7 +13,8 @@ from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
 from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
-from workflow.measured.runs import analysis_window, first_mode_and_channel, first_mode_rows
+from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
+from workflow.measured.runs import analysis_window
 from workflow.outputs import figures
 from workflow.outputs.escape import plot_text
 from workflow.runtime.logs import ScriptStop, setup_script_logging

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table, write_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.measured.runs import first_mode_and_channel, with_mode_and_channel
+from workflow.measured.campaign_tables import first_mode_and_channel, with_mode_and_channel
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
 from workflow.outputs.escape import plot_text

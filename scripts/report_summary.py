@@ -7,7 +7,7 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.measured.runs import first_mode_and_channel
+from workflow.measured.campaign_tables import first_mode_and_channel
 from workflow.outputs import report
 from workflow.outputs.summary import run_summary
 from workflow.runtime.logs import setup_script_logging

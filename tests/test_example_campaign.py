@@ -10,7 +10,7 @@ import pytest
 
 from workflow.io.campaign import list_runs, load_campaign
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_campaign
+from workflow.measured.campaign_tables import analyse_campaign
 
 DATA = Path(__file__).resolve().parent / "data"
 CAMPAIGN = DATA / "example_campaign"

@@ -23,7 +23,8 @@ from workflow.io import limits
 from workflow.io.campaign import CampaignFormatError, load_campaign, read_run, scan_campaign
 from workflow.io.interim import read_mode, write_mode
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_run_file, identify_configuration_mode
+from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.runs import analyse_run_file
 
 ONE_CONFIGURATION = BASE_YAML + "configurations:\n  cfg: {}\n"
 SECRET = "root:$6$SECRETHASH$abc:19000:0:99999:7:::"
@@ -645,12 +646,12 @@ def test_a_fault_of_the_analysis_on_one_run_excludes_it_and_the_others_go_on(lab
 
 
 def test_a_fault_of_the_mode_search_is_the_configurations_reason_not_a_crash(lab, monkeypatch):
-    from workflow.measured import runs as measured_runs
+    from workflow.measured import mode_identification
 
     def fails(*args, **kwargs):
         raise FloatingPointError("overflow in multiply")
 
-    monkeypatch.setattr(measured_runs, "identify_mode", fails)
+    monkeypatch.setattr(mode_identification, "identify_mode", fails)
     found = mode_of(lab, ["no_washer/run01.txt"], "no_washer")
     assert found.mode is None
     assert found.error.startswith(

@@ -13,7 +13,8 @@ from helpers import CHEAP, run_snakemake
 from system_format_files import write_tdms
 
 from workflow.io.campaign import load_campaign, read_run
-from workflow.measured.runs import NOTHING_ANALYSED, RUN_COLUMNS, nothing_analysed_message
+from workflow.measured.campaign_tables import NOTHING_ANALYSED, nothing_analysed_message
+from workflow.measured.runs import RUN_COLUMNS
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 

@@ -9,7 +9,8 @@ from workflow.io.campaign import list_runs, load_campaign
 from workflow.io.interim import ConfigurationMode
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.campaigns import generate_campaign
-from workflow.measured.runs import analyse_run_file, identify_configuration_mode
+from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.runs import analyse_run_file
 
 
 @pytest.fixture(scope="module")

@@ -28,7 +28,7 @@ from workflow.lab.campaigns import generate_campaign
 from workflow.lab.configurations import setup_configuration
 from workflow.lab.sensors import Sensor, positions_with_mode1_gain
 from workflow.lab.settings import TIME_DOMAIN_EFFECTS, LabSettings
-from workflow.measured.runs import analyse_campaign
+from workflow.measured.campaign_tables import analyse_campaign
 
 __all__ = [
     "CASES",
