@@ -3,6 +3,7 @@
 from workflow.io.interim import read_campaign
 from workflow.io.tables import atomic_write_bytes, write_table
 from workflow.measured.campaign_tables import collect_tables
+from workflow.outputs.escape import spreadsheet_text
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "collect_tables")
@@ -19,8 +20,11 @@ response_unit = {"response_amplitude": tables["response_unit"]}
 for name in ("segments", "rejected", "runs", "quality", "modes"):
     write_table(tables[name], snakemake.output[name], units=response_unit)
 runs = tables["runs"]
-# beside the Parquet: the table of runs opens in any spreadsheet or text editor
-atomic_write_bytes(snakemake.output.runs_csv, runs.to_csv(index=False).encode())
+# beside the Parquet: the table of runs opens in any spreadsheet or text editor; its
+# text cells (run names, paths, reasons) through spreadsheet_text, so none is a formula
+text_columns = runs.select_dtypes(include=["object", "string"]).columns
+shown = runs.assign(**{column: runs[column].map(spreadsheet_text) for column in text_columns})
+atomic_write_bytes(snakemake.output.runs_csv, shown.to_csv(index=False).encode())
 log.info(
     "%d runs used, %d excluded; %d segments kept",
     int((runs["status"] == "used").sum()),

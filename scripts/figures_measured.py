@@ -111,7 +111,7 @@ all_segments = read_table(snakemake.input.segments)
 for path in snakemake.output.modes_channels:
     figure = figures.modes_and_channels(
         all_segments,
-        title=f"{campaign.name}: damping and frequency of every mode, per channel",
+        title=f"{plot_text(campaign.name)}: damping and frequency of every mode, per channel",
         channels=snakemake.params.channels,
         units=units,
     )

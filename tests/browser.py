@@ -37,7 +37,9 @@ window.addEventListener("load", function () {
     }).filter(function (t) { return t.right > window.innerWidth; });
     var result = {errors: window.__errors, images: images.length, broken_images: broken,
                   wide_tables: wide, page_width: document.documentElement.scrollWidth,
-                  window_width: window.innerWidth, text: document.body.innerText.slice(0, 20000)};
+                  window_width: window.innerWidth, text: document.body.innerText.slice(0, 20000),
+                  title: document.title,
+                  marked: document.querySelectorAll('[id*="lapjoint-marker"]').length};
     var out = document.createElement("pre");
     out.id = "lapjoint-audit";
     out.textContent = JSON.stringify(result);
@@ -59,7 +61,9 @@ def chromium() -> str | None:
 def audit_page(page: Path, workdir: Path) -> dict:
     """Render ``page`` at a 1280 px wide window and return what the audit script found:
     ``errors`` (script errors), ``images``, ``broken_images``, ``wide_tables`` (tables
-    reaching past the window's right edge), ``page_width``, ``window_width``, ``text``."""
+    reaching past the window's right edge), ``page_width``, ``window_width``, ``text``,
+    ``title`` (the document's title once its scripts ran) and ``marked`` (elements whose id
+    holds ``lapjoint-marker``: the hostile-names test puts it in every injected element)."""
     text = page.read_text()
     audited = workdir / f"audited_{page.name}"
     audited.write_text(re.sub(r"<head([^>]*)>", lambda m: m.group(0) + AUDIT, text, count=1))

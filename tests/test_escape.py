@@ -20,6 +20,7 @@ from workflow.outputs.escape import (
     rst_strong,
     rst_text,
     shortened,
+    spreadsheet_text,
     terminal_text,
     visible_controls,
 )
@@ -151,3 +152,20 @@ def test_a_very_long_name_draws_quickly():
     axis.set_title(plot_text("n" * 100_000))
     figure.savefig(io.BytesIO(), format="png", bbox_inches="tight")
     plt.close(figure)
+
+
+@pytest.mark.parametrize(
+    "text, cell",
+    [
+        ('=HYPERLINK("http://x","y")', '\'=HYPERLINK("http://x","y")'),
+        ("+1", "'+1"),
+        ("-2 dB", "'-2 dB"),
+        ("@SUM(A1)", "'@SUM(A1)"),
+        ("\tx", "'\tx"),
+        ("run01", "run01"),
+        ("a=b", "a=b"),
+        ("", ""),
+    ],
+)
+def test_spreadsheet_text_leaves_no_formula(text, cell):
+    assert spreadsheet_text(text) == cell

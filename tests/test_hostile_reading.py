@@ -246,6 +246,20 @@ def test_samples_beyond_the_float64_range_of_the_analysis_are_refused_naming_the
     assert error.problem.startswith("response column 3 'Acceleration (g)': ") and word in error.problem
 
 
+def test_every_response_channel_of_an_ascii_file_is_checked(tmp_path):
+    n = 400
+    t = np.arange(n) / FS_HZ
+    rows = [f"{a:.7f}\t{b:.6e}\t{c:.6e}" for a, b, c in zip(t, ringing(n), ringing(n, 1e160))]
+    text = "Sample rate: 2560 Hz\nTime (s)\tacc1 (g)\tacc2 (g)\n" + "\n".join(rows) + "\n"
+    yaml_text = (
+        BASE_YAML.replace("force: {unit: lbf}\n", "").replace("unit: g}", "unit: g, channels: [acc1, acc2]}")
+        + "configurations:\n  cfg: {}\n"
+    )
+    error = read_error(tmp_path, text, yaml_text)
+    assert error.line == 4  # the first sample of a sine is 0; the second is beyond
+    assert error.problem.startswith("response column 3 'acc2 (g)': value ")
+
+
 def test_a_force_beyond_the_range_is_refused_in_a_system_format_naming_the_sample(tmp_path):
     n = 1024
     force = np.exp(-np.arange(n) / 5.0) * 1e200

@@ -109,10 +109,8 @@ def test_every_run_excluded_for_a_channel_not_chosen_ends_with_the_reasons(lab, 
     assert tail[1] == "2 of 2 run files (or globs) are excluded:"
     for run in ("run01", "run02"):
         (line,) = [line for line in tail if line.startswith(f"  no_washer/{run}: ")]
-        assert (
-            "2 response channels in the TDMS file; say which one with response: {channel: NAME or INDEX}"
-            in line
-        )
+        assert "2 response channels in the TDMS file; say which" in line
+        assert "response: {channel: NAME or INDEX}" in line
     assert tail[-1].startswith("What to change:")
     assert not (workdir / "results/diagnosis.json").exists()  # no verdict, not even `none`
     runs = pd.read_parquet(workdir / "results/tables/runs.parquet")

@@ -776,7 +776,7 @@ def test_unidentified_parameters_said_once_in_words(document):
     assert "the baseline and the extended model: 3" in page
     assert "151 m/s" in page and "slip_velocity_in_s" not in page  # 5960 in/s in SI
     assert "2 fitted parameters not determined by the data" in page
-    assert "100 % of the resamples" in page and "1e+02" not in page
+    assert "its confidence is 100 %" in page and "1e+02" not in page
 
 
 def test_one_run_campaign_is_not_said_to_predict_runs(document):
@@ -808,3 +808,32 @@ def test_model_fits_say_undetermined_parameters_with_their_units():
     assert "v0 = 5.382 ± 0 in/s <i>(not determined: the fit does not change with it" in page
     in_si = report.model_fits_html(fits, SI)
     assert "m/s" in in_si and " N " in in_si and "lbf" not in in_si and "in/s" not in in_si
+
+
+def test_verdict_sentences_agree_with_the_residual_and_damping_figures(built_report):
+    workdir = built_report[0]
+    document = json.loads((workdir / "results/diagnosis.json").read_text())
+    residuals = pd.read_parquet(workdir / "results/tables/diagnosis_residuals.parquet")
+    segments = pd.read_parquet(workdir / "results/tables/segments.parquet")
+    page = html.unescape((workdir / "results/report/verdict.html").read_text())
+    for name, entry in document["configurations"].items():
+        bins = entry["evidence"]["binned_residuals"]
+        for curve, column in (("damping", "zeta"), ("frequency", "frequency_hz")):
+            if any(b["curve"] == curve for b in bins):  # both curves are named
+                assert f"measured {curve}" in entry["discrepancy"], (name, curve)
+            # a clear bin's side is the side the residual figure's points lie on there
+            drawn = residuals[
+                (residuals["configuration"] == name)
+                & (residuals["role"] == "baseline")
+                & (residuals["curve"] == column)
+            ]
+            for b in bins:
+                if b["curve"] != curve or abs(b["t"]) < 4:
+                    continue
+                v = drawn["velocity_amplitude_in_s"]
+                inside = drawn[(v >= b["v_low_in_s"]) & (v < b["v_high_in_s"])]
+                assert np.sign(inside["residual"].mean()) == np.sign(b["mean"]), (name, b)
+        # the trend sentence spans what figures 10-12 plot
+        mine = segments[segments["configuration"] == name]
+        low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
+        assert f"Measured from {report.fmt(low)} to {report.fmt(high)} in/s" in page, name

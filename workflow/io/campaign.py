@@ -1809,11 +1809,10 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
 
 
 def _check_magnitude(
-    column: NDArray[np.float64], role: str, columns: _Columns, first_line: int, path: str
+    column: NDArray[np.float64], role: str, index: int, columns: _Columns, first_line: int, path: str
 ) -> None:
-    """Refuse a force or response column the analysis cannot square (:mod:`workflow.io.limits`),
-    naming the line of the first such value."""
-    index = columns.roles[role]
+    """Refuse a force or response column (0-based ``index``) the analysis cannot square
+    (:mod:`workflow.io.limits`), naming the line of the first such value."""
     name = f" {quoted(columns.names[index])}" if columns.names else ""
     problem = magnitude_problem(column, f"{role} column {index + 1}{name}")
     if problem is not None:
@@ -2076,9 +2075,9 @@ def read_run(
             f"pre-trigger of {pretrigger_samples} samples is not shorter than the record ({n_rows} samples)",
         )
 
-    for role in ("force", "response"):
-        if role in columns.roles:
-            _check_magnitude(values[:, columns.roles[role]], role, columns, first_line, shown)
+    checked = [("force", columns.roles["force"])] if "force" in columns.roles else []
+    for role, index in checked + [("response", index) for index in columns.responses]:
+        _check_magnitude(values[:, index], role, index, columns, first_line, shown)
     force_lbf = None
     if "force" in columns.roles:
         force_lbf = values[:, columns.roles["force"]] * force_factor_lbf

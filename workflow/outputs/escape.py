@@ -10,6 +10,7 @@ destination:
 * :func:`plot_text`: matplotlib text (no mathtext: ``$`` stays a dollar sign).
 * :func:`terminal_text`: the console and plain-text files (no escape sequence reaches
   the terminal); :func:`terminal_lines` for a message of several lines (a log record).
+* :func:`spreadsheet_text`: a cell of a CSV file a spreadsheet opens (no formula).
 
 Each one first makes invisible characters visible (:func:`visible_controls`), so that a
 name reads the same everywhere and no line break, terminal escape or bidirectional
@@ -123,3 +124,16 @@ def terminal_lines(text: Any) -> str:
     """Lines of a message for the console (a log record, a traceback): each line as
     :func:`terminal_text`, the line breaks between them kept, nothing shortened."""
     return "\n".join(visible_controls(line) for line in str(text).split("\n"))
+
+
+_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def spreadsheet_text(text: Any) -> str:
+    """``text`` for a cell of a CSV file that a spreadsheet opens: a cell that starts like
+    a formula (``=``, ``+``, ``-``, ``@``, tab, carriage return) gets a leading ``'``, which
+    spreadsheets read as "text, not a formula" (a run file named ``=HYPERLINK(...)``
+    would otherwise be evaluated when the table is opened). Nothing else changes: the CSV
+    writer quotes separators and line breaks."""
+    text = str(text)
+    return "'" + text if text.startswith(_FORMULA_STARTS) else text

@@ -503,7 +503,9 @@ def modes_and_channels(
                         markersize=3.5,
                         alpha=0.7,
                         color=colours.get(channel, "0.4"),
-                        label=channel if len(configurations) == 1 else f"{channel} ({configuration})",
+                        label=plot_text(
+                            channel if len(configurations) == 1 else f"{channel} ({configuration})"
+                        ),
                     )
                 amplitude_axis(axis, units)
                 axis.set_ylabel(label)

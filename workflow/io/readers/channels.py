@@ -208,7 +208,7 @@ def _select_channels(
                 shown,
                 None,
                 f"{'no' if not candidates else len(candidates)} response channels in the {name} file; "
-                "say which with response: {channel: NAME or INDEX} (or channels: [...] for several) "
+                "say which one with response: {channel: NAME or INDEX} (or channels: [...] for several) "
                 f"in campaign.yaml; its channels: {describe_channels(channels)}",
             )
         responses = candidates
