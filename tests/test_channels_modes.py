@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import REALDATA, needs_realdata
 from system_format_files import (
     lms_export_group,
     to_uff_ascii_precision,
@@ -468,13 +469,10 @@ def identify(folder):
     )
 
 
-REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
 UNESP_EXPORT = REALDATA / "raw" / "unesp_T5Nm_Sine_09Hz_Time.mat"
 
 
-@pytest.mark.skipif(
-    not UNESP_EXPORT.is_file(), reason=f"{UNESP_EXPORT} absent (../shared beside the repository)"
-)
+@needs_realdata("raw")
 def test_unesp_export_without_window_or_unit_names_the_dwell_line_and_asks_for_the_window(tmp_path):
     yaml_text = (
         "name: unesp\nmode_hz: 18.7\n"

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from workflow.measured.mode import band_around, find_mode_hz, h1_frf, response_spectrum
+from workflow.measured.mode import band_around, find_mode_hz, h1_frf, h1_over_channels, response_spectrum
 
 FS_HZ = 2560.0
 MODES_HZ = (125.0, 310.0)
@@ -67,6 +67,29 @@ def test_h1_finds_both_modes_and_coherence_is_high_at_the_mode():
     assert coherence[at_mode] > 0.99
     # Noise dominates between modes far from both, where |H| is small: coherence drops.
     assert coherence[np.argmin(np.abs(f_hz - 1000))] < coherence[at_mode]
+
+
+def test_sensors_on_either_side_of_a_node_keep_the_mode_and_its_coherence():
+    """Two sensors seeing the hits with opposite signs (either side of a node of the
+    mode): averaged over channels their cross-spectra cancel; each channel's own H1
+    keeps the mode at its analytic frequency with its high coherence."""
+    forces, responses = hammer_runs(4, [8192])
+    other_side = [-response for response in responses]
+    pooled_f, pooled_h1, pooled_coherence = h1_frf(forces * 2, responses + other_side, FS_HZ)
+    f_hz, magnitude, coherence = h1_over_channels(
+        forces * 2, responses + other_side, ["a"] * 4 + ["b"] * 4, FS_HZ
+    )
+    np.testing.assert_array_equal(f_hz, pooled_f)
+    at_mode = np.argmin(np.abs(f_hz - MODES_HZ[0]))
+    # the pooled estimate is left with the noise alone (0.2 % of the response's peak)
+    assert np.abs(pooled_h1[at_mode]) < 0.01 * magnitude[at_mode] and pooled_coherence[at_mode] < 0.01
+    assert find_mode_hz(f_hz, magnitude, (100, 150)) == pytest.approx(exact_peak_hz(100, 150), abs=0.1)
+    assert coherence[at_mode] > 0.99
+    # one channel: h1_frf's magnitude and coherence
+    _, one_h1, one_coherence = h1_frf(forces, responses, FS_HZ)
+    _, one_magnitude, one_channel_coherence = h1_over_channels(forces, responses, [None] * 4, FS_HZ)
+    np.testing.assert_array_equal(one_magnitude, np.abs(one_h1))
+    np.testing.assert_array_equal(one_channel_coherence, one_coherence)
 
 
 def test_h1_magnitude_matches_the_analytic_frf_at_the_mode():

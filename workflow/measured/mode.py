@@ -21,6 +21,7 @@ import numpy as np
 
 __all__ = [
     "h1_frf",
+    "h1_over_channels",
     "response_spectrum",
     "find_mode_hz",
     "band_around",
@@ -152,6 +153,54 @@ def h1_frf(
     h1 = np.where(g_ff > 0, h1, np.nan)
     coherence = np.clip(np.where((g_ff > 0) & (g_xx > 0), coherence, np.nan), 0.0, 1.0)
     return frequency_hz, h1, coherence
+
+
+def h1_over_channels(
+    force_runs: Sequence[np.ndarray],
+    response_runs: Sequence[np.ndarray],
+    channel_of_run: Sequence[str | None],
+    fs_hz: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """H1 magnitude and coherence of several response channels, each channel's H1
+    averaged over its own runs (:func:`h1_frf`).
+
+    Sensors on either side of a node see a mode with opposite signs: a cross-spectrum
+    averaged over channels would cancel the mode, so the channels' ``|H1|`` are summed
+    and their coherences averaged instead. With one channel this is :func:`h1_frf`'s
+    ``|H1|`` and coherence.
+
+    Parameters
+    ----------
+    force_runs, response_runs : sequence of 1-D array_like
+        Force and response of each (run, channel) pair, as for :func:`h1_frf`.
+    channel_of_run : sequence of str or None
+        The channel of each pair; pairs of one channel are averaged together.
+    fs_hz : float
+        Sample rate, Hz.
+
+    Returns
+    -------
+    frequency_hz : ndarray
+        Frequencies, Hz.
+    h1_magnitude : ndarray
+        Sum over channels of ``|H1|`` (response unit per force unit).
+    coherence : ndarray
+        Mean over channels of each channel's ordinary coherence, in [0, 1].
+    """
+    if len(channel_of_run) != len(response_runs):
+        raise ValueError(f"{len(channel_of_run)} channel names for {len(response_runs)} responses")
+    # one segment length for every channel, so that their spectra share one grid
+    segment = _segment_length(_as_runs(force_runs, "force_runs"), None)
+    magnitude = coherence = 0.0
+    channels = list(dict.fromkeys(channel_of_run))
+    for channel in channels:
+        mine = [i for i, other in enumerate(channel_of_run) if other == channel]
+        frequency_hz, h1, channel_coherence = h1_frf(
+            [force_runs[i] for i in mine], [response_runs[i] for i in mine], fs_hz, nperseg=segment
+        )
+        magnitude = magnitude + np.abs(h1)
+        coherence = coherence + channel_coherence
+    return frequency_hz, magnitude, coherence / len(channels)
 
 
 def response_spectrum(

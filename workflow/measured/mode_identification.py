@@ -61,11 +61,12 @@ WINDOW_ADVICE = (
 
 def channel_responses(
     records: list[RunRecord], windows: list[tuple[int, int]]
-) -> tuple[list[np.ndarray], list[tuple[RunRecord, tuple[int, int]]]]:
-    """The analysed part of every response channel of every run, for the mode search, and
-    the run and window each comes from. With several channels each is divided by its RMS
-    over every run, so that a sensor in a larger unit (or nearer an antinode) does not
-    hide the modes the others see; one channel is left as recorded."""
+) -> tuple[list[np.ndarray], list[tuple[RunRecord, tuple[int, int]]], list[str | None]]:
+    """The analysed part of every response channel of every run, for the mode search, the
+    run and window each comes from, and its channel's name (None for a one-channel
+    record). With several channels each is divided by its RMS over every run, so that a
+    sensor in a larger unit (or nearer an antinode) does not hide the modes the others
+    see; one channel is left as recorded."""
     parts, owners, names = [], [], []
     for record, (start, stop) in zip(records, windows):
         for channel in record.responses or (None,):
@@ -79,7 +80,7 @@ def channel_responses(
             rms = np.sqrt(np.mean(np.concatenate([parts[i] for i in mine]) ** 2))
             for i in mine:
                 parts[i] = parts[i] / rms if rms > 0 else parts[i]
-    return parts, owners
+    return parts, owners, names
 
 
 def identify_mode(
@@ -103,15 +104,16 @@ def identify_mode(
         raise ValueError("no readable run to identify the mode from")
     sample_rate_hz = records[0].sample_rate_hz
     search_hz = mode_search_range(sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction)
-    responses, owners = channel_responses(records, windows)
+    responses, owners, channels = channel_responses(records, windows)
     coherence_at_mode = None
     if all(record.force_lbf is not None for record in records):
         forces = [owner.force_lbf[start:stop] for owner, (start, stop) in owners]
-        frequency_hz, h1, coherence = modal_id.h1_frf(forces, responses, sample_rate_hz)
-        mode_hz = modal_id.find_mode_hz(frequency_hz, np.abs(h1), search_hz)
+        frequency_hz, amplitude, coherence = modal_id.h1_over_channels(
+            forces, responses, channels, sample_rate_hz
+        )
+        mode_hz = modal_id.find_mode_hz(frequency_hz, amplitude, search_hz)
         coherence_at_mode = float(np.interp(mode_hz, frequency_hz, coherence))
         method = "h1"
-        amplitude = np.abs(h1)
     else:
         frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
         mode_hz = modal_id.find_mode_hz(frequency_hz, psd, search_hz)
@@ -294,7 +296,7 @@ def find_every_mode(
         raise ValueError("no readable run to find the modes in")
     sample_rate_hz = records[0].sample_rate_hz
     search_hz = mode_search_range(sample_rate_hz, None, mode_search_hz, mode_search_fraction)
-    responses, _ = channel_responses(records, windows)
+    responses, _, _ = channel_responses(records, windows)
     frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
     found, left_out = modal_id.find_decaying_modes(
         responses, sample_rate_hz, frequency_hz, np.sqrt(psd), search_hz, band_half_width, min_mode_prominence
