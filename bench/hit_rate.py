@@ -423,7 +423,8 @@ def short_label(label: str) -> str:
 
 
 def verdict_label(record: dict) -> str:
-    return "+".join(record["causes"]) if record["causes"] else str(record["verdict"])
+    """The verdict's column: its causes as a ``confidence`` key (:func:`verdict_key`)."""
+    return verdict_key(record["causes"]) if record["causes"] else str(record["verdict"])
 
 
 RELIABILITY_BINS = (0.0, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.0)

@@ -203,6 +203,14 @@ def mode_channel_diagnoses():
     ]
 
 
+def joint_diagnoses():
+    """rule diagnose_joint's outputs: every configuration's, when the campaign has several
+    response channels (one channel's diagnosis is the configuration's)."""
+    if len(RESPONSE_CHANNELS) < 2:
+        return []
+    return [f"results/interim/diagnosis_joint/{name}" for name in CONFIGURATIONS]
+
+
 CONFIGURATIONS = list(dict.fromkeys(run.configuration for run in RUN_FILES))
 RUNS = {name: [run for run in RUN_FILES if run.configuration == name] for name in CONFIGURATIONS}
 if not RUN_FILES:

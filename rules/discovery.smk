@@ -67,12 +67,42 @@ rule diagnose_modes:
         "../scripts/diagnose_modes.py"
 
 
+rule diagnose_joint:
+    # Every mode of one configuration from all its response channels at once: one
+    # joint analysis (workflow/discovery/joint.py), one job per configuration.
+    input:
+        segments="results/tables/segments.parquet",
+        runs="results/tables/runs.parquet",
+        campaign_settings="results/interim/campaign.json",
+    output:
+        directory("results/interim/diagnosis_joint/{configuration}"),
+    log:
+        "results/logs/diagnose_joint/{configuration}.log",
+    benchmark:
+        "results/benchmarks/diagnose_joint/{configuration}.tsv"
+    priority: 1
+    conda:
+        LAPJOINT_ENV
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=60,
+    params:
+        channel=None,
+        first_channel=False,
+        decay=asdict(SETTINGS.analysis.decay()),
+        discovery=asdict(SETTINGS.discovery),
+    script:
+        "../scripts/diagnose_modes.py"
+
+
 rule diagnose:
     # The campaign's diagnosis from its configurations'. It does not depend on config
     # units: switching them redraws the figures below and re-runs no diagnosis.
     input:
         configurations=expand("results/interim/diagnosis/{configuration}.npz", configuration=CONFIGURATIONS),
         modes_channels=mode_channel_diagnoses(),
+        joint=joint_diagnoses(),
         modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:

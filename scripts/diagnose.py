@@ -42,11 +42,18 @@ for folder in map(Path, snakemake.input.modes_channels):
             read_configuration_diagnosis(path)
         )
 documents = {key: first if key == (0, 0) else document_of(found)[1] for key, found in outcomes.items()}
+# several channels: every mode's joint analysis, rule diagnose_joint's <configuration>/<mode>.npz
+joint_outcomes: dict[int, list] = {}
+for folder in map(Path, snakemake.input.joint):
+    for path in sorted(folder.glob("*.npz")):
+        joint_outcomes.setdefault(int(path.stem), []).append(read_configuration_diagnosis(path))
+joint = {mode: document_of(found)[1] for mode, found in joint_outcomes.items()}
 document = with_modes(
     [
         mode_document(
             mode_hz,
             {channels[c]: documents[(m, c)] for c in range(len(channels)) if (m, c) in documents},
+            joint.get(m),
         )
         for m, mode_hz in enumerate(modes_hz or [None])
     ]

@@ -1,11 +1,12 @@
-"""Rule diagnose_modes: one configuration's diagnosis for every mode seen by one response
-channel (the first mode of the first channel is rule diagnose_configuration's), one file
-per mode, for the campaign's diagnose rule (workflow/discovery/modes.py)."""
+"""Rules diagnose_modes and diagnose_joint: one configuration's diagnosis for every mode,
+seen by one response channel (the first mode of the first channel is rule
+diagnose_configuration's) or, with no channel given, by every channel at once (one joint
+analysis), one file per mode, for the campaign's diagnose rule (workflow/discovery/modes.py)."""
 
 from pathlib import Path
 
 from workflow.discovery.diagnosis_files import write_configuration_diagnosis
-from workflow.discovery.modes import diagnosed_outcome
+from workflow.discovery.modes import diagnosed_outcome, joint_outcome
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
@@ -17,15 +18,17 @@ configuration = snakemake.wildcards.configuration
 channel = snakemake.params.channel
 campaign = read_campaign(snakemake.input.campaign_settings)
 segments = read_table(snakemake.input.segments)
+segments = segments[
+    segments["channel"].isin(campaign.response.channel_names() if channel is None else [channel])
+]
 runs = read_table(snakemake.input.runs)
 folder = Path(snakemake.output[0])
 folder.mkdir(parents=True, exist_ok=True)
 for index, mode_hz in enumerate(sorted(segments["mode_hz"].dropna().unique())):
     if index == 0 and snakemake.params.first_channel:
         continue  # rule diagnose_configuration's
-    mine = segments[(segments["mode_hz"] == mode_hz) & (segments["channel"] == channel)]
-    outcome = diagnosed_outcome(
-        mine,
+    outcome = (diagnosed_outcome if channel is not None else joint_outcome)(
+        segments[segments["mode_hz"] == mode_hz],
         runs,
         configuration,
         response_quantity=campaign.response.quantity,
@@ -33,5 +36,6 @@ for index, mode_hz in enumerate(sorted(segments["mode_hz"].dropna().unique())):
         segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
     )
     verdict = outcome.skipped if outcome.diagnosis is None else outcome.diagnosis.document["cause"]
-    log.info("%s, mode %.6g Hz, channel %r: %s", configuration, mode_hz, channel, verdict)
+    seen_by = "every channel" if channel is None else f"channel {channel!r}"
+    log.info("%s, mode %.6g Hz, %s: %s", configuration, mode_hz, seen_by, verdict)
     write_configuration_diagnosis(folder / f"{index:02d}.npz", outcome)

@@ -490,7 +490,7 @@ def test_unesp_export_without_window_or_unit_names_the_dwell_line_and_asks_for_t
 
 
 def entry(cause, confidence, ratio, model="dahl"):
-    """A configuration's entry of a one-channel document (the keys combine_channels reads)."""
+    """A configuration's entry of a one-channel document (the keys with_channels reads)."""
     return {
         "cause": cause,
         "confidence": confidence,
@@ -499,55 +499,58 @@ def entry(cause, confidence, ratio, model="dahl"):
     }
 
 
-def test_channels_combine_into_the_cause_most_name_with_the_mean_confidence():
-    from workflow.discovery.modes import combine_channels
+def document(cause, confidence, ratio):
+    """A one-configuration campaign document (the keys mode_document reads)."""
+    return {
+        "campaign": "c",
+        "cause": cause,
+        "confidence": confidence,
+        "configurations": {"hit": entry(cause, confidence, ratio)},
+        "skipped_configurations": {},
+    }
 
+
+def test_the_joint_verdict_is_kept_and_each_channel_listed_beside_it():
+    """No vote: the configuration's entry is the joint analysis's even where most
+    channels alone name something else; each channel's own verdict is under channels."""
+    from workflow.discovery.modes import with_channels
+
+    joint = entry("microslip_power_law", {"microslip_power_law": 0.7, "none": 0.3}, 0.5, "iwan")
     entries = {
         "acc1": entry("microslip_power_law", {"microslip_power_law": 0.9, "none": 0.1}, 0.4, "iwan"),
-        "acc2": entry("microslip_power_law", {"microslip_power_law": 0.6, "none": 0.4}, 0.7, "iwan_b"),
+        "acc2": entry("none", {"none": 0.6, "microslip_power_law": 0.4}, 1.0),
         "acc3": entry("none", {"none": 0.8, "microslip_power_law": 0.2}, 1.0),
     }
-    combined = combine_channels(entries)
-    assert combined["cause"] == "microslip_power_law"
-    # the rest from the channel most confident in that cause
-    assert combined["extended_model"] == {"model": "iwan"} and combined["gain"] == {"ratio": 0.4}
-    assert combined["confidence"] == pytest.approx({"microslip_power_law": 1.7 / 3, "none": 1.3 / 3})
-    assert sum(combined["confidence"].values()) == pytest.approx(1.0)
+    combined = with_channels(joint, entries)
+    assert {k: v for k, v in combined.items() if k != "channels"} == joint
+    assert list(combined["channels"]) == ["acc1", "acc2", "acc3"]
     assert combined["channels"]["acc3"] == {
         "cause": "none",
+        "causes": ["none"],
         "confidence": entries["acc3"]["confidence"],
         "gain": {"ratio": 1.0},
     }
-    assert "2 of 3 channels" in combined["channel_combination"]
-    # one channel: its entry as it is
-    assert combine_channels({"acc1": entries["acc1"]}) is entries["acc1"]
 
 
 def test_modes_document_repeats_the_first_mode_at_the_top():
     from workflow.discovery.modes import mode_document, with_modes
 
-    def document(cause, confidence, ratio):
-        return {
-            "campaign": "c",
-            "cause": cause,
-            "confidence": confidence,
-            "configurations": {"hit": entry(cause, confidence, ratio)},
-            "skipped_configurations": {},
-        }
-
     first = document("microslip_power_law", {"microslip_power_law": 1.0}, 0.2)
     one = mode_document(80.5, {"response": first})
     assert one == {"mode_hz": 80.5, **first}
+    joint = document("quadratic_damping", {"quadratic_damping": 0.6, "none": 0.4}, 0.6)
     second = mode_document(
         297.7,
         {
             "a": document("none", {"none": 1.0}, 1.0),
             "b": document("quadratic_damping", {"quadratic_damping": 0.5, "none": 0.5}, 0.8),
-            "c": document("none", {"none": 0.9, "quadratic_damping": 0.1}, 1.0),
         },
+        joint,
     )
-    assert second["cause"] == "none" and second["configurations"]["hit"]["cause"] == "none"
-    assert second["confidence"] == pytest.approx({"none": 0.8, "quadratic_damping": 0.2})
+    # the joint analysis's verdict and confidence, each channel's beside it
+    assert second["cause"] == "quadratic_damping" and second["confidence"] == joint["confidence"]
+    assert second["configurations"]["hit"]["cause"] == "quadratic_damping"
+    assert second["configurations"]["hit"]["channels"]["a"]["cause"] == "none"
     whole = with_modes([one, second])
     assert {key: value for key, value in whole.items() if key != "modes"} == first
     assert [mode["mode_hz"] for mode in whole["modes"]] == [80.5, 297.7]
@@ -618,7 +621,11 @@ def test_workflow_analyses_every_mode_on_every_channel(tmp_path):
     for mode in document["modes"]:
         configuration = mode["configurations"]["c"]
         assert set(configuration["channels"]) == {"acc1", "acc2"}
-        assert configuration["cause"] in {c["cause"] for c in configuration["channels"].values()}
+        assert set(configuration["joint"]["amplitude_factors"]) == {"acc1", "acc2"}
+    # one joint analysis of mode 1 on acc1's scale: acc2's amplitudes doubled
+    joint = document["configurations"]["c"]["joint"]
+    assert joint["reference_channel"] == "acc1"
+    assert joint["amplitude_factors"]["acc2"] == pytest.approx(2.0, rel=0.05)
     top = {key: value for key, value in document.items() if key != "modes"}
     assert top == {key: value for key, value in document["modes"][0].items() if key != "mode_hz"}
 

@@ -102,7 +102,7 @@ def across_configurations(
             res = model_residuals(fit, d.data, d.scatter, context)
             err = weighted_rms(
                 0.5 * (res[f"z_{HELD_OUT_SCALE}"] ** 2 + res[f"f_{HELD_OUT_SCALE}"] ** 2),
-                amplitude_weights(d.data.velocity_in_s, d.data.anchor_velocity_in_s),
+                amplitude_weights(d.data.velocity_in_s, d.data.anchor_velocity_in_s, d.data.n_channels),
             )
             entry = out["configurations"].setdefault(n, {"bearing_area_in2": d.data.bearing_area_in2})
             entry[f"{role}_error"] = err

@@ -19,13 +19,12 @@ Its confidence carries the two uncertainties behind it:
   than their scatter over the units share the confidence; one that leads in every
   reweighting takes it.
 
-Several channels (sensors) of one run pool into one joint likelihood: each channel's
-held-out errors are in its own scatter units (its own noise and amplitude scale), the
-runs (units) are the same on every channel and reweighted together, and the log
-densities add (:class:`ChannelEvidence`, one per channel). Nothing is voted or
-multiplied across sensors: a channel that sees less has larger held-out errors relative
-to its scatter only where its data say less, and a duplicated channel doubles ``n_eff``
-without changing which model predicts better.
+Several channels (sensors) of one hit are pooled before this point into one
+configuration's data (:mod:`workflow.discovery.joint`: each channel in its own scatter
+units, the runs shared), so their evidence reaches the confidence as one
+:class:`ChannelEvidence` whose units and ``n_eff`` are the runs and cells of the hit, not
+one per sensor: nothing is voted or multiplied across sensors, and a duplicated sensor
+adds no evidence.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
-"""The decision: ``none``, a named cause, or ``unknown``, and how often resamples agree.
+"""The decision: ``none``, a named cause, or ``unknown``, and how sure the data let one be.
 
 :func:`decide` is the rule; :func:`evaluate_decision` computes what it needs (held-out
-errors, BIC, the baseline's misfit tests) on all segments or on a resample of runs;
+errors, BIC, the baseline's misfit tests) on all segments;
 :func:`confidence_draws` re-takes it, softly, on Bayesian-bootstrap reweightings of the
 runs for the confidence (:mod:`workflow.discovery.confidence`).
 """
@@ -228,7 +228,7 @@ def evaluate_decision(
     """
     view = data
     n_runs_view = view.n_runs
-    weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s)
+    weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s, view.n_channels)
     n_eff = effective_observations(view)
     units = heldout_units(view)
     n_units = int(units.max()) + 1 if units.size else 0

@@ -51,13 +51,14 @@ def folds_of(data: ConfigurationData, n_folds: int) -> list[np.ndarray]:
 
     With several runs every fold holds out whole runs spread over the run order,
     so a run-order effect is interpolated, not extrapolated. With one run the
-    segments are split into ``n_folds`` contiguous amplitude ranges.
+    segments are split into ``n_folds`` contiguous amplitude ranges (pooled channels: on
+    one amplitude scale, so a block holds out the same instants on every channel).
     """
     if data.n_runs >= 2:
         k = min(n_folds, data.n_runs)
         return [(data.run_index % k) == j for j in range(k)]
     order = np.argsort(data.velocity_in_s)
-    k = max(2, min(n_folds, data.n // 6))
+    k = max(2, min(n_folds, data.n // (6 * data.n_channels)))  # 6 instants of the hit a block
     masks = []
     for chunk in np.array_split(order, k):
         m = np.zeros(data.n, dtype=bool)
@@ -97,7 +98,9 @@ def amplitude_bin(velocity_in_s: np.ndarray, anchor_velocity_in_s: float, per_de
     return np.ceil(per_decade * np.log10(velocity_in_s / anchor_velocity_in_s) - 1e-9).astype(int) - 1
 
 
-def amplitude_weights(velocity_in_s: np.ndarray, anchor_velocity_in_s: float) -> np.ndarray:
+def amplitude_weights(
+    velocity_in_s: np.ndarray, anchor_velocity_in_s: float, channels: int = 1
+) -> np.ndarray:
     """Weights that give every quarter decade of amplitude the same say in an error.
 
     Segments are equally spaced in time, so a ring-down leaves segments at each
@@ -106,12 +109,15 @@ def amplitude_weights(velocity_in_s: np.ndarray, anchor_velocity_in_s: float) ->
     model agrees, holds most segments, and the top of the range, where the friction
     models differ, holds few. An error meant to say how well a model predicts the
     *curves* over the measured amplitude range weights each occupied quarter decade
-    equally: each segment gets ``1 / max(n_bin, MIN_BIN_SEGMENTS)`` (a nearly empty
-    bin is not inflated).
+    equally: each segment gets ``1 / max(n_bin, MIN_BIN_SEGMENTS * channels)`` (a nearly
+    empty bin is not inflated). ``channels`` sensors pooled on one hit
+    (:mod:`workflow.discovery.joint`) put ``channels`` segments where one sensor puts one:
+    the floor counts one sensor's segments, so that a sparse bin keeps the say it has with
+    one sensor (a duplicated sensor changes no weight ratio).
     """
     code = amplitude_bin(velocity_in_s, anchor_velocity_in_s, AMPLITUDE_BINS_PER_DECADE)
     _, inverse, counts = np.unique(code, return_inverse=True, return_counts=True)
-    return 1.0 / np.maximum(counts[inverse], MIN_BIN_SEGMENTS)
+    return 1.0 / np.maximum(counts[inverse], MIN_BIN_SEGMENTS * channels)
 
 
 def weighted_rms(squares: np.ndarray, weights: np.ndarray) -> float:
@@ -149,7 +155,7 @@ def cross_validate(
     model = MODELS[model] if isinstance(model, str) else model
     sq_z, sq_f, fold_errors = np.zeros(data.n), np.zeros(data.n), []
     scored = np.ones(data.n, dtype=bool)
-    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
+    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
     for held in folds_of(data, settings.folds):
         fit = fit_model(
             model, data, scatter, context, settings=settings, mask=~held, warm_start=full_fit.coords

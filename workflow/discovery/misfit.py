@@ -147,7 +147,6 @@ def run_order_trend(
     *,
     n_tests: int,
     alpha: float = ALPHA,
-    run_position: np.ndarray | None = None,
 ) -> dict | None:
     """Linear trend with run order of the runs' shift of the damping curve.
 
@@ -177,9 +176,6 @@ def run_order_trend(
     ----------
     n_tests : int
         The test is significant at ``p < alpha / n_tests``.
-    run_position : ndarray, optional
-        Position in run order of each of the ``data.n_runs`` runs (default ``0 .. n-1``;
-        a resample of runs passes the drawn runs' positions).
 
     Returns None with fewer than 4 runs with scored segments; else ``slope_per_run`` (of
     the projection, per run: ``ln Fc``, or ``ln zeta`` without a slope),
@@ -189,9 +185,9 @@ def run_order_trend(
     the model accuracy), ``order`` (which run order, ``data.run_order``) and ``runs`` (the
     run names in that order).
     """
-    x = np.arange(data.n_runs, dtype=float) if run_position is None else np.asarray(run_position, float)
+    x = np.arange(data.n_runs, dtype=float)
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
-    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s)
+    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
     if "calibration" in residuals:
         w = w * ~residuals["calibration"]
     if "scatter_ln_zeta" in residuals:

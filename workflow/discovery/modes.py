@@ -1,27 +1,24 @@
 """Several modes and several sensors of one hit in results/diagnosis.json.
 
 Each (mode, channel) is diagnosed on its own, exactly as a one-mode, one-channel campaign
-(:func:`diagnosed_outcome`). A configuration's verdict for a mode then uses every channel
-(:func:`combine_channels`): the cause is the one most channels name (ties: the higher mean
-confidence), its confidence the mean of the channels' confidences, and the rest of the
-entry (baseline, extended model, gain, evidence) is that of the channel most confident
-in that cause; each channel's own verdict goes under ``channels``. The campaign's cause
-for a mode is :func:`~workflow.discovery.campaign.campaign_verdict` of the combined
-configuration causes. This is a combination of per-channel diagnoses, not one fit to the
-pooled channels.
+(:func:`diagnosed_outcome`). With several channels a configuration's verdict for a mode
+is one joint analysis of every channel's segments (:func:`joint_outcome`,
+:mod:`workflow.discovery.joint`: shared joint physics and run offsets, each channel on
+the reference channel's amplitude scale with its own scatter, the same runs held out on
+every channel), and each channel's own verdict goes under ``channels`` as a consistency
+check (:func:`with_channels`). Nothing is voted or averaged across channels.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 
-import numpy as np
-
-from workflow.discovery.campaign import campaign_fit_context, campaign_verdict
+from workflow.discovery.campaign import campaign_fit_context
 from workflow.discovery.configuration import diagnose_configuration_segments, record_starts
 from workflow.discovery.diagnosis_files import DiagnosedConfiguration
+from workflow.discovery.joint import joint_segments
 
-__all__ = ["diagnosed_outcome", "combine_channels", "mode_document", "with_modes"]
+__all__ = ["diagnosed_outcome", "joint_outcome", "with_channels", "mode_document", "with_modes"]
 
 NOT_DIAGNOSED = (
     "no kept segment: every run excluded (runs.parquet) or every segment rejected (segments_rejected.parquet)"
@@ -48,77 +45,65 @@ def diagnosed_outcome(segments, runs, configuration: str, **options) -> Diagnose
     )
 
 
-def _mean_confidence(confidences: list[Mapping[str, float]]) -> dict[str, float]:
-    causes = list(dict.fromkeys(cause for confidence in confidences for cause in confidence))
-    mean = {cause: float(np.mean([c.get(cause, 0.0) for c in confidences])) for cause in causes}
-    return dict(sorted(mean.items(), key=lambda item: -item[1]))
+JOINT_RULE = (
+    "every channel's segments in one analysis: one fit of the joint's physics and the run offsets, "
+    "each channel's amplitudes on the reference channel's scale (median ratio of the envelopes at "
+    "the same instants of the same run) and its own scatter, the same runs held out on every channel"
+)
 
 
-def combine_channels(entries: Mapping[str, dict]) -> dict:
-    """One configuration's entry for a mode from its channels' entries (channel -> the
-    configuration's entry of that channel's document), in campaign.yaml's channel order.
+def joint_outcome(segments, runs, configuration: str, **options) -> DiagnosedConfiguration:
+    """:func:`diagnosed_outcome` of the segments of one mode seen by every channel, pooled
+    by :func:`~workflow.discovery.joint.joint_segments`; the diagnosis's document says how
+    (``joint``: the reference channel, each channel's amplitude factor, the channels left
+    out, the rule)."""
+    pooled, joint = joint_segments(segments)
+    outcome = diagnosed_outcome(pooled, runs, configuration, **options)
+    if outcome.diagnosis is not None:
+        outcome.diagnosis.document["joint"] = {**joint[configuration], "rule": JOINT_RULE}
+    return outcome
 
-    With one channel the entry is returned unchanged (no ``channels`` key)."""
-    if len(entries) == 1:
-        return next(iter(entries.values()))
-    named: dict[str, list[str]] = {}
-    for channel, entry in entries.items():
-        named.setdefault(entry["cause"], []).append(channel)
 
-    def mean_own(cause: str) -> float:
-        return float(np.mean([entries[c]["confidence"].get(cause, 0.0) for c in named[cause]]))
-
-    cause = max(named, key=lambda c: (len(named[c]), mean_own(c)))
-    source = max(named[cause], key=lambda c: entries[c]["confidence"].get(cause, 0.0))
-    combined = dict(entries[source])
-    combined["confidence"] = _mean_confidence([entry["confidence"] for entry in entries.values()])
-    combined["channels"] = {
-        channel: {
-            "cause": entry["cause"],
-            "confidence": entry["confidence"],
-            "gain": {"ratio": entry["gain"]["ratio"]},
-        }
-        for channel, entry in entries.items()
+def with_channels(joint: dict, entries: Mapping[str, dict]) -> dict:
+    """One configuration's entry for a mode: the joint analysis's (``joint``), with each
+    channel's own verdict (channel -> that channel's entry, campaign.yaml's order) under
+    ``channels``."""
+    return {
+        **joint,
+        "channels": {
+            channel: {
+                "cause": entry["cause"],
+                "causes": entry.get("causes") or [entry["cause"]],
+                "confidence": entry["confidence"],
+                "gain": {"ratio": entry["gain"]["ratio"]},
+            }
+            for channel, entry in entries.items()
+        },
     }
-    combined["channel_combination"] = (
-        f"each channel diagnosed on its own; cause named by {len(named[cause])} of {len(entries)} channels, "
-        f"confidence the channels' mean, the rest from channel {source!r}"
-    )
-    return combined
 
 
-def mode_document(mode_hz: float | None, documents: Mapping[str, dict]) -> dict:
+def mode_document(mode_hz: float | None, documents: Mapping[str, dict], joint: dict | None = None) -> dict:
     """The ``modes`` entry of one mode from the campaign documents of its channels
-    (channel -> :func:`~workflow.discovery.campaign.campaign_document`), in campaign.yaml's
-    channel order; with one channel that document with ``mode_hz`` (None when no
-    configuration has a mode: every configuration is then skipped)."""
-    first = next(iter(documents.values()))
-    if len(documents) == 1:
-        return {"mode_hz": mode_hz, **first}
-    names = list(
-        dict.fromkeys(name for document in documents.values() for name in document["configurations"])
-    )
+    (channel -> :func:`~workflow.discovery.campaign.campaign_document`, campaign.yaml's
+    channel order) and, with several channels, of their joint analysis (``joint``, from
+    :func:`joint_outcome`'s diagnoses): the joint document, each configuration with its
+    channels' verdicts (:func:`with_channels`). With one channel its document with
+    ``mode_hz`` (None when no configuration has a mode: every configuration is then
+    skipped)."""
+    if len(documents) == 1 or joint is None:
+        return {"mode_hz": mode_hz, **next(iter(documents.values()))}
     configurations = {
-        name: combine_channels(
+        name: with_channels(
+            entry,
             {
                 channel: document["configurations"][name]
                 for channel, document in documents.items()
                 if name in document["configurations"]
-            }
+            },
         )
-        for name in names
+        for name, entry in joint["configurations"].items()
     }
-    cause = campaign_verdict(
-        [entry["cause"] for entry in configurations.values()],
-        [entry["gain"]["ratio"] for entry in configurations.values()],
-    )
-    return {
-        "mode_hz": mode_hz,
-        **first,
-        "cause": cause,
-        "confidence": _mean_confidence([document["confidence"] for document in documents.values()]),
-        "configurations": configurations,
-    }
+    return {"mode_hz": mode_hz, **joint, "configurations": configurations}
 
 
 def with_modes(modes: list[dict]) -> dict:

@@ -280,8 +280,8 @@ class DiscoverySettings:
     # Each resample repeats the decision; a confidence's Monte Carlo error is at most
     # 0.5 / sqrt(B): 5 % at the default, 1.6 % at 1000, at 10 times the cost.
     resamples: Annotated[int, Ge(10), Le(1000)] = 100
-    """Bootstrap resamples of the runs (of amplitude blocks with one run) behind each
-    verdict's ``confidence``."""
+    """Bayesian-bootstrap reweightings of the runs (of half decades of amplitude with one
+    run) behind each verdict's ``confidence`` (docs/discovery.md, Confidence)."""
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,10 @@ class ConfigurationData:
         of the log decrement, and the envelope amplitude in the record's unit.
     anchor_velocity_in_s : float
         Amplitude the bins are counted from (default: the largest measured).
+    channel_index : ndarray of int or None
+        Per segment, the response channel (sensor) that measured it, when the segments
+        of several channels are pooled (:mod:`workflow.discovery.joint`): each channel
+        then has its own scatter (:func:`scatter_of`). None: one channel.
     """
 
     name: str
@@ -83,6 +87,7 @@ class ConfigurationData:
     """Top of the measured amplitudes (default: the largest), in/s: amplitude bins are
     counted down from it, so that they do not depend on the sensor's position."""
     run_order: str = FILE_NAME_ORDER
+    channel_index: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not self.anchor_velocity_in_s > 0:
@@ -91,6 +96,11 @@ class ConfigurationData:
     @property
     def n_runs(self) -> int:
         return len(self.run_names)
+
+    @property
+    def n_channels(self) -> int:
+        """Response channels pooled in these segments (1 unless :attr:`channel_index`)."""
+        return 1 if self.channel_index is None else int(np.unique(self.channel_index).size)
 
     @property
     def n(self) -> int:
@@ -111,6 +121,8 @@ def prepare_configuration(
     fit in ``ln zeta`` and are dropped (counted in ``n_dropped``). ``record_start``
     (run name -> ISO 8601 recording start, the runs table's ``record_start``) orders
     the runs when every run has one (:func:`workflow.io.recording_time.run_order`).
+    A ``channel_index`` column (pooled channels, :func:`workflow.discovery.joint.joint_segments`)
+    becomes :attr:`ConfigurationData.channel_index`.
 
     Examples
     --------
@@ -149,6 +161,8 @@ def prepare_configuration(
         amp = rows["response_amplitude"].to_numpy(float)[ok]
         if np.all(np.isfinite(rms) & (rms > 0) & np.isfinite(amp) & (amp > 0)):
             extra = {"fit_rms": rms, "response_amplitude": amp}
+    if "channel_index" in rows:
+        extra["channel_index"] = rows["channel_index"].to_numpy(int)[ok]
     return ConfigurationData(
         name=name,
         velocity_in_s=v[ok],
@@ -253,7 +267,14 @@ def estimate_scatter(
 
 
 def scatter_of(data: ConfigurationData) -> Scatter:
-    """:class:`Scatter` of a configuration's two curves."""
-    noise_z = estimate_scatter(data.velocity_in_s, np.log(data.zeta), runs=data.run_index)
-    noise_f = estimate_scatter(data.velocity_in_s, data.frequency_hz / data.f_ref - 1.0, runs=data.run_index)
+    """:class:`Scatter` of a configuration's two curves; with pooled channels, each
+    channel's own (a sensor near a node of the mode measures noisier curves)."""
+    channels = np.zeros(data.n, dtype=int) if data.channel_index is None else data.channel_index
+    noise_z, noise_f = np.empty(data.n), np.empty(data.n)
+    rel_f = data.frequency_hz / data.f_ref - 1.0
+    for channel in np.unique(channels):
+        rows = channels == channel
+        v, runs = data.velocity_in_s[rows], data.run_index[rows]
+        noise_z[rows] = estimate_scatter(v, np.log(data.zeta[rows]), runs=runs)
+        noise_f[rows] = estimate_scatter(v, rel_f[rows], runs=runs)
     return Scatter(np.hypot(noise_z, TOL_LN_ZETA), np.hypot(noise_f, TOL_REL_F), noise_z, noise_f)

@@ -930,8 +930,9 @@ def modes_section(document: Mapping) -> list[str]:
         )
     parts.append(
         '<p class="note">Each mode is diagnosed on its own. With several channels a '
-        "configuration's verdict is the cause most channels name, its confidence the "
-        "channels' mean; the paper's figures and models are the first mode's, on the first channel.</p>"
+        "configuration's verdict is one joint analysis of every channel (each on one amplitude "
+        "scale, in its own scatter, the same runs held out on all); each channel's own verdict is "
+        "a consistency check. The paper's figures and models are the first mode's, on the first channel.</p>"
     )
     return parts
 
