@@ -27,7 +27,8 @@ the timed run), each cold run starts from a copy of that version's directory, an
 version imports its own library (``PYTHONPATH``). A warm-up pair compiles Numba's
 kernels. It prints each version's median wall and CPU time (Snakemake and its jobs), then
 the median and range of the pairs' ratios, which stay meaningful when the machine's
-speed drifts; a run with nothing to do follows each cold run and is paired the same way.
+speed drifts; a run with nothing to do follows each cold run and is paired the same way,
+and is also set against Snakemake's own floor, a workflow of no jobs timed in the same round.
 
 Every mode ends with the CPU time of a fixed pure-Python loop before and after its runs:
 the interpreter's speed on the machine that day, printed beside the figures.
@@ -51,9 +52,9 @@ import pandas as pd
 REPO = Path(__file__).resolve().parents[1]
 
 
-def snakemake(workdir: Path, *args: str, repo: Path = REPO) -> float:
-    """Wall time of one ``snakemake -c2`` call of ``repo``'s workflow in ``workdir``,
-    seconds (the workflow imports ``repo``'s library)."""
+def snakemake(workdir: Path, *args: str, repo: Path = REPO, snakefile: Path | None = None) -> float:
+    """Wall time of one ``snakemake -c2`` call of ``repo``'s workflow (or of ``snakefile``)
+    in ``workdir``, seconds (the workflow imports ``repo``'s library)."""
     start = time.perf_counter()
     subprocess.run(
         [
@@ -61,7 +62,7 @@ def snakemake(workdir: Path, *args: str, repo: Path = REPO) -> float:
             "-m",
             "snakemake",
             "-s",
-            str(repo / "Snakefile"),
+            str(snakefile or repo / "Snakefile"),
             "-d",
             str(workdir),
             "-c2",
@@ -98,11 +99,28 @@ def reference_loop_s(repeats: int = 3) -> float:
     return statistics.median(seconds)
 
 
-def timed_run(workdir: Path, *args: str, repo: Path = REPO) -> tuple[float, float]:
+def timed_run(
+    workdir: Path, *args: str, repo: Path = REPO, snakefile: Path | None = None
+) -> tuple[float, float]:
     """Wall and CPU seconds (Snakemake and its jobs) of one :func:`snakemake` call."""
     before = children_cpu_s()
-    wall_s = snakemake(workdir, *args, repo=repo)
+    wall_s = snakemake(workdir, *args, repo=repo, snakefile=snakefile)
     return wall_s, children_cpu_s() - before
+
+
+EMPTY_SNAKEFILE = """\
+from workflow.runtime.scheduler import cancel_scheduler_timers
+
+
+rule all:
+    input: []
+
+
+onsuccess:
+    cancel_scheduler_timers()
+"""
+"""Snakemake's own floor for a run with nothing to do: a workflow of no jobs, ended
+as the project's is (without a scheduler timer to wait for)."""
 
 
 COST = re.compile(
@@ -291,15 +309,24 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
             snakemake(root / f"template{index}", "demo_campaign", repo=repo)
         kinds = (f"cold {target}", "nothing to do")
         times = {(version, kind): [] for version in versions for kind in kinds}
+        empty = root / "empty"
+        empty.mkdir()
+        (empty / "Snakefile").write_text(EMPTY_SNAKEFILE)
+        floor = []
         for repeat in range(repeats + 1):
             for index, (version, repo) in enumerate(versions.items()):
                 workdir = root / f"run{index}"
                 shutil.rmtree(workdir, ignore_errors=True)
                 shutil.copytree(root / f"template{index}", workdir, symlinks=True)
+                # the copy's results/ is for the campaign copied with it, not the template's
+                (workdir / "results" / "interim" / "campaign_folder.txt").unlink(missing_ok=True)
                 for kind in kinds:
                     wall_and_cpu_s = timed_run(workdir, target, repo=repo)
                     if repeat:  # the first pair is the warm-up
                         times[version, kind].append(wall_and_cpu_s)
+            floor_s = timed_run(empty, "all", snakefile=empty / "Snakefile")
+            if repeat:
+                floor.append(floor_s)
     finally:
         subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(other)], check=True)
         shutil.rmtree(root, ignore_errors=True)
@@ -312,6 +339,14 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
             theirs = [run[column] for run in times[base, kind]]
             ratios = [a / b for a, b in zip(mine, theirs)]
             print(f"| {kind}, {name} s | {spread(mine, 2)} | {spread(theirs, 2)} | {spread(ratios, 3)} |")
+    for column, name in enumerate(("wall", "CPU")):
+        mine = [run[column] for run in times[this, "nothing to do"]]
+        empty_s = [run[column] for run in floor]
+        ratios = [a / b for a, b in zip(mine, empty_s)]
+        print(
+            f"| nothing to do / Snakemake's empty workflow, {name} s | {spread(mine, 2)} | "
+            f"{spread(empty_s, 2)} (empty) | {spread(ratios, 3)} |"
+        )
 
 
 def run_demo(args: argparse.Namespace) -> None:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from workflow.discovery.wording import runs_words
 from workflow.io.campaign import read_run
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings
@@ -81,7 +82,7 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     figure = figures.damping_vs_amplitude(
         mine,
         title=f"{plot_text(configuration)}: local equivalent damping vs velocity amplitude "
-        f"({mine['run'].nunique()} runs)",
+        f"({runs_words(mine['run'].nunique())})",
         curve=curves[curves["configuration"] == configuration],
         units=units,
     )

@@ -15,6 +15,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import pytest
+
 WINDOW_WIDTH_PX = 1280
 
 AUDIT = """<script>
@@ -56,6 +58,14 @@ def chromium() -> str | None:
         if found:
             return found
     return None
+
+
+def needs_chromium(test):
+    """Skipped without Chromium; a failure then with LAPJOINT_REQUIRE_CHROMIUM=1 (tests/conftest.py)."""
+    test = pytest.mark.skipif(
+        chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
+    )(test)
+    return pytest.mark.group("chromium")(test)
 
 
 def audit_page(page: Path, workdir: Path) -> dict:

@@ -2,8 +2,14 @@
 
 import os
 
-import pytest
-from hypothesis import settings
+# Tests that diagnose in-process use one BLAS thread, as every Snakemake job does: the
+# diagnosis's many small matrix products slow down by an order of magnitude when OpenBLAS
+# threads compete on a busy 2-core machine. Set before anything imports NumPy.
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 # Under CI the property tests draw the same examples on every run, so that a failure there
 # reproduces; elsewhere they draw new ones each run and keep searching.

@@ -262,6 +262,22 @@ def test_binned_discrepancy_flags_a_consistent_misfit_only():
     assert not any(r["significant"] for r in binned_discrepancy(data, res))
 
 
+def test_misfit_bins_span_only_measured_amplitudes():
+    # PFF: the verdict said "Measured from 0.101 in/s" and placed a frequency misfit at
+    # 0.0674-0.213 in/s, the half-decade edge below the lowest segment
+    data, res = _data_with_offset(0.05)  # amplitudes 0.1-3 in/s, half decades down from 3
+    three_scatters = np.full(data.velocity_in_s.size, 3.0)  # every bin fails explains_data
+    failing = explains_data(data, {"z_noise": three_scatters, "f_noise": three_scatters})["failing_bins"]
+    for rows in (binned_discrepancy(data, res), failing):
+        assert min(r["v_low_in_s"] for r in rows) == pytest.approx(0.1)  # the edge is 3e-1.5 = 0.095
+        assert max(r["v_high_in_s"] for r in rows) == pytest.approx(3.0)
+        for r in rows:
+            in_bin = data.velocity_in_s[
+                (data.velocity_in_s >= r["v_low_in_s"]) & (data.velocity_in_s <= r["v_high_in_s"])
+            ]
+            assert in_bin.size >= r["n_segments"]
+
+
 def test_run_order_trend():
     data, res = _data_with_offset(0.0, n_runs=8)
     res["ln_zeta"] = res["ln_zeta"] + 0.02 * data.run_index
@@ -757,7 +773,10 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
     # a real misfit: its size with its sign, and a drift with the order it was measured in
     trend = {"significant": True, "change_over_sequence": -0.3, "t": -6.2, "order": RECORD_START_ORDER}
     text = discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
-    assert text.startswith("The measured damping differs from the lugre fit") and "by up to -26 %" in text
+    assert (
+        text.startswith("The measured damping differs from the lugre fit")
+        and "at 1-3.16 in/s, by -26 %" in text
+    )
     assert "shifts with run order (recording start times in the files) by -26 %" in text
 
 
@@ -778,6 +797,31 @@ def test_discrepancy_sentence_names_both_curves():
     one = {**_bin("damping", 0.3, 11.0, 1e-9, significant=True), "n_runs": 1, "n_segments": 40}
     text = discrepancy_sentence("dahl", [one], None, 1)
     assert "over the 40 segments of the one run" in text and "1 runs" not in text
+
+
+def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range():
+    # the demo's no_washer: damping significant at 0.465-1.47 in/s only, while the residual
+    # figure shows the baseline 2.8 % too low above 1.47 in/s over the 7 runs reaching it
+    significant = {
+        **_bin("damping", -0.0517, -6.7, 9.2e-5, significant=True, p_limit=6.3e-4),
+        "v_low_in_s": 0.465,
+        "v_high_in_s": 1.47,
+    }
+    above = {**_bin("damping", 0.0279, 1.4, 0.22, p_limit=6.3e-4), "v_low_in_s": 1.47, "v_high_in_s": 4.65}
+    above["n_runs"] = 7
+    below = {**_bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4), "v_low_in_s": 0.147, "v_high_in_s": 0.465}
+    text = discrepancy_sentence("lugre", [below, significant, above], None, 10)
+    assert (
+        "the largest damping misfit outside that range, where the measured damping lies 2.8 % above "
+        "the lugre fit at 1.47-4.65 in/s, is larger than the 2 % in damping" in text
+    )
+    assert "|t| = 1.4 over 7 runs" in text
+    # a bin within the models' accuracy outside the range is not named
+    assert "0.147-0.465" not in text and "0.85 %" not in text
+    assert "outside that range" not in discrepancy_sentence("lugre", [below, significant], None, 10)
+    # one significant bin: its range once, not "between A and B ... at A-B"
+    assert "differs from the lugre fit at 0.465-1.47 in/s, by -5.0 % (|t| = 6.7" in text
+    assert "between" not in text
 
 
 def test_one_significance_rule():

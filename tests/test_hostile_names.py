@@ -21,12 +21,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from browser import audit_page, chromium
+from browser import audit_page, needs_chromium
 from helpers import CHEAP, REPO, run_snakemake
 from system_format_files import write_tdms
 
 MARKER = "lapjoint-marker"
 """In every injected element's id: no element of any page may carry it."""
+SCRIPT_RAN = "lapjoint-script-ran"
+"""The document title the campaign name's script sets; it builds it from two halves so that
+the name's own text, which a page may show in its title, never holds it."""
 
 
 def command(marker_file: str) -> str:
@@ -45,7 +48,7 @@ TERMINAL = "\x1b[2J\x1b[H\x1b[32mVerdict: none (fake)\x1b[0m"
 MATH = "$\\frac{$"
 
 CAMPAIGN_NAME = (
-    f"{command('PWNED-campaign')} {{{{ 7*7 }}}} {MATH} {TERMINAL} <script>document.title='{MARKER}'</script>"
+    f"{command('PWNED-campaign')} {{{{ 7*7 }}}} {MATH} {TERMINAL} <script>document.title='{SCRIPT_RAN[:-4]}'+'{SCRIPT_RAN[-4:]}'</script>"
     + RAW_HTML.format(marker=f"{MARKER}-campaign")
     + "end_of_name_"
 )
@@ -267,9 +270,6 @@ def test_another_campaign_in_the_same_results_is_refused_naming_both(hostile, tm
     assert sorted(path.relative_to(workdir) for path in (workdir / "results").rglob("*")) == before
 
 
-needs_chromium = pytest.mark.skipif(chromium() is None, reason="no chromium on this machine")
-
-
 @needs_chromium
 @pytest.mark.parametrize(
     "page", ["results/report.html", "results/report/verdict.html", "results/report/runs.html"]
@@ -278,7 +278,7 @@ def test_pages_in_chromium_run_no_injected_script(hostile, page, tmp_path):
     found = audit_page(hostile[1] / page, tmp_path)
     assert found["errors"] == []
     assert found["marked"] == 0  # no element from a name, after the page's scripts ran
-    assert MARKER not in found["title"]  # no script from a name ran
+    assert SCRIPT_RAN not in found["title"]  # no script from a name ran
 
 
 # ------------------------------------------------------------------ each case alone, fast

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from browser import WINDOW_WIDTH_PX, audit_page, chromium
+from browser import WINDOW_WIDTH_PX, audit_page, needs_chromium
 from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 
 from workflow.discovery.wording import discrepancy_sentence
@@ -517,8 +517,33 @@ def test_damping_low_point_on_the_way_is_said():
             "frequency_hz": 100.0,
         }
     )
-    sentence = report.trend_sentence(report.measured_trends(segments)["c"])
-    assert "the damping stays level" in sentence and "through a low of 0.1" in sentence
+    trend = report.measured_trends(segments)["c"]
+    sentence = report.trend_sentence(trend)
+    assert f"the damping falls from {report.fmt(100 * trend['zeta_low'])} %" in sentence
+    assert "to a low of 0.1" in sentence and 100 * trend["zeta_min"] == pytest.approx(0.1, rel=0.02)
+    assert f"in/s, then rises to {report.fmt(100 * trend['zeta_high'])} %" in sentence
+    assert "damping stays level" not in sentence
+
+
+def test_damping_hump_is_said_as_a_rise_then_a_fall():
+    # UNESP t5nm: "the damping stays level from 0.499 % to 0.523 %, through a high of
+    # 0.653 % near 0.0445 in/s" beside a figure where it climbs to 0.65 % and falls to 0.48 %
+    amplitude = np.logspace(np.log10(0.0223), np.log10(31.0), 300)
+    x = np.log10(amplitude / 0.0445)
+    zeta = 0.005 + 0.0015 * np.exp(-(x**2) / 0.1)  # 0.5 % at both ends, 0.65 % at 0.0445 in/s
+    segments = pd.DataFrame(
+        {"configuration": "t5nm", "run": "r", "velocity_amplitude_in_s": amplitude, "zeta": zeta}
+    ).assign(frequency_hz=19.0)
+    trend = report.measured_trends(segments)["t5nm"]
+    sentence = report.trend_sentence(trend)
+    x_drawn, y_drawn = _plotted_points(figures.damping_vs_amplitude(segments, title="t"))
+    peak = float(y_drawn.max())  # the figure's highest point, in %
+    assert peak == pytest.approx(0.65, rel=0.01)
+    assert f"the damping rises from {report.fmt(100 * trend['zeta_low'])} %" in sentence
+    assert f"to a high of {report.fmt(100 * trend['zeta_max'])} % near" in sentence
+    assert 100 * trend["zeta_max"] == pytest.approx(peak, rel=0.02)
+    assert f", then falls to {report.fmt(100 * trend['zeta_high'])} %" in sentence
+    assert "stays level" not in sentence.split("frequency")[0]
 
 
 def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
@@ -614,14 +639,6 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
 
 
 # ------------------------------------------------------------------ in a real browser
-def needs_chromium(test):
-    """Skipped without Chromium; a failure then with LAPJOINT_REQUIRE_CHROMIUM=1 (tests/conftest.py)."""
-    test = pytest.mark.skipif(
-        chromium() is None, reason="no chromium on this machine (Debian: apt-get install chromium)"
-    )(test)
-    return pytest.mark.group("chromium")(test)
-
-
 @needs_chromium
 @pytest.mark.parametrize("page", ["results/report.html", "results/report/verdict.html"])
 def test_page_renders_in_chromium_without_errors_or_overflow(built_report, page, tmp_path):
@@ -709,7 +726,8 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
     entry["evidence"]["threshold_distribution"]["adopted"] = False
     assert "the power law stays the extended model" in report.threshold_sentences(entry)[0]
     assert report.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []
-    assert report.model_name("iwan_cells_6") == "Iwan micro-slip, slip thresholds from the data"
+    # no comma inside the name: "The extended model, NAME, predicts" and "NAME predicts" both read
+    assert report.model_name("iwan_cells_6") == "Iwan micro-slip with slip thresholds from the data"
 
 
 def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_aside():

@@ -56,6 +56,24 @@ def misfit_significant(p: float, p_limit: float, size: float, tolerance: float) 
     return bool(p < p_limit and abs(size) > tolerance)
 
 
+def bin_span_in_s(velocity_in_s: np.ndarray, anchor_velocity_in_s: float, b: int) -> dict:
+    """Amplitudes of half-decade bin ``b`` (of :func:`amplitude_bin`), in/s: its edges,
+    cut to the measured range so that a sentence or table never places a misfit at
+    amplitudes no segment reached.
+
+    Examples
+    --------
+    >>> bin_span_in_s(np.array([0.5, 2.0, 10.0]), 10.0, -3)
+    {'v_low_in_s': 0.5, 'v_high_in_s': 1.0}
+    """
+    low = anchor_velocity_in_s * 10 ** (b / 2.0)
+    high = anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)
+    return {
+        "v_low_in_s": float(max(low, velocity_in_s.min())),
+        "v_high_in_s": float(min(high, velocity_in_s.max())),
+    }
+
+
 def _lag1_effective(r: np.ndarray) -> float:
     """Effective sample size of a serially correlated sequence (AR(1))."""
     n = r.size
@@ -121,8 +139,7 @@ def binned_discrepancy(
             rows.append(
                 {
                     "curve": curve,
-                    "v_low_in_s": float(data.anchor_velocity_in_s * 10 ** (b / 2.0)),
-                    "v_high_in_s": float(data.anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)),
+                    **bin_span_in_s(data.velocity_in_s, data.anchor_velocity_in_s, b),
                     "mean": m,
                     "standard_error": se,
                     "t": float(t),
@@ -380,8 +397,7 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
             bins.append(
                 {
                     "curve": curve,
-                    "v_low_in_s": float(data.anchor_velocity_in_s * 10 ** (b / 2.0)),
-                    "v_high_in_s": float(data.anchor_velocity_in_s * 10 ** ((b + 1) / 2.0)),
+                    **bin_span_in_s(data.velocity_in_s, data.anchor_velocity_in_s, b),
                     "mean_over_scatter": float(np.mean(r[in_bin])),
                     "n_segments": int(in_bin.sum()),
                 }

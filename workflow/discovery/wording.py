@@ -114,7 +114,9 @@ def discrepancy_sentence(
     is not zero never reads as ``0.00 %``), with their direction in words. A misfit is
     significant by :func:`~workflow.discovery.misfit.misfit_significant` (statistically
     clear and larger than the models' accuracy). Each curve is named: where it has
-    significant bins, their range and the largest; where it has none, its largest bin by
+    significant bins, their range and the largest, then the largest bin outside that range
+    that exceeds the models' accuracy without being significant (so that a residual figure
+    showing a large misfit there is not contradicted); where it has none, its largest bin by
     ``|t|`` and which half of the rule that bin fails, so that a large but uncertain
     misfit in one curve is not left out beside a significant one in the other.
     Amplitudes (``v_low_in_s``, ``v_high_in_s`` of the bins, in/s) are shown in ``units``.
@@ -135,12 +137,29 @@ def discrepancy_sentence(
         lo = min(b["v_low_in_s"] for b in sig)
         hi = max(b["v_high_in_s"] for b in sig)
         worst = max(sig, key=lambda b: abs(b["mean"]))
-        parts.append(
-            f"the measured {curve} differs from the {model_name} fit between "
-            f"{_span(lo, hi, units, ' and ')}, by up to "
-            f"{format_percent(_misfit_percent(curve, worst['mean']))} "
-            f"({statistic_words(worst)}) at {_span(worst['v_low_in_s'], worst['v_high_in_s'], units)}"
-        )
+        size = f"{format_percent(_misfit_percent(curve, worst['mean']))} ({statistic_words(worst)})"
+        if len(sig) == 1:
+            where = f"at {_span(lo, hi, units)}, by {size}"
+        else:
+            where = (
+                f"between {_span(lo, hi, units, ' and ')}, by up to {size} "
+                f"at {_span(worst['v_low_in_s'], worst['v_high_in_s'], units)}"
+            )
+        parts.append(f"the measured {curve} differs from the {model_name} fit {where}")
+        outside = [
+            b
+            for b in rows
+            if (b["v_high_in_s"] <= lo or b["v_low_in_s"] >= hi) and abs(b["mean"]) > b["tolerance"]
+        ]
+        if outside:
+            parts.append(
+                _negligible_misfit_words(
+                    model_name,
+                    max(outside, key=lambda b: abs(b["mean"])),
+                    f"the largest {curve} misfit outside that range",
+                    units,
+                )
+            )
     if trend is not None and trend["significant"]:
         parts.append(
             f"the runs' damping curve shifts with run order ({trend['order']}) by "

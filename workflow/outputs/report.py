@@ -221,7 +221,7 @@ def esc(text: Any) -> str:
 
 def model_name(model_id: str | None) -> str:
     if model_id and model_id.startswith("iwan_cells_"):
-        return "Iwan micro-slip, slip thresholds from the data"
+        return "Iwan micro-slip with slip thresholds from the data"
     return MODEL_NAMES.get(model_id or "", model_id or "?")
 
 
@@ -526,30 +526,34 @@ def _end_words(trend: Mapping, end: str, units: UnitSystem) -> str:
 def trend_sentence(trend: Mapping, units: UnitSystem = INCH_SECOND) -> str:
     """What the measured damping and frequency do over the full measured range, in words
     taken from the numbers of :func:`measured_trends` (direction, both ends, the damping's
-    low or high point on the way when it lies beyond both ends, the frequency's relative
-    change)."""
+    low or high point on the way when it lies beyond both ends, said as a turn: "rises
+    from A to a high of M near V, then falls to B"; the frequency's relative change)."""
     zeta = _direction(trend["zeta_low"], trend["zeta_high"], FLAT_CHANGE)
     frequency_change = trend["frequency_high_hz"] / trend["frequency_low_hz"] - 1.0
     # a joint's frequency moves by a fraction of a percent: 0.1 % is already a trend
     frequency = _direction(trend["frequency_low_hz"], trend["frequency_high_hz"], 1e-3)
     ends = (trend["zeta_low"], trend["zeta_high"])
-    on_the_way = ""
+    low_end = f"{fmt(100 * trend['zeta_low'])} % {_end_words(trend, 'low', units)}"
+    high_end = f"{fmt(100 * trend['zeta_high'])} % {_end_words(trend, 'high', units)}"
+    # a low or high point beyond both ends is a turn the figure shows: said as one
     if trend["zeta_min"] < (1 - FLAT_CHANGE) * min(ends):
-        on_the_way = (
-            f", through a low of {fmt(100 * trend['zeta_min'])} % near "
-            f"{fmt(units.per_in_s * trend['zeta_min_in_s'])} {units.velocity}"
-        )
+        turn = ("falls", "a low", trend["zeta_min"], trend["zeta_min_in_s"], "rises")
     elif trend["zeta_max"] > (1 + FLAT_CHANGE) * max(ends):
-        on_the_way = (
-            f", through a high of {fmt(100 * trend['zeta_max'])} % near "
-            f"{fmt(units.per_in_s * trend['zeta_max_in_s'])} {units.velocity}"
+        turn = ("rises", "a high", trend["zeta_max"], trend["zeta_max_in_s"], "falls")
+    else:
+        turn = None
+    if turn is None:
+        damping = f"the damping {zeta} from {low_end} to {high_end}"
+    else:
+        first, point, value, at_in_s, then = turn
+        damping = (
+            f"the damping {first} from {low_end} to {point} of {fmt(100 * value)} % near "
+            f"{fmt(units.per_in_s * at_in_s)} {units.velocity}, then {then} to {high_end}"
         )
     return (
         f"Measured from {fmt(units.per_in_s * trend['amplitude_low_in_s'])} to "
         f"{fmt(units.per_in_s * trend['amplitude_high_in_s'])} {units.velocity} "
-        f"({trend['n_segments']} segments, {runs_words(trend['n_runs'])}), "
-        f"the damping {zeta} from {fmt(100 * trend['zeta_low'])} % {_end_words(trend, 'low', units)} "
-        f"to {fmt(100 * trend['zeta_high'])} % {_end_words(trend, 'high', units)}{on_the_way} "
+        f"({trend['n_segments']} segments, {runs_words(trend['n_runs'])}), {damping} "
         f"(medians of the segments there), and the frequency {frequency} from "
         f"{fmt(trend['frequency_low_hz'], 5)} Hz to {fmt(trend['frequency_high_hz'], 5)} Hz "
         f"({100 * frequency_change:+.2f} %)."
