@@ -45,7 +45,8 @@ STAGES = {
 PRELUDE = """
 import sys
 from pathlib import Path
-from workflow.io.campaign import load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import read_run
 from workflow.io.interim import read_mode, write_mode
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode

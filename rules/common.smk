@@ -110,15 +110,10 @@ def campaign_inventory():
     generates it); any other campaign is listed from its campaign.yaml, and its band
     and mode are checked against the sample rate its files declare before any job runs.
     """
-    from workflow.io.campaign import (
-        CAMPAIGN_FILE,
-        CampaignFormatError,
-        ExcludedPath,
-        declared_sample_rate_hz,
-        frequency_problem,
-        load_campaign,
-        scan_campaign,
-    )
+    from workflow.io.campaign import CAMPAIGN_FILE, load_campaign
+    from workflow.io.readers.ascii import declared_sample_rate_hz
+    from workflow.io.records import CampaignFormatError, frequency_problem
+    from workflow.io.run_files import ExcludedPath, scan_campaign
 
     if USES_DEMO:
         from workflow.lab.layout import planned_run_files

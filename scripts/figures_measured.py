@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from workflow.discovery.wording import runs_words
-from workflow.io.campaign import read_run
 from workflow.io.interim import read_campaign
+from workflow.io.run_files import read_run
 from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
 from workflow.io.units import UNIT_SYSTEMS, response_in_units

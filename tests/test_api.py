@@ -9,7 +9,8 @@ from helpers import CHEAP
 
 import workflow
 from workflow.api import load_results, ring_down_table, run_campaign
-from workflow.io.campaign import load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import read_run
 from workflow.io.units import STANDARD_GRAVITY_IN_S2
 from workflow.lab.campaigns import generate_campaign
 

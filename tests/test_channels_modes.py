@@ -21,14 +21,9 @@ from system_format_files import (
     write_uff58,
 )
 
-from workflow.io.campaign import (
-    SINGLE_CHANNEL_NAME,
-    CampaignFormatError,
-    campaign_from_dict,
-    campaign_to_dict,
-    load_campaign,
-    read_run,
-)
+from workflow.io.campaign import SINGLE_CHANNEL_NAME, campaign_from_dict, campaign_to_dict, load_campaign
+from workflow.io.records import CampaignFormatError
+from workflow.io.run_files import read_run
 
 N = 4096
 RATE_HZ = 2560.0

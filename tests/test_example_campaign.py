@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import list_runs
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.campaign_tables import analyse_campaign
 

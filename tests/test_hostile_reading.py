@@ -20,8 +20,10 @@ from system_format_files import lms_export_group, write_mat73, write_plain_mat, 
 from test_hostile_inputs import BASE_YAML, FS_HZ, make_campaign, run_text
 
 from workflow.io import limits
-from workflow.io.campaign import CampaignFormatError, load_campaign, read_run, scan_campaign
+from workflow.io.campaign import load_campaign
 from workflow.io.interim import read_mode, write_mode
+from workflow.io.records import CampaignFormatError
+from workflow.io.run_files import read_run, scan_campaign
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_file

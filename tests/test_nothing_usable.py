@@ -12,7 +12,8 @@ import pytest
 from helpers import CHEAP, run_snakemake
 from system_format_files import write_tdms
 
-from workflow.io.campaign import load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import read_run
 from workflow.measured.campaign_tables import NOTHING_ANALYSED, nothing_analysed_message
 from workflow.measured.runs import RUN_COLUMNS
 

@@ -5,8 +5,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
+from workflow.io.run_files import list_runs
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.campaigns import generate_campaign
 from workflow.measured.mode_identification import identify_configuration_mode

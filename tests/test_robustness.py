@@ -448,7 +448,8 @@ def test_unknown_campaign_key_stops_before_any_job(tmp_path):
 def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
     from helpers import failed_check_reasons
 
-    from workflow.io.campaign import load_campaign, read_run
+    from workflow.io.campaign import load_campaign
+    from workflow.io.run_files import read_run
     from workflow.io.settings import QualitySettings
     from workflow.measured.quality import QC_COLUMNS, quality_rows
 
@@ -510,7 +511,7 @@ def test_quality_table_of_a_good_run_passes_with_margins(study):
 
 
 def test_quality_rows_mark_checks_that_do_not_apply():
-    from workflow.io.campaign import RunRecord
+    from workflow.io.records import RunRecord
     from workflow.io.settings import QualitySettings
     from workflow.measured.quality import analysis_rows, quality_rows
 
@@ -561,13 +562,13 @@ def test_configuration_with_every_run_excluded_is_listed_in_the_diagnosis(tmp_pa
 
 
 def test_a_reader_fault_on_one_file_excludes_that_run_and_names_it(tmp_path, monkeypatch):
-    from workflow.io import campaign as campaign_io
+    from workflow.io import run_files
     from workflow.measured.runs import read_with_quality
 
     def faulty(campaign_dir, path, campaign):
         raise OverflowError("cannot convert float infinity to integer")
 
-    monkeypatch.setattr(campaign_io, "read_run", faulty)
+    monkeypatch.setattr(run_files, "read_run", faulty)
     record, rows = read_with_quality(tmp_path, "cfg/run07.txt", None, None)
     assert record is None and len(rows) == 1 and not rows[0]["passed"]
     assert rows[0]["reason"].startswith(f"{tmp_path.as_posix()}/cfg/run07.txt: not read: OverflowError")

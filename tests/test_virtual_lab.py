@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
-from workflow.io import campaign
+from workflow.io import campaign, run_files
 from workflow.lab.campaign_files import truth_path
 from workflow.lab.campaigns import generate_campaign, generate_one_hit, generate_sensor_campaigns
 from workflow.lab.configurations import (
@@ -90,9 +90,9 @@ def test_run_file_format_trigger_and_quantisation(demo):
 def test_campaign_reader_accepts_it(demo):
     out, _ = demo
     meta = campaign.load_campaign(out)
-    runs = campaign.list_runs(out, meta)
+    runs = run_files.list_runs(out, meta)
     assert len(runs) == 6
-    record = campaign.read_run(out, runs[0], meta)
+    record = run_files.read_run(out, runs[0], meta)
     assert record.n_samples == 8192 and record.pretrigger_samples == 25
 
 

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from workflow.io.campaign import RunRecord
+from workflow.io.records import RunRecord
 from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.io.tables import read_table, with_si_columns
 from workflow.io.units import normalize_unit

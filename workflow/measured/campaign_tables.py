@@ -16,11 +16,7 @@ import numpy as np
 
 from workflow.io.interim import ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
-from workflow.io.settings import (
-    AnalysisSettings,
-    DampingFitSettings,
-    QualitySettings,
-)
+from workflow.io.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_file, empty_segments
 
@@ -57,7 +53,8 @@ def analyse_campaign(
     """
     import pandas as pd
 
-    from workflow.io.campaign import list_runs, load_campaign
+    from workflow.io.campaign import load_campaign
+    from workflow.io.run_files import list_runs
 
     campaign = load_campaign(campaign_dir)
     run_files = list_runs(campaign_dir, campaign)
@@ -170,7 +167,7 @@ def collect_tables(
     ``mode_paths`` are the configurations' mode files (``<configuration>.json``,
     :func:`workflow.io.interim.write_mode`); the other paths list every ``analyse_runs``
     job's files. ``excluded_paths`` are runs-table rows for what the campaign's globs
-    lead to that no job reads (:meth:`workflow.io.campaign.ExcludedPath.status`):
+    lead to that no job reads (:meth:`workflow.io.run_files.ExcludedPath.status`):
     directories, links leading outside the campaign, unreadable files, globs that match
     nothing.
 

@@ -19,13 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from workflow.io import units
-from workflow.io.campaign import SINGLE_CHANNEL_NAME, RunRecord
+from workflow.io.campaign import SINGLE_CHANNEL_NAME
 from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import QUOTED_CHARACTERS, quoted, shortened
-from workflow.io.settings import (
-    DecaySettings,
-    QualitySettings,
-)
+from workflow.io.records import RunRecord
+from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.measured import decay, quality
 
 __all__ = [
@@ -64,9 +62,9 @@ def window_problem(record: RunRecord, window_s: tuple[float, float] | None, conf
 
     The window is the part of every run to analyse, in s from the start of the file
     (campaign-format.md); the part of it inside the record must hold at least
-    :data:`~workflow.io.campaign.MIN_SAMPLES` samples, as a whole run file must.
+    :data:`~workflow.io.records.MIN_SAMPLES` samples, as a whole run file must.
     """
-    from workflow.io.campaign import MIN_SAMPLES
+    from workflow.io.records import MIN_SAMPLES
 
     if window_s is None:
         return None
@@ -200,7 +198,8 @@ def read_with_quality(
     (:func:`workflow.measured.quality.quality_rows`); an unreadable file gives a single
     ``read`` row whose reason names the file, the line and what is wrong.
     """
-    from workflow.io.campaign import CampaignFormatError, read_run
+    from workflow.io.records import CampaignFormatError
+    from workflow.io.run_files import read_run
 
     try:
         record = read_run(campaign_dir, path, campaign)
