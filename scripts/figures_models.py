@@ -11,7 +11,7 @@ from workflow.measured.campaign_tables import first_mode_and_channel, with_mode_
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
 from workflow.outputs.escape import plot_text
-from workflow.outputs.report import model_fits_html
+from workflow.outputs.report_tables import model_fits_html
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_models")

@@ -626,7 +626,7 @@ def test_workflow_analyses_every_mode_on_every_channel(tmp_path):
 
 
 def test_verdict_page_has_a_section_per_mode_with_each_channel_escaped():
-    from workflow.outputs.report import modes_section
+    from workflow.outputs.verdict_page import modes_section
 
     channel = "<b>acc1</b> & co"
     configuration = {

@@ -297,14 +297,18 @@ def first_page(document: dict, runs, config: dict | None = None) -> str:
     import jinja2
     from docutils.core import publish_parts
 
-    from workflow.outputs import report
+    from workflow.outputs import landing_page
 
     class Snakemake:
         pass
 
     Snakemake.config = config or {"campaign": "campaigns/washers"}
     description = (REPO / "report" / "workflow.rst").read_text()
-    landing = report.landing_rst(report.verdict_rst(document, runs=runs), description) + "\n" + REPORT_LINKS
+    landing = (
+        landing_page.landing_rst(landing_page.verdict_rst(document, runs=runs), description)
+        + "\n"
+        + REPORT_LINKS
+    )
     rendered = (
         jinja2.Environment(trim_blocks=True, lstrip_blocks=True)
         .from_string(landing)

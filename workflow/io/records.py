@@ -160,7 +160,7 @@ class ResponseChannel:
     ----------
     name : str
         The channel's name in every table: campaign.yaml's reference
-        (:meth:`ResponseSpec.channel_names`).
+        (:meth:`workflow.io.campaign.ResponseSpec.channel_names`).
     values : ndarray
         The samples.
     unit : str

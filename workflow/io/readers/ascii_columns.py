@@ -459,7 +459,7 @@ def _named_response_columns(
 
 
 def _response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:
-    """Each response column's canonical unit (:func:`response_unit`)."""
+    """Each response column's canonical unit (:func:`workflow.io.records.response_unit`)."""
     found = []
     for index, unit in zip(columns.responses, columns.response_units):
         what = (
