@@ -10,7 +10,7 @@ from pathlib import Path
 
 from workflow.io.settings import ConfigError, validate_config
 from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
-from workflow.outputs.escape import terminal_lines, terminal_text, visible_controls
+from workflow.io.escape import terminal_lines, terminal_text, visible_controls
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
 # asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a

@@ -377,8 +377,8 @@ def test_summary_shows_terminal_escapes_as_text():
 def test_figures_draw_names_holding_mathtext(tmp_path):
     import pandas as pd
 
+    from workflow.io.escape import plot_text
     from workflow.outputs import figures
-    from workflow.outputs.escape import plot_text
 
     velocity = np.geomspace(0.1, 3.0, 20)
     segments = pd.DataFrame(

@@ -8,8 +8,8 @@ from collections.abc import Mapping
 
 import pandas as pd
 
+from workflow.io.escape import display_text, rst_strong, rst_text
 from workflow.io.units import INCH_SECOND, UnitSystem
-from workflow.outputs.escape import display_text, rst_strong, rst_text
 from workflow.outputs.plain_words import unidentified_sentence
 from workflow.outputs.report_html import fmt, ratio
 from workflow.outputs.report_wording import (
@@ -128,7 +128,7 @@ def landing_rst(verdict: str, description: str) -> str:
     """The report's first page: the verdict, then the workflow description.
 
     ``verdict`` (:func:`verdict_rst`) holds the campaign's text only as
-    :func:`~workflow.outputs.escape.rst_text`, in which no Jinja tag can form, so it goes
+    :func:`~workflow.io.escape.rst_text`, in which no Jinja tag can form, so it goes
     through Snakemake's Jinja rendering of the page as it is; ``description``
     (report/workflow.rst) keeps its Jinja expressions.
     """

@@ -8,8 +8,8 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from workflow.io.escape import html_text
 from workflow.io.units import INCH_SECOND, UnitSystem
-from workflow.outputs.escape import html_text
 
 __all__ = [
     "CSS",
@@ -97,7 +97,7 @@ def ratio(value: Any) -> str:
 
 
 def esc(text: Any) -> str:
-    """Text (the campaign's or ours) as HTML (:func:`workflow.outputs.escape.html_text`)."""
+    """Text (the campaign's or ours) as HTML (:func:`workflow.io.escape.html_text`)."""
     return html_text(text)
 
 

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-from workflow.outputs.escape import terminal_text
+from workflow.io.escape import terminal_text
 from workflow.outputs.report_command import REPORT_COMMAND_FILE
 from workflow.outputs.report_wording import cause_name
 
