@@ -112,7 +112,8 @@ def campaign_inventory():
     """
     from workflow.io.campaign import CAMPAIGN_FILE, load_campaign
     from workflow.io.readers.ascii import declared_sample_rate_hz
-    from workflow.io.records import CampaignFormatError, frequency_problem
+    from workflow.io.campaign import frequency_problem
+    from workflow.io.records import CampaignFormatError
     from workflow.io.run_files import ExcludedPath, scan_campaign
 
     if USES_DEMO:

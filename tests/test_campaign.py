@@ -10,8 +10,8 @@ from helpers import REALDATA, needs_realdata
 from workflow.io import interim
 from workflow.io.campaign import load_campaign
 from workflow.io.recording_time import run_order
-from workflow.io.records import MIN_SAMPLES, CampaignFormatError
-from workflow.io.run_files import RunFile, list_runs, read_run
+from workflow.io.records import MIN_SAMPLES, CampaignFormatError, RunFile
+from workflow.io.run_files import list_runs, read_run
 
 FS_HZ = 2560.0
 N = 300

@@ -25,8 +25,8 @@ from hypothesis import strategies as st
 
 from workflow.io.campaign import load_campaign
 from workflow.io.readers.ascii import declared_sample_rate_hz
-from workflow.io.records import CampaignFormatError
-from workflow.io.run_files import RunFile, list_runs, read_run, scan_campaign
+from workflow.io.records import CampaignFormatError, RunFile
+from workflow.io.run_files import list_runs, read_run, scan_campaign
 from workflow.measured import quality
 
 FS_HZ = 2560.0

@@ -7,22 +7,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from workflow.io import units
-from workflow.io.limits import quoted
-
-if TYPE_CHECKING:
-    from workflow.io.campaign import Campaign
-
 __all__ = [
     "MIN_SAMPLES",
     "CampaignFormatError",
-    "frequency_problem",
-    "response_unit",
+    "RunFile",
     "ResponseChannel",
     "RunRecord",
 ]
@@ -70,86 +63,19 @@ class CampaignFormatError(ValueError):
         return (type(self), (self.path, self.line, self.problem))
 
 
-def frequency_problem(campaign: Campaign, sample_rate_hz: float, rate_source: str = "") -> str | None:
-    """What is wrong with campaign.yaml's modes and bands (``mode_hz``, ``band_hz``,
-    ``modes_hz``, ``bands_hz``) for records sampled at ``sample_rate_hz``, or None.
-
-    Each band must lie inside (0, Nyquist) and hold its mode, which must lie below
-    Nyquist; a message starts with the campaign.yaml key it is about (``modes_hz[1]``
-    for the second entry of a list).
-
-    Parameters
-    ----------
-    campaign : Campaign
-        The validated campaign.yaml.
-    sample_rate_hz : float
-        Sample rate of the records, Hz (``math.inf`` checks the bands and modes alone).
-    rate_source : str, optional
-        Where the sample rate comes from, for the message (e.g. ``"header line 2"``).
-    """
-    nyquist_hz = sample_rate_hz / 2.0
-    source = f" ({rate_source})" if rate_source else ""
-    rate = f"the Nyquist frequency {nyquist_hz:.6g} Hz of the sample rate {sample_rate_hz:.6g} Hz{source}"
-    listed = campaign.modes_hz is not None
-    for index, (mode_hz, band) in enumerate(campaign.mode_requests()):
-        mode_key = f"modes_hz[{index}]" if listed else "mode_hz"
-        band_key = f"bands_hz[{index}]" if listed else "band_hz"
-        if mode_hz is not None and mode_hz >= nyquist_hz:
-            return f"{mode_key}: {mode_hz:.6g} Hz is not below {rate}: such a mode cannot be in the records"
-        if band is not None and band[1] >= nyquist_hz:
-            return f"{band_key}: [{band[0]:.6g}, {band[1]:.6g}] Hz reaches {rate}; the band must lie below it"
-        if band is not None and mode_hz is not None and not band[0] < mode_hz < band[1]:
-            return (
-                f"{band_key}: [{band[0]:.6g}, {band[1]:.6g}] Hz does not hold {mode_key} {mode_hz:.6g} Hz: "
-                "the band-pass would isolate another mode (or none)"
-            )
-    return None
-
-
 # --------------------------------------------------------------------------------------
 # Run files: the record
 
 
-def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
-    """The unit of a response channel: the one its file records, which must be a unit of
-    campaign.yaml's response quantity and agree with campaign.yaml's ``unit`` when given;
-    else campaign.yaml's (campaign.yaml fills only what the file leaves out).
+@dataclass(frozen=True)
+class RunFile:
+    """One run file of a configuration."""
 
-    Parameters
-    ----------
-    file_unit : str or None
-        The unit the file records for the channel (None: none).
-    campaign : Campaign
-        The validated campaign.yaml.
-    what : str
-        How the message names the channel, e.g. ``response column 'acc1 (g)'``.
-
-    Raises
-    ------
-    ValueError
-        The file's unit is no unit of the quantity or disagrees with campaign.yaml, or
-        neither gives one; the message names the channel (the caller adds the file).
-    """
-    quantity, yaml_unit = campaign.response.quantity, campaign.response.unit
-    if file_unit is None:
-        if yaml_unit is None:
-            raise ValueError(
-                f"{what}: the file records no unit and campaign.yaml gives none; "
-                "add unit to response in campaign.yaml"
-            )
-        return yaml_unit
-    canonical = units.normalize_unit(file_unit)
-    if canonical not in units.known_units(quantity):
-        raise ValueError(
-            f"{what}: unit {quoted(file_unit)} in the file is not a unit of {quantity} "
-            f"(campaign.yaml response quantity); expected one of {', '.join(units.known_units(quantity))}"
-        )
-    if yaml_unit is not None and canonical != yaml_unit:
-        raise ValueError(
-            f"{what}: unit {quoted(file_unit)} in the file disagrees with campaign.yaml response unit "
-            f"{yaml_unit!r} ({quantity})"
-        )
-    return canonical
+    configuration: str
+    run: str
+    """File name without extension."""
+    path: str
+    """Path relative to the campaign folder, with ``/`` separators."""
 
 
 @dataclass(frozen=True, eq=False)

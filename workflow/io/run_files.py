@@ -14,15 +14,14 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from workflow.io.campaign import CAMPAIGN_FILE, Campaign
+from workflow.io.campaign import CAMPAIGN_FILE, Campaign, frequency_problem
 from workflow.io.limits import name_length_problem, quoted, shortened
 from workflow.io.path_checks import unreadable_reason
 from workflow.io.readers.ascii import read_ascii_run
-from workflow.io.records import CampaignFormatError, RunRecord, frequency_problem
+from workflow.io.records import CampaignFormatError, RunFile, RunRecord
 
 __all__ = [
     "SYSTEM_FORMAT_EXTENSIONS",
-    "RunFile",
     "ExcludedPath",
     "scan_campaign",
     "list_runs",
@@ -37,17 +36,6 @@ every other extension is read as ASCII."""
 
 # --------------------------------------------------------------------------------------
 # Run discovery
-
-
-@dataclass(frozen=True)
-class RunFile:
-    """One run file of a configuration."""
-
-    configuration: str
-    run: str
-    """File name without extension."""
-    path: str
-    """Path relative to the campaign folder, with ``/`` separators."""
 
 
 @dataclass(frozen=True)

@@ -9,10 +9,10 @@ and columns by :mod:`workflow.io.readers.ascii_columns`.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from workflow.io.campaign import Campaign, frequency_problem
 from workflow.io.readers.ascii_columns import (
     _check_magnitude,
     _check_time,
@@ -41,13 +41,9 @@ from workflow.io.records import (
     MIN_SAMPLES,
     CampaignFormatError,
     ResponseChannel,
+    RunFile,
     RunRecord,
-    frequency_problem,
 )
-
-if TYPE_CHECKING:
-    from workflow.io.campaign import Campaign
-    from workflow.io.run_files import RunFile
 
 __all__ = [
     "HEAD_ROWS",

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
+from workflow.io.campaign import response_unit
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.readers.ascii_rows import (
     _KEY_VALUE,
@@ -41,7 +42,7 @@ from workflow.io.record_rules import (
     first_bad_time_step,
     split_name_unit,
 )
-from workflow.io.records import CampaignFormatError, response_unit
+from workflow.io.records import CampaignFormatError
 
 if TYPE_CHECKING:
     from workflow.io.campaign import Campaign
@@ -459,7 +460,7 @@ def _named_response_columns(
 
 
 def _response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:
-    """Each response column's canonical unit (:func:`workflow.io.records.response_unit`)."""
+    """Each response column's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
     found = []
     for index, unit in zip(columns.responses, columns.response_units):
         what = (

@@ -29,10 +29,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
+from workflow.io.campaign import response_unit
 from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
-from workflow.io.records import MIN_SAMPLES, CampaignFormatError, ResponseChannel, RunRecord, response_unit
+from workflow.io.records import MIN_SAMPLES, CampaignFormatError, ResponseChannel, RunRecord
 
 if TYPE_CHECKING:
     from workflow.io.campaign import Campaign
@@ -258,7 +259,7 @@ def _checked_magnitude(channel: Channel, values: NDArray[np.float64], shown: str
 
 
 def _response_unit(channel: Channel, campaign: Campaign, shown: str) -> str:
-    """The channel's canonical unit (:func:`workflow.io.records.response_unit`)."""
+    """The channel's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
     try:
         return response_unit(unit_label(channel.unit), campaign, channel.record)
     except ValueError as error:
