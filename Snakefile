@@ -7,7 +7,7 @@
 
 from snakemake.utils import min_version
 
-from workflow.outputs.escape import terminal_lines, terminal_text
+from workflow.io.escape import terminal_lines, terminal_text
 from workflow.outputs.report_command import REPORT_COMMAND_FILE, report_command
 from workflow.runtime.params_pandas import defer_pandas_import
 from workflow.runtime.scheduler import cancel_scheduler_timers

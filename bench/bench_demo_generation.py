@@ -12,24 +12,26 @@ from pathlib import Path
 
 import numpy as np
 
-from workflow.lab import virtual_lab
+from workflow.lab.campaigns import generate_campaign
+from workflow.lab.configurations import _configuration_physics, setup_configuration
 from workflow.lab.layout import PAPER_CONFIGURATIONS
+from workflow.lab.settings import LabSettings
 
 
 def main(repeats: int = 5) -> None:
     totals, setups = [], []
-    settings = virtual_lab.LabSettings()
+    settings = LabSettings()
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(repeats):
             # cold: the per-configuration physics cache is emptied first
-            virtual_lab._configuration_physics.cache_clear()
+            _configuration_physics.cache_clear()
             start = time.perf_counter()
             for name, area in PAPER_CONFIGURATIONS.items():
-                virtual_lab.setup_configuration(name, area, settings)
+                setup_configuration(name, area, settings)
             setups.append(time.perf_counter() - start)
-            virtual_lab._configuration_physics.cache_clear()
+            _configuration_physics.cache_clear()
             start = time.perf_counter()
-            virtual_lab.generate_campaign(Path(tmp) / f"demo{i}", seed=2004, runs_per_configuration=10)
+            generate_campaign(Path(tmp) / f"demo{i}", seed=2004, runs_per_configuration=10)
             totals.append(time.perf_counter() - start)
     totals, setups = np.array(totals), np.array(setups)
     print(f"{'stage':<28}{'median s':>10}{'min s':>8}{'max s':>8}")

@@ -27,7 +27,8 @@ from system_format_files import (  # noqa: E402
     write_uff58,
 )
 
-from workflow.io.campaign import load_campaign, read_run  # noqa: E402
+from workflow.io.campaign import load_campaign  # noqa: E402
+from workflow.io.run_files import read_run  # noqa: E402
 
 RATE_HZ = 51200.0
 

@@ -193,7 +193,8 @@ def high_rate_hit(root: Path) -> Path:
     """One hit recorded by three sensors at 12.8 kHz for 5 s, as a campaign whose
     configurations are the sensors (one run each): the virtual lab writes each sensor's
     record, and they are gathered into one campaign folder."""
-    from workflow.lab.virtual_lab import LabSettings, generate_sensor_campaigns
+    from workflow.lab.campaigns import generate_sensor_campaigns
+    from workflow.lab.settings import LabSettings
 
     settings = LabSettings(sample_rate_hz=HIGH_RATE_HZ, samples_per_run=HIGH_RATE_SAMPLES)
     generate_sensor_campaigns(
@@ -248,7 +249,7 @@ SCALE_CAMPAIGNS = {
 
 def scale_campaigns(root: Path, names: list[str]) -> dict[str, Path]:
     """The named campaigns of :data:`SCALE_CAMPAIGNS`, generated under ``root``."""
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     campaigns = {}
     for name in names:

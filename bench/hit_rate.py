@@ -52,7 +52,7 @@ from workflow.lab.hidden_effects import (  # noqa: E402
     generate_case,
     time_domain_can_hide,
 )
-from workflow.lab.virtual_lab import LabSettings  # noqa: E402
+from workflow.lab.settings import LabSettings  # noqa: E402
 
 VERDICTS = [
     "none",
@@ -199,18 +199,19 @@ def baseline_misfit_on_truth(
     where both stay within ``EXPLAINS_LIMIT`` the baseline explains the effect-laden
     truth itself, and ``none`` is the contract's reading of any campaign of that case.
     """
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.settings import LabSettings
     from workflow.models.averaged_fit import FitContext, FitSettings, fit_model, model_residuals
     from workflow.models.configuration_data import ConfigurationData, Scatter
 
-    lab = vl.LabSettings()
+    lab = LabSettings()
     v = np.geomspace(*velocity_range_in_s, 60)
     area = case["bearing_area_in2"]
     noise = Scatter(*(np.full(v.size, x) for x in (scatter_ln_zeta, scatter_rel_f) * 2))
     settings = FitSettings(global_samples=256, local_starts=4, max_nfev=200)
-    setup, curves = vl.setup_configuration("x", area, lab)
-    table = vl.mode_table(setup, curves, lab, case["joint"], case["effect"], case["effect_size"])
-    zeta, frequency_hz = vl.truth_curves(setup, table, v)
+    setup, curves = setup_configuration("x", area, lab)
+    table = mode_table(setup, curves, lab, case["joint"], case["effect"], case["effect_size"])
+    zeta, frequency_hz = truth_curves(setup, table, v)
     data = ConfigurationData("x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], area, response_order=0)
     context = FitContext(float(np.quantile(v, 0.9)))
     best = None
@@ -232,15 +233,16 @@ def drift_change_on_truth(
     drift alone, no random spread), over the measured amplitude range: the largest change
     of ``ln zeta`` or of the relative frequency between them, in measured scatters.
     """
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.settings import LabSettings
 
-    lab = vl.LabSettings()
+    lab = LabSettings()
     v = np.geomspace(*velocity_range_in_s, 60)
-    setup, curves = vl.setup_configuration("x", case["bearing_area_in2"], lab)
+    setup, curves = setup_configuration("x", case["bearing_area_in2"], lab)
     first, last = (
-        vl.truth_curves(
+        truth_curves(
             setup,
-            vl.mode_table(setup, curves, lab, case["joint"], case["effect"], case["effect_size"], fraction),
+            mode_table(setup, curves, lab, case["joint"], case["effect"], case["effect_size"], fraction),
             v,
         )
         for fraction in (0.0, 1.0)
@@ -259,15 +261,14 @@ def added_term_on_truth(
     over the measured amplitude range: the largest change of ``ln zeta`` or of the
     relative frequency, in measured scatters.
     """
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.settings import LabSettings
 
-    lab = vl.LabSettings()
+    lab = LabSettings()
     v = np.geomspace(*velocity_range_in_s, 60)
-    setup, curves = vl.setup_configuration("x", case["bearing_area_in2"], lab)
+    setup, curves = setup_configuration("x", case["bearing_area_in2"], lab)
     alone, both = (
-        vl.truth_curves(
-            setup, vl.mode_table(setup, curves, lab, case["joint"], effect, case["effect_size"]), v
-        )
+        truth_curves(setup, mode_table(setup, curves, lab, case["joint"], effect, case["effect_size"]), v)
         for effect in (None, case["effect"])
     )
     change_zeta = np.max(np.abs(np.log(both[0] / alone[0]))) / scatter_ln_zeta
@@ -283,9 +284,10 @@ def visibility() -> None:
     scatter (0.015 in ln zeta, 2e-5 in relative frequency); then the patch joint's
     micro-slip onset and log-log slope per area.
     """
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.settings import LabSettings
 
-    lab = vl.LabSettings()
+    lab = LabSettings()
     print("quadratic damping: best baseline's largest residual on the truth curves (scatters)")
     for area in (0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.36):
         row = []
@@ -302,8 +304,8 @@ def visibility() -> None:
     print("micro-slip (patch joint): onset (joint damping > 0.1 zeta0), decades to 3 in/s, slope")
     vv = np.logspace(-2, 1, 301)
     for area in np.arange(0.6, 1.41, 0.05):
-        setup, curves = vl.setup_configuration("x", float(area), lab)
-        zeta, _ = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "patches", None, None), vv)
+        setup, curves = setup_configuration("x", float(area), lab)
+        zeta, _ = truth_curves(setup, mode_table(setup, curves, lab, "patches", None, None), vv)
         excess = zeta - lab.zeta0
         onset = vv[np.argmax(excess > 0.1 * lab.zeta0)]
         sel = (vv >= onset) & (vv <= 3.0)

@@ -57,10 +57,12 @@ import scipy.io
 from bench_workflow import REFERENCE_ADDITIONS, reference_loop_s
 from scipy import signal
 
-from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
+from workflow.io.run_files import list_runs
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import RunAnalysis, analyse_run_file, identify_configuration_mode
+from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.runs import RunAnalysis, analyse_run_file
 
 NOMINAL_HZ = 151.0
 """The mode's approximate frequency, as the converted campaign gives it (mode_hz), Hz."""

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from workflow.io.settings import ConfigError, validate_config
 from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
-from workflow.outputs.escape import terminal_lines, terminal_text, visible_controls
+from workflow.io.escape import terminal_lines, terminal_text, visible_controls
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
 # asdict(...): Snakemake re-runs a job when such a param changes, and cannot see into a
@@ -89,7 +89,7 @@ STARTED_S = time.time()
 def nothing_analysed_this_run():
     """Why nothing could be analysed, when rule usable_segments stopped for it in this run,
     else None."""
-    from workflow.measured.runs import NOTHING_ANALYSED, nothing_analysed_in_tables
+    from workflow.measured.campaign_tables import NOTHING_ANALYSED, nothing_analysed_in_tables
 
     log = Path("results/logs/usable_segments.log")
     # a second of slack: some file systems keep whole seconds
@@ -110,15 +110,11 @@ def campaign_inventory():
     generates it); any other campaign is listed from its campaign.yaml, and its band
     and mode are checked against the sample rate its files declare before any job runs.
     """
-    from workflow.io.campaign import (
-        CAMPAIGN_FILE,
-        CampaignFormatError,
-        ExcludedPath,
-        declared_sample_rate_hz,
-        frequency_problem,
-        load_campaign,
-        scan_campaign,
-    )
+    from workflow.io.campaign import CAMPAIGN_FILE, load_campaign
+    from workflow.io.readers.ascii import declared_sample_rate_hz
+    from workflow.io.campaign import frequency_problem
+    from workflow.io.records import CampaignFormatError
+    from workflow.io.run_files import ExcludedPath, scan_campaign
 
     if USES_DEMO:
         from workflow.lab.layout import planned_run_files

@@ -1,4 +1,4 @@
-# The built-in demo: a campaign measured in the virtual lab (workflow/lab/virtual_lab.py).
+# The built-in demo: a campaign measured in the virtual lab (workflow/lab/campaigns.py).
 # It exists only when config.yaml's campaign points at demo.path.
 
 if USES_DEMO:

@@ -1,9 +1,9 @@
 """Rule collect_tables: the campaign's segments, runs and modes as Parquet tables."""
 
+from workflow.io.escape import spreadsheet_text
 from workflow.io.interim import read_campaign
 from workflow.io.tables import atomic_write_bytes, write_table
-from workflow.measured.runs import collect_tables
-from workflow.outputs.escape import spreadsheet_text
+from workflow.measured.campaign_tables import collect_tables
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "collect_tables")

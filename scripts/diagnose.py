@@ -8,7 +8,7 @@ from workflow.discovery.diagnosis_files import read_configuration_diagnosis
 from workflow.discovery.modes import mode_document, with_modes
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json, write_table
-from workflow.measured.runs import with_mode_and_channel
+from workflow.measured.campaign_tables import with_mode_and_channel
 from workflow.models.averaged_fit import FitContext
 from workflow.runtime.logs import setup_script_logging
 

@@ -9,7 +9,7 @@ from workflow.discovery.modes import diagnosed_outcome
 from workflow.io.interim import read_campaign
 from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
-from workflow.measured.runs import first_mode_and_channel, first_mode_rows
+from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
 from workflow.models.averaged_fit import FitSettings
 from workflow.models.paper import configuration_models_document
 from workflow.runtime.logs import setup_script_logging

@@ -5,13 +5,13 @@ table and the same as the report's readable HTML page, then paper figures 14 (Da
 import json
 from pathlib import Path
 
+from workflow.io.escape import plot_text
 from workflow.io.tables import atomic_write_bytes, read_table, write_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.measured.runs import first_mode_and_channel, with_mode_and_channel
+from workflow.measured.campaign_tables import first_mode_and_channel, with_mode_and_channel
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
-from workflow.outputs.escape import plot_text
-from workflow.outputs.report import model_fits_html
+from workflow.outputs.report_tables import model_fits_html
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "figures_models")

@@ -4,7 +4,7 @@ from pathlib import Path
 
 from workflow.io.interim import read_campaign, write_mode
 from workflow.io.settings import ModeSearchSettings, QualitySettings
-from workflow.measured.runs import identify_configuration_mode
+from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "identify_mode")

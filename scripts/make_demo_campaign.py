@@ -2,7 +2,8 @@
 
 from pathlib import Path
 
-from workflow.lab.virtual_lab import LabSettings, generate_campaign
+from workflow.lab.campaigns import generate_campaign
+from workflow.lab.settings import LabSettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "demo_campaign")

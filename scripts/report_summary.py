@@ -7,8 +7,8 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.measured.runs import first_mode_and_channel
-from workflow.outputs import report
+from workflow.measured.campaign_tables import first_mode_and_channel
+from workflow.outputs import landing_page, report_tables, verdict_page
 from workflow.outputs.summary import run_summary
 from workflow.runtime.logs import setup_script_logging
 
@@ -24,7 +24,7 @@ areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]
 units = UNIT_SYSTEMS[snakemake.params.units]
 
 pages = {
-    "verdict": report.verdict_html(
+    "verdict": verdict_page.verdict_html(
         document,
         runs=runs,
         hypotheses=hypotheses,
@@ -32,18 +32,18 @@ pages = {
         segments=segments,
         units=units,
     ),
-    "hypotheses": report.hypotheses_html(hypotheses, units),
-    "runs": report.runs_html(runs),
-    "rejected": report.rejected_segments_html(read_table(snakemake.input.rejected)),
-    "quality": report.quality_html(read_table(snakemake.input.quality)),
-    "damping_fits": report.damping_fits_html(damping_fits),
-    "candidates": report.candidates_html(document),
+    "hypotheses": report_tables.hypotheses_html(hypotheses, units),
+    "runs": report_tables.runs_html(runs),
+    "rejected": report_tables.rejected_segments_html(read_table(snakemake.input.rejected)),
+    "quality": report_tables.quality_html(read_table(snakemake.input.quality)),
+    "damping_fits": report_tables.damping_fits_html(damping_fits),
+    "candidates": report_tables.candidates_html(document),
 }
 for name, text in pages.items():
     atomic_write_bytes(snakemake.output[name], text.encode())
 # the report's first page: the verdict, then report/workflow.rst (see rules/report.smk)
-landing = report.landing_rst(
-    report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments, units=units),
+landing = landing_page.landing_rst(
+    landing_page.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments, units=units),
     Path(snakemake.input.description).read_text(),
 )
 atomic_write_bytes(snakemake.output.landing, landing.encode())

@@ -4,7 +4,7 @@ none (which runs, why, what to change), before any fit, figure or diagnosis is t
 from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes
-from workflow.measured.runs import nothing_analysed_in_tables
+from workflow.measured.campaign_tables import nothing_analysed_in_tables
 from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "usable_segments")

@@ -208,7 +208,8 @@ def write_mixed_format_copy(source, target) -> dict[str, str]:
     """
     import shutil
 
-    from workflow.io.campaign import list_runs, load_campaign, read_run
+    from workflow.io.campaign import load_campaign
+    from workflow.io.run_files import list_runs, read_run
 
     source, target = Path(source), Path(target)
     campaign = load_campaign(source)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from test_decay import band, ring_down
 
-from workflow.io.campaign import RunRecord
 from workflow.io.interim import ModeInfo
+from workflow.io.records import RunRecord
 from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.measured.decay import analyse_decay, segment_bounds
 from workflow.measured.runs import analyse_run_with_quality

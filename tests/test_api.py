@@ -9,9 +9,10 @@ from helpers import CHEAP
 
 import workflow
 from workflow.api import load_results, ring_down_table, run_campaign
-from workflow.io.campaign import load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import read_run
 from workflow.io.units import STANDARD_GRAVITY_IN_S2
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaigns import generate_campaign
 
 
 def _decay(zeta: float, f_hz: float, amplitude_g: float, fs_hz: float = 4000.0, seconds: float = 3.0):

@@ -8,15 +8,10 @@ import pytest
 from helpers import REALDATA, needs_realdata
 
 from workflow.io import interim
-from workflow.io.campaign import (
-    MIN_SAMPLES,
-    CampaignFormatError,
-    RunFile,
-    list_runs,
-    load_campaign,
-    read_run,
-)
+from workflow.io.campaign import load_campaign
 from workflow.io.recording_time import run_order
+from workflow.io.records import MIN_SAMPLES, CampaignFormatError, RunFile
+from workflow.io.run_files import list_runs, read_run
 
 FS_HZ = 2560.0
 N = 300

@@ -15,7 +15,9 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from workflow.io.campaign import MIN_SAMPLES, CampaignFormatError, load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.records import MIN_SAMPLES, CampaignFormatError
+from workflow.io.run_files import read_run
 
 SETTINGS = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

@@ -21,14 +21,9 @@ from system_format_files import (
     write_uff58,
 )
 
-from workflow.io.campaign import (
-    SINGLE_CHANNEL_NAME,
-    CampaignFormatError,
-    campaign_from_dict,
-    campaign_to_dict,
-    load_campaign,
-    read_run,
-)
+from workflow.io.campaign import SINGLE_CHANNEL_NAME, campaign_from_dict, campaign_to_dict, load_campaign
+from workflow.io.records import CampaignFormatError
+from workflow.io.run_files import read_run
 
 N = 4096
 RATE_HZ = 2560.0
@@ -457,7 +452,7 @@ def assert_dwell_line_named_then_mode_found(folder, yaml_text):
 
 def identify(folder):
     from workflow.io.settings import AnalysisSettings, QualitySettings
-    from workflow.measured.runs import identify_configuration_mode
+    from workflow.measured.mode_identification import identify_configuration_mode
 
     return identify_configuration_mode(
         folder,
@@ -564,9 +559,9 @@ def two_sensor_campaign(root: Path) -> Path:
     """Three lab hits, each seen by two accelerometers (acc2 at half acc1's mode-1 shape),
     written as one ASCII file per hit with the two response columns by name (units in the
     names, none in campaign.yaml) and ``modes_hz: auto``."""
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.campaigns import generate_sensor_campaigns
 
-    vl.generate_sensor_campaigns(
+    generate_sensor_campaigns(
         root / "sensors",
         {"acc1": 1.0, "acc2": 0.5},
         seed=4,
@@ -631,7 +626,7 @@ def test_workflow_analyses_every_mode_on_every_channel(tmp_path):
 
 
 def test_verdict_page_has_a_section_per_mode_with_each_channel_escaped():
-    from workflow.outputs.report import modes_section
+    from workflow.outputs.verdict_page import modes_section
 
     channel = "<b>acc1</b> & co"
     configuration = {

@@ -12,7 +12,8 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from workflow.io.campaign import load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import read_run
 
 LBF_N = 0.45359237 * 9.80665
 """Newtons in one pound-force: 4.4482216152605 N (the avoirdupois pound times standard gravity)."""

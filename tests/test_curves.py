@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.measured import curves
+from workflow.measured import curves, hypotheses
 
 SD_RUN = 3e-4
 SD_NOISE = 4e-4
@@ -238,19 +238,21 @@ def test_bootstrap_band_is_reproducible_and_needs_two_runs():
 
 
 def test_h1_supported_on_rising_data():
-    table = curves.amplitude_hypothesis(
+    table = hypotheses.amplitude_hypothesis(
         *synthetic_segments(np.random.default_rng(21), RISING), configuration="no_washer"
     )
-    assert list(table.columns) == curves.HYPOTHESIS_COLUMNS and len(table) == 1
+    assert list(table.columns) == hypotheses.HYPOTHESIS_COLUMNS and len(table) == 1
     row = table.iloc[0]
-    assert row.hypothesis == curves.H1_NAME and row.configuration == "no_washer"
+    assert row.hypothesis == hypotheses.H1_NAME and row.configuration == "no_washer"
     assert row.supported and row.verdict == "supported"
     # true slope at the window's centre (log10 v ~ -1.15): 2 * -0.0008 * -1.15 + 0.002
     assert row.ci_low < 0.00384 < row.ci_high
 
 
 def test_h1_contradicted_on_falling_data():
-    row = curves.amplitude_hypothesis(*synthetic_segments(np.random.default_rng(22), -RISING + 0.012)).iloc[0]
+    row = hypotheses.amplitude_hypothesis(
+        *synthetic_segments(np.random.default_rng(22), -RISING + 0.012)
+    ).iloc[0]
     assert not row.supported and row.verdict == "contradicted"
 
 
@@ -261,7 +263,7 @@ def test_h1_inconclusive_on_flat_data_at_about_the_nominal_rate():
     # rate is 4.5 %; an interval 0.6x too narrow fails this test.)
     flat = np.array([0.005])
     verdicts = [
-        curves.amplitude_hypothesis(
+        hypotheses.amplitude_hypothesis(
             *synthetic_segments(np.random.default_rng(100 + k), flat), n_boot=200, seed=k
         ).verdict.iloc[0]
         for k in range(40)
@@ -271,9 +273,9 @@ def test_h1_inconclusive_on_flat_data_at_about_the_nominal_rate():
 
 
 def test_h1_with_one_run_is_inconclusive():
-    row = curves.amplitude_hypothesis(*synthetic_segments(np.random.default_rng(23), RISING, n_runs=1)).iloc[
-        0
-    ]
+    row = hypotheses.amplitude_hypothesis(
+        *synthetic_segments(np.random.default_rng(23), RISING, n_runs=1)
+    ).iloc[0]
     assert row.verdict == "inconclusive" and np.isnan(row.ci_low)
     assert "two runs" in row.note
 
@@ -291,13 +293,13 @@ def _configurations(rng, slope_per_in2, areas=AREAS_IN2, n_runs=8):
 
 def _h2(data, areas=AREAS_IN2, seed=0):
     degrees = {name: curves.fit_damping_polynomial(*d).degree for name, d in data.items()}
-    return curves.area_hypothesis(data, areas, degrees, n_boot=200, seed=seed)
+    return hypotheses.area_hypothesis(data, areas, degrees, n_boot=200, seed=seed)
 
 
 def test_h2_supported_when_damping_grows_with_area():
     table = _h2(_configurations(np.random.default_rng(31), 0.001))
     assert len(table) == 6  # five amplitudes and the combined row
-    assert (table.hypothesis == curves.H2_NAME).all()
+    assert (table.hypothesis == hypotheses.H2_NAME).all()
     assert table.supported.all()
     combined = table.iloc[-1]
     assert "mean over the common velocity amplitudes" in combined.statistic
@@ -329,9 +331,9 @@ def test_hypothesis_tests_from_a_segments_table():
         pd.DataFrame({"configuration": name, "run": d[2], "velocity_amplitude_in_s": d[0], "zeta": d[1]})
         for name, d in data.items()
     ]
-    table = curves.hypothesis_tests(pd.concat(frames), AREAS_IN2, n_boot=100)
-    assert list(table.columns) == curves.HYPOTHESIS_COLUMNS
-    assert list(table.hypothesis) == [curves.H1_NAME] * 3 + [curves.H2_NAME] * 6
+    table = hypotheses.hypothesis_tests(pd.concat(frames), AREAS_IN2, n_boot=100)
+    assert list(table.columns) == hypotheses.HYPOTHESIS_COLUMNS
+    assert list(table.hypothesis) == [hypotheses.H1_NAME] * 3 + [hypotheses.H2_NAME] * 6
     assert list(table.configuration[:3]) == list(AREAS_IN2)
     assert table.supported.all()
 

@@ -4,15 +4,9 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from workflow.measured import decay
-from workflow.measured.decay import (
-    analyse_decay,
-    analytic_signal,
-    bandpass,
-    envelope,
-    log_decrement_segments,
-    segment_bounds,
-)
+from workflow.measured import decay, filters
+from workflow.measured.decay import analyse_decay, log_decrement_segments, segment_bounds
+from workflow.measured.filters import analytic_signal, bandpass, envelope
 
 PRETRIGGER = 25
 
@@ -277,7 +271,7 @@ def test_power_response_matches_scipy_butter_squared(fs_hz, band_hz, order):
     sos = sp_signal.butter(order // 2, band_hz, btype="bandpass", fs=fs_hz, output="sos")
     frequency_hz, response = sp_signal.sosfreqz(sos, worN=4096, fs=fs_hz)
     expected = np.abs(response) ** 2
-    got = decay.butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order)
+    got = filters.butterworth_bandpass_power(frequency_hz, fs_hz, band_hz, order)
     # same bilinear design: agreement to rounding in the pass band and the skirts
     assert np.max(np.abs(got - expected)) < 1e-9
 
@@ -290,10 +284,10 @@ def test_bandpass_equals_sosfiltfilt_away_from_the_record_ends():
     x = rng.normal(size=8192)
     sos = sp_signal.butter(5, band_hz, btype="bandpass", fs=fs_hz, output="sos")
     reference = sp_signal.sosfiltfilt(sos, x)
-    got = decay.bandpass(x, fs_hz, band_hz, 10)
+    got = filters.bandpass(x, fs_hz, band_hz, 10)
     # the two differ only in how the record ends are padded; 25 slowest-pole time
     # constants in, that difference has decayed by e^-25 ~ 1e-11
-    edge = int(25 * decay.slowest_pole_time_constant_s(band_hz, 10) * fs_hz)
+    edge = int(25 * filters.slowest_pole_time_constant_s(band_hz, 10) * fs_hz)
     scale = np.std(reference)
     assert np.max(np.abs(got[edge:-edge] - reference[edge:-edge])) < 1e-9 * scale
 
@@ -304,7 +298,7 @@ def test_analytic_signal_equals_scipy_hilbert():
     rng = np.random.default_rng(4)
     for n in (1001, 1024):
         x = rng.normal(size=n)
-        assert np.allclose(decay.analytic_signal(x), sp_signal.hilbert(x), atol=1e-12)
+        assert np.allclose(filters.analytic_signal(x), sp_signal.hilbert(x), atol=1e-12)
 
 
 def test_per_run_analysis_does_not_import_scipy_signal():
@@ -322,15 +316,15 @@ def test_the_band_power_kept_between_records_gives_the_same_filter():
     rng = np.random.default_rng(5)
     fs_hz, band_hz = 2560.0, (100.0, 150.0)
     records = rng.normal(size=(3, 4096))
-    decay._padded_band_power.cache_clear()
+    filters._padded_band_power.cache_clear()
     fresh = []
     for x in records:
-        fresh.append(decay.bandpass(x, fs_hz, band_hz, 10))
-        decay._padded_band_power.cache_clear()
-    kept = [decay.bandpass(x, fs_hz, np.array(band_hz), 10) for x in records]
-    assert decay._padded_band_power.cache_info().hits == 2
+        fresh.append(filters.bandpass(x, fs_hz, band_hz, 10))
+        filters._padded_band_power.cache_clear()
+    kept = [filters.bandpass(x, fs_hz, np.array(band_hz), 10) for x in records]
+    assert filters._padded_band_power.cache_info().hits == 2
     for a, b in zip(fresh, kept):
         assert np.array_equal(a, b)
-    _, _, padded = decay._zero_phase_spectrum(records[0], fs_hz, band_hz, 10)
+    _, _, padded = filters._zero_phase_spectrum(records[0], fs_hz, band_hz, 10)
     with pytest.raises(ValueError):
-        decay._padded_band_power(padded, fs_hz, band_hz, 10)[0] = 0.0
+        filters._padded_band_power(padded, fs_hz, band_hz, 10)[0] = 0.0

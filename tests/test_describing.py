@@ -7,8 +7,24 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from workflow.models import averaged as dsc
 from workflow.models import friction
+from workflow.models.averaged import (
+    MODELS,
+    CurveGrid,
+    gradient_along_grid,
+    model_curves,
+    model_curves_on_grid,
+)
+from workflow.models.joint_averages import (
+    dahl_averages,
+    iwan_averages,
+    iwan_cells_averages,
+    jenkins_dissipation,
+    jenkins_inphase,
+    lugre_averages,
+    power_stiffness_harmonic_factor,
+    threshold_cell_edges,
+)
 
 
 def _loop_averages(model, params, amplitude, frequency_hz=10.0, points=4000):
@@ -28,7 +44,7 @@ def test_dahl_closed_forms_match_direct_integration_of_the_dahl_ode(y):
     sigma, fc = 2133.4, 38.0
     amplitude = y * fc / sigma
     d, k1 = _loop_averages("dahl", {"sigma": sigma, "fc": fc}, amplitude)
-    av = dsc.dahl_averages(y)
+    av = dahl_averages(y)
     # the issue's D = 4 Fc A - 4 Fc^2 / sigma tanh(sigma A / Fc), normalised by Fc^2/sigma
     assert av.dissipation == pytest.approx(d / (fc**2 / sigma), rel=2e-3)
     assert av.inphase == pytest.approx(k1 / sigma, rel=2e-3, abs=1e-5)
@@ -36,7 +52,7 @@ def test_dahl_closed_forms_match_direct_integration_of_the_dahl_ode(y):
 
 def test_dahl_small_and_large_amplitude_limits():
     y = np.array([1e-4, 1e-3 * 0.999, 1e-3, 50.0])
-    av = dsc.dahl_averages(y)
+    av = dahl_averages(y)
     assert av.dissipation[0] == pytest.approx(4 * y[0] ** 3 / 3, rel=1e-6)
     assert av.dissipation[1] == pytest.approx(av.dissipation[2], rel=1e-2)  # series/exact join
     assert av.dissipation[3] == pytest.approx(4 * (50 - 1), rel=1e-9)  # Coulomb 4 Fc A
@@ -47,8 +63,8 @@ def test_dahl_small_and_large_amplitude_limits():
 
 def test_lugre_without_stribeck_or_micro_damping_is_dahl():
     y = np.geomspace(0.01, 100, 25)
-    lugre = dsc.lugre_averages(y, 1.0, 0.0, 0.0, n_steps=160)
-    dahl = dsc.dahl_averages(y)
+    lugre = lugre_averages(y, 1.0, 0.0, 0.0, n_steps=160)
+    dahl = dahl_averages(y)
     np.testing.assert_allclose(lugre.dissipation, dahl.dissipation, rtol=1e-6)
     np.testing.assert_allclose(lugre.inphase, dahl.inphase, rtol=1e-4, atol=1e-7)
     np.testing.assert_allclose(lugre.tip_energy, 0.5 * np.tanh(y) ** 2, rtol=1e-6)
@@ -70,7 +86,7 @@ def test_lugre_steady_cycle_matches_direct_integration(y, velocity_ratio):
         "vd": v0,
     }
     d, k1 = _loop_averages("lugre", params, amplitude, frequency_hz=frequency)
-    av = dsc.lugre_averages(y, velocity_ratio, 0.7, sigma1 * 2 * np.pi * frequency / sigma0, n_steps=400)
+    av = lugre_averages(y, velocity_ratio, 0.7, sigma1 * 2 * np.pi * frequency / sigma0, n_steps=400)
     assert av.dissipation == pytest.approx(d / (alpha0**2 / sigma0), rel=5e-3)
     assert av.inphase == pytest.approx(k1 / sigma0, rel=5e-3, abs=2e-4)
 
@@ -83,15 +99,15 @@ def _iwan_discrete(x, chi, macro_ratio, n=20000):
     macro = macro_ratio / (1.0 + macro_ratio)
     onsets = np.append(t, 1.0)
     weights = np.append(weights, macro)
-    d = np.sum(weights * dsc.jenkins_dissipation(x, onsets))
-    g = np.sum(weights * np.where(onsets >= x, 1.0, dsc.jenkins_inphase(onsets / x)))
+    d = np.sum(weights * jenkins_dissipation(x, onsets))
+    g = np.sum(weights * np.where(onsets >= x, 1.0, jenkins_inphase(onsets / x)))
     return d, g
 
 
 @pytest.mark.parametrize("x", [0.03, 0.4, 0.99, 2.5])
 @pytest.mark.parametrize("chi", [-0.6, -0.2, 0.3])
 def test_iwan_averages_match_a_sum_of_jenkins_elements(x, chi):
-    av = dsc.iwan_averages(x, chi, 0.4)
+    av = iwan_averages(x, chi, 0.4)
     d, g = _iwan_discrete(x, chi, 0.4)
     assert av.dissipation == pytest.approx(d, rel=1e-2)
     assert av.inphase == pytest.approx(g, rel=2e-3)
@@ -101,8 +117,8 @@ def test_iwan_averages_match_a_sum_of_jenkins_elements(x, chi):
 @settings(max_examples=30, deadline=None)
 def test_iwan_micro_slip_power_law(chi, x):
     """Below macro-slip D ~ x^(3 + chi): the damping ratio grows like x^(1 + chi)."""
-    d1 = dsc.iwan_averages(x, chi, 0.3).dissipation
-    d2 = dsc.iwan_averages(2 * x, chi, 0.3).dissipation
+    d1 = iwan_averages(x, chi, 0.3).dissipation
+    d2 = iwan_averages(2 * x, chi, 0.3).dissipation
     assert np.log2(d2 / d1) == pytest.approx(3 + chi, rel=1e-9)
 
 
@@ -118,7 +134,7 @@ def test_iwan_tip_energy_slope_is_the_derivative_of_the_stored_energy():
         + 0.5 * r * m ** (chi + 3) / (chi + 3)
         + np.where(x > 1, 0.5 * s, 0.0)
     )
-    slope = dsc.iwan_averages(x, chi, beta).tip_energy_slope
+    slope = iwan_averages(x, chi, beta).tip_energy_slope
     smooth = np.abs(x - 1.0) > 0.02  # the slope jumps at macro-slip onset (x = 1)
     smooth[[0, -1]] = False
     np.testing.assert_allclose(np.gradient(energy, x)[smooth], slope[smooth], rtol=2e-2, atol=1e-4)
@@ -126,15 +142,15 @@ def test_iwan_tip_energy_slope_is_the_derivative_of_the_stored_energy():
 
 def _cells_discrete(x, shares, per_cell=20000):
     """A sum of Jenkins elements with thresholds log-uniform within each cell (midpoint rule in ln t)."""
-    edges = dsc.threshold_cell_edges(len(shares))
+    edges = threshold_cell_edges(len(shares))
     onsets, weights = [], []
     for k, share in enumerate(shares):
         u = np.linspace(np.log(edges[k]), np.log(edges[k + 1]), per_cell + 1)
         onsets.append(np.exp(0.5 * (u[1:] + u[:-1])))
         weights.append(np.full(per_cell, share / per_cell))
     t, w = np.concatenate(onsets), np.concatenate(weights)
-    d = np.sum(w * dsc.jenkins_dissipation(x, t))
-    g = np.sum(w * np.where(t >= x, 1.0, dsc.jenkins_inphase(t / x)))
+    d = np.sum(w * jenkins_dissipation(x, t))
+    g = np.sum(w * np.where(t >= x, 1.0, jenkins_inphase(t / x)))
     stuck = x * np.sum(w[t > x])
     return d, g, stuck
 
@@ -142,7 +158,7 @@ def _cells_discrete(x, shares, per_cell=20000):
 @pytest.mark.parametrize("x", [0.002, 0.05, 0.3, 0.9, 3.0])
 def test_threshold_cells_match_a_sum_of_jenkins_elements(x):
     shares = np.array([0.1, 0.35, 0.05, 0.5])
-    av = dsc.iwan_cells_averages(x, shares)
+    av = iwan_cells_averages(x, shares)
     d, g, slope = _cells_discrete(x, shares)
     # midpoint rule over 20000 elements a cell: relative error ~ (ln 10 / 2 / 20000)^2
     assert av.dissipation == pytest.approx(d, rel=1e-7, abs=1e-15)
@@ -153,9 +169,9 @@ def test_threshold_cells_match_a_sum_of_jenkins_elements(x):
 
 def test_threshold_cells_are_a_stuck_joint_below_and_a_slipped_one_above():
     shares = np.array([0.25, 0.25, 0.5])
-    below = dsc.iwan_cells_averages(0.5 * dsc.threshold_cell_edges(3)[0], shares)
+    below = iwan_cells_averages(0.5 * threshold_cell_edges(3)[0], shares)
     assert below.dissipation == 0.0 and below.inphase == pytest.approx(1.0)
-    above = dsc.iwan_cells_averages(1e4, shares)
+    above = iwan_cells_averages(1e4, shares)
     # every element slides: in-phase stiffness ~ (16 / 3 pi) sum t^1.5, dissipation ~ 4 x sum t
     assert above.inphase < 1e-4
     assert above.tip_energy_slope == 0.0
@@ -164,14 +180,14 @@ def test_threshold_cells_are_a_stuck_joint_below_and_a_slipped_one_above():
 def test_threshold_cells_batch_shapes_follow_the_parameters():
     y = np.geomspace(0.01, 2.0, 7)
     shares = np.array([[0.5, 0.5], [0.9, 0.1]])[:, None, :]  # two parameter sets, shape (2, 1, 2)
-    av = dsc.iwan_cells_averages(y, shares)
+    av = iwan_cells_averages(y, shares)
     assert av.inphase.shape == (2, 7)
-    np.testing.assert_allclose(av.inphase[1], dsc.iwan_cells_averages(y, [0.9, 0.1]).inphase, rtol=1e-12)
+    np.testing.assert_allclose(av.inphase[1], iwan_cells_averages(y, [0.9, 0.1]).inphase, rtol=1e-12)
 
 
 def test_power_stiffness_harmonic_factor():
-    assert dsc.power_stiffness_harmonic_factor(2.0) == pytest.approx(0.75)  # cubic spring
-    assert dsc.power_stiffness_harmonic_factor(0.0) == pytest.approx(1.0)  # linear spring
+    assert power_stiffness_harmonic_factor(2.0) == pytest.approx(0.75)  # cubic spring
+    assert power_stiffness_harmonic_factor(0.0) == pytest.approx(1.0)  # linear spring
 
 
 # ------------------------------------------------------------ direct integration
@@ -243,7 +259,7 @@ def test_averaged_dahl_model_matches_direct_integration_of_the_ringdown(beta, qu
         "slip_velocity_in_s": v_slip,
         "quadratic_zeta_per_in_s": max(quadratic, 1e-12),
     }
-    model_zeta, model_f = dsc.model_curves("dahl_quadratic", params, velocity, response_order=2)
+    model_zeta, model_f = model_curves("dahl_quadratic", params, velocity, response_order=2)
     assert velocity.max() > 10 * v_slip and velocity.min() < 0.2 * v_slip
     np.testing.assert_allclose(model_zeta, zeta, rtol=0.03)
     np.testing.assert_allclose(model_f, freq, rtol=1e-3)
@@ -252,8 +268,8 @@ def test_averaged_dahl_model_matches_direct_integration_of_the_ringdown(beta, qu
 def test_response_order_changes_the_envelope_decay_only_where_frequency_moves():
     params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.1, "slip_velocity_in_s": 1.0}
     v = np.geomspace(0.01, 100, 50)
-    z0, _ = dsc.model_curves("dahl", params, v, response_order=0)
-    z2, _ = dsc.model_curves("dahl", params, v, response_order=2)
+    z0, _ = model_curves("dahl", params, v, response_order=0)
+    z2, _ = model_curves("dahl", params, v, response_order=2)
     # the frequency rises as the amplitude decays (softening joint): the acceleration
     # envelope (omega^2 a) decays more slowly than the displacement's
     assert np.all(z2 <= z0 * (1 + 1e-9))
@@ -265,12 +281,12 @@ def test_drift_model_at_the_middle_run_is_dahl_and_shifts_the_slip_scale():
     params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05, "slip_velocity_in_s": 1.0}
     v = np.geomspace(0.05, 5, 30)
     runs = np.array([0, 1, 2])
-    grid = dsc.CurveGrid(np.tile(v, 3), run_index=np.repeat(runs, v.size), n_runs=3)
+    grid = CurveGrid(np.tile(v, 3), run_index=np.repeat(runs, v.size), n_runs=3)
     z_drift, f_drift = grid("dahl_drift", {**params, "drift": 0.6})
     z_dahl, f_dahl = grid("dahl", params)
     middle = slice(v.size, 2 * v.size)
     np.testing.assert_allclose(z_drift[middle], z_dahl[middle], rtol=1e-12)
-    shifted = dsc.CurveGrid(v, grid_range=(v.min(), v.max()))(
+    shifted = CurveGrid(v, grid_range=(v.min(), v.max()))(
         "dahl", {**params, "slip_velocity_in_s": 1.0 * (1 + 0.6 * (2 - 1) / 3)}
     )
     np.testing.assert_allclose(z_drift[2 * v.size :], shifted[0], rtol=1e-9)
@@ -286,8 +302,8 @@ def test_curve_grid_interpolation_is_accurate():
         "macro_ratio": 0.2,
     }
     v = np.geomspace(0.01, 10, 333)
-    z_fine, f_fine = dsc.model_curves_on_grid(dsc.MODELS["iwan"], params, v)
-    z, f = dsc.CurveGrid(v)("iwan", params)
+    z_fine, f_fine = model_curves_on_grid(MODELS["iwan"], params, v)
+    z, f = CurveGrid(v)("iwan", params)
     # the Iwan curve has a kink at macro-slip onset; elsewhere it is smooth
     np.testing.assert_allclose(z, z_fine, rtol=1.5e-2)
     assert np.median(np.abs(z / z_fine - 1)) < 1e-3
@@ -304,8 +320,8 @@ def test_stiffness_term_moves_frequency_not_damping():
         "stiffness_exponent": 2.0,
     }
     v = np.append(np.geomspace(0.01, 3, 40), 1.0)
-    z0, f0 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": 0.0}, v, response_order=0)
-    z1, f1 = dsc.model_curves("dahl_stiffness", {**params, "stiffness_shift": -0.02}, v, response_order=0)
+    z0, f0 = model_curves("dahl_stiffness", {**params, "stiffness_shift": 0.0}, v, response_order=0)
+    z1, f1 = model_curves("dahl_stiffness", {**params, "stiffness_shift": -0.02}, v, response_order=0)
     i = v.size - 1  # V = reference velocity
     # omega^2 changes by -2 % at the reference amplitude: f by about -1 %
     assert f1[i] / f0[i] - 1 == pytest.approx(-0.01, rel=0.05)
@@ -321,7 +337,7 @@ def test_gradient_along_grid_is_numpys_gradient_to_the_bit(coordinate):
     # the fits' residuals rely on it: every fit is unchanged only if each value is
     values = np.random.default_rng(0).standard_normal((5, 3, coordinate.size))
     np.testing.assert_array_equal(
-        dsc.gradient_along_grid(values, coordinate), np.gradient(values, coordinate, axis=-1)
+        gradient_along_grid(values, coordinate), np.gradient(values, coordinate, axis=-1)
     )
 
 
@@ -329,6 +345,6 @@ def test_gradient_along_grid_of_a_quadratic_is_exact_inside():
     # second-order central differences are exact for a quadratic on any spacing;
     # the one-sided ends are off by the curvature times half the end step
     x = np.log(np.geomspace(0.1, 10.0, 30))
-    got = dsc.gradient_along_grid(3.0 * x**2 - x, x)
+    got = gradient_along_grid(3.0 * x**2 - x, x)
     np.testing.assert_allclose(got[1:-1], 6.0 * x[1:-1] - 1.0, rtol=0, atol=1e-12)
     assert got[0] == pytest.approx(6.0 * x[0] - 1.0 + 3.0 * (x[1] - x[0]), abs=1e-12)

@@ -440,12 +440,13 @@ def test_stiffness_signature_on_the_labs_truth(effect, size, shows):
     stiff Dahl joint in pre-sliding whose softening a stiffness term cancels); the signature
     check tells it apart from a real softening, whose frequency change outgrows the
     friction's."""
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.settings import LabSettings
 
-    lab = vl.LabSettings()
+    lab = LabSettings()
     v = np.geomspace(0.07, 3.0, 60)
-    setup, curves = vl.setup_configuration("x", 0.6, lab)
-    zeta, frequency_hz = vl.truth_curves(setup, vl.mode_table(setup, curves, lab, "dahl", effect, size), v)
+    setup, curves = setup_configuration("x", 0.6, lab)
+    zeta, frequency_hz = truth_curves(setup, mode_table(setup, curves, lab, "dahl", effect, size), v)
     data = ConfigurationData("x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0)
     # the campaigns' typical scatter as weights
     scatter = Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
@@ -473,17 +474,16 @@ def test_a_dahl_joint_cannot_absorb_a_velocity_squared_loss():
     more than two of the campaigns' typical scatters (by 8.9; allowed half the modal
     stiffness, it followed them within 1.2); without the effect it fits them within 0.01,
     inside the limit."""
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.settings import LabSettings
 
-    lab = vl.LabSettings()
+    lab = LabSettings()
     v = np.geomspace(0.07, 3.0, 60)
-    setup, curves = vl.setup_configuration("x", 0.6, lab)
+    setup, curves = setup_configuration("x", 0.6, lab)
     scatter = Scatter(*(np.full(v.size, x) for x in (0.015, 2e-5, 0.015, 2e-5)))
     context = FitContext(2.0)
     for effect, size in ((None, None), ("quadratic_damping", 0.002)):
-        zeta, frequency_hz = vl.truth_curves(
-            setup, vl.mode_table(setup, curves, lab, "dahl", effect, size), v
-        )
+        zeta, frequency_hz = truth_curves(setup, mode_table(setup, curves, lab, "dahl", effect, size), v)
         data = ConfigurationData(
             "x", v, zeta, frequency_hz, np.zeros(v.size, int), ["r"], 0.6, response_order=0
         )
@@ -845,17 +845,19 @@ def _contact_patch_segments(seed, n_runs=8, noise_ln_zeta=0.01, noise_rel_f=2e-5
     """Segments of the virtual lab's contact-patch joint (the demo's no-washer physics: a
     Gaussian clamping pressure, whose slip thresholds follow no power law), each run
     its own beam (the lab's run-to-run spreads), as displacement records."""
-    from workflow.lab import virtual_lab as vl
+    from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
+    from workflow.lab.layout import PAPER_CONFIGURATIONS
+    from workflow.lab.settings import LabSettings, draw_run_physics
 
-    settings = vl.LabSettings()
-    setup, curves = vl.setup_configuration("no_washer", vl.PAPER_CONFIGURATIONS["no_washer"], settings)
+    settings = LabSettings()
+    setup, curves = setup_configuration("no_washer", PAPER_CONFIGURATIONS["no_washer"], settings)
     rng = np.random.default_rng(seed)
     rows = []
     truth = []
-    for r, run in enumerate(vl.draw_run_physics(settings, rng, n_runs)):
-        table = vl.mode_table(setup, curves, settings, "patches", None, None, run=run)
+    for r, run in enumerate(draw_run_physics(settings, rng, n_runs)):
+        table = mode_table(setup, curves, settings, "patches", None, None, run=run)
         v = np.geomspace(rng.uniform(2.5, 5.0), 0.02, 70)
-        zeta, omega = vl.truth_curves(setup, table, v)
+        zeta, omega = truth_curves(setup, table, v)
         freq = omega * np.sqrt(1 - zeta**2) / (2 * np.pi)
         truth.append((v, zeta, freq))
         rows.append(

@@ -7,7 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflow.io.campaign import CampaignFormatError, load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.records import CampaignFormatError
+from workflow.io.run_files import read_run
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "input-format.md"
 FENCE = re.compile(r"^```(yaml|text) (.+?)\n(.*?)^```\n(<!-- expect: (.+?) -->)?", re.S | re.M)

@@ -11,7 +11,7 @@ import matplotlib
 import pytest
 from docutils.core import publish_parts
 
-from workflow.outputs.escape import (
+from workflow.io.escape import (
     DISPLAY_LIMIT,
     PLOT_LIMIT,
     display_text,

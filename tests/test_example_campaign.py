@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import list_runs
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_campaign
+from workflow.measured.campaign_tables import analyse_campaign
 
 DATA = Path(__file__).resolve().parent / "data"
 CAMPAIGN = DATA / "example_campaign"

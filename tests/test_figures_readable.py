@@ -21,7 +21,7 @@ import pytest  # noqa: E402
 from helpers import CHEAP, REALDATA, needs_realdata, run_snakemake  # noqa: E402
 
 from workflow.io.units import SI  # noqa: E402
-from workflow.lab.virtual_lab import generate_campaign  # noqa: E402
+from workflow.lab.campaigns import generate_campaign  # noqa: E402
 from workflow.outputs import figures  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 

@@ -90,8 +90,10 @@ def test_placed_sensor_sees_mode1_at_the_drawn_gain():
     """A placement's mode-1 gain against its noise floor is the one drawn: a point of the
     beam with that shape ratio where one exists, else a quieter sensor at the free end
     whose shape ratio times the noise-floor ratio is the gain."""
+    from workflow.lab.configurations import setup_configuration
     from workflow.lab.hidden_effects import PLACEMENT_GAIN_RANGE, draw_mode1_gain, placed_sensor
-    from workflow.lab.virtual_lab import LabSettings, mode1_gain, setup_configuration
+    from workflow.lab.sensors import mode1_gain
+    from workflow.lab.settings import LabSettings
 
     settings = LabSettings()
     area = 1.2

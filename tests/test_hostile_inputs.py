@@ -23,15 +23,10 @@ from helpers import REPO, checksums, run_snakemake
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from workflow.io.campaign import (
-    CampaignFormatError,
-    RunFile,
-    declared_sample_rate_hz,
-    list_runs,
-    load_campaign,
-    read_run,
-    scan_campaign,
-)
+from workflow.io.campaign import load_campaign
+from workflow.io.readers.ascii import declared_sample_rate_hz
+from workflow.io.records import CampaignFormatError, RunFile
+from workflow.io.run_files import list_runs, read_run, scan_campaign
 from workflow.measured import quality
 
 FS_HZ = 2560.0
@@ -269,7 +264,7 @@ def test_unreadable_file_is_listed_as_excluded(tmp_path, monkeypatch):
     root = make_campaign(tmp_path, BASE_YAML + "configurations:\n  cfg: {}\n", {"cfg/run01.txt": run_text()})
     campaign = load_campaign(root)
     # Root reads any file whatever its mode bits: the permission check itself is replaced.
-    monkeypatch.setattr("workflow.io.campaign.os.access", lambda path, mode: False)
+    monkeypatch.setattr("workflow.io.path_checks.os.access", lambda path, mode: False)
     runs, excluded = scan_campaign(root, campaign)
     assert runs == [] and len(excluded) == 1
     assert excluded[0].reason.endswith(
@@ -282,7 +277,8 @@ def test_file_without_read_permission_is_excluded_not_a_crash(tmp_path):
     (root / "cfg/run01.txt").chmod(0)
     code = (
         "import json, sys\n"
-        "from workflow.io.campaign import load_campaign, scan_campaign\n"
+        "from workflow.io.campaign import load_campaign\n"
+        "from workflow.io.run_files import scan_campaign\n"
         "runs, excluded = scan_campaign(sys.argv[1], load_campaign(sys.argv[1]))\n"
         "print(json.dumps([len(runs), [entry.reason for entry in excluded]]))"
     )
@@ -305,7 +301,7 @@ def test_open_failure_in_the_reader_is_a_format_error(tmp_path, monkeypatch):
     def refuse(*args, **kwargs):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr("workflow.io.campaign.open", refuse, raising=False)
+    monkeypatch.setattr("workflow.io.readers.ascii_rows.open", refuse, raising=False)
     with pytest.raises(CampaignFormatError, match="cfg/run01.txt: cannot be read: Permission denied"):
         read_run(root, "cfg/run01.txt", campaign)
 
@@ -434,7 +430,7 @@ snakemake = functools.partial(run_snakemake, timeout=600)
 
 @pytest.fixture(scope="module")
 def lab_campaign(tmp_path_factory):
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     base = tmp_path_factory.mktemp("hostile_workflow")
     campaign = base / "campaign"

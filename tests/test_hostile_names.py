@@ -78,7 +78,7 @@ def short_run_text() -> str:
 @pytest.fixture(scope="module")
 def hostile(tmp_path_factory):
     """The campaign analysed (``all``) and reported (``--report``): workdir, both results."""
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     root = tmp_path_factory.mktemp("hostile_names")
     campaign = root / FOLDER / SUBFOLDER
@@ -256,7 +256,7 @@ def test_printed_report_command_builds_the_report_from_another_folder(hostile, t
 
 
 def test_another_campaign_in_the_same_results_is_refused_naming_both(hostile, tmp_path):
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     root, workdir, _, _ = hostile
     other = tmp_path / "other"
@@ -297,14 +297,18 @@ def first_page(document: dict, runs, config: dict | None = None) -> str:
     import jinja2
     from docutils.core import publish_parts
 
-    from workflow.outputs import report
+    from workflow.outputs import landing_page
 
     class Snakemake:
         pass
 
     Snakemake.config = config or {"campaign": "campaigns/washers"}
     description = (REPO / "report" / "workflow.rst").read_text()
-    landing = report.landing_rst(report.verdict_rst(document, runs=runs), description) + "\n" + REPORT_LINKS
+    landing = (
+        landing_page.landing_rst(landing_page.verdict_rst(document, runs=runs), description)
+        + "\n"
+        + REPORT_LINKS
+    )
     rendered = (
         jinja2.Environment(trim_blocks=True, lstrip_blocks=True)
         .from_string(landing)
@@ -373,8 +377,8 @@ def test_summary_shows_terminal_escapes_as_text():
 def test_figures_draw_names_holding_mathtext(tmp_path):
     import pandas as pd
 
+    from workflow.io.escape import plot_text
     from workflow.outputs import figures
-    from workflow.outputs.escape import plot_text
 
     velocity = np.geomspace(0.1, 3.0, 20)
     segments = pd.DataFrame(

@@ -20,10 +20,13 @@ from system_format_files import lms_export_group, write_mat73, write_plain_mat, 
 from test_hostile_inputs import BASE_YAML, FS_HZ, make_campaign, run_text
 
 from workflow.io import limits
-from workflow.io.campaign import CampaignFormatError, load_campaign, read_run, scan_campaign
+from workflow.io.campaign import load_campaign
 from workflow.io.interim import read_mode, write_mode
+from workflow.io.records import CampaignFormatError
+from workflow.io.run_files import read_run, scan_campaign
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.measured.runs import analyse_run_file, identify_configuration_mode
+from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.runs import analyse_run_file
 
 ONE_CONFIGURATION = BASE_YAML + "configurations:\n  cfg: {}\n"
 SECRET = "root:$6$SECRETHASH$abc:19000:0:99999:7:::"
@@ -291,7 +294,7 @@ def mode_of(root: Path, paths: list[str], configuration: str = "cfg"):
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory) -> Path:
     """A virtual-lab campaign of two configurations, two runs each."""
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     campaign = tmp_path_factory.mktemp("lab") / "campaign"
     generate_campaign(
@@ -659,12 +662,12 @@ def test_a_fault_of_the_analysis_on_one_run_excludes_it_and_the_others_go_on(lab
 
 
 def test_a_fault_of_the_mode_search_is_the_configurations_reason_not_a_crash(lab, monkeypatch):
-    from workflow.measured import runs as measured_runs
+    from workflow.measured import mode_identification
 
     def fails(*args, **kwargs):
         raise FloatingPointError("overflow in multiply")
 
-    monkeypatch.setattr(measured_runs, "identify_mode", fails)
+    monkeypatch.setattr(mode_identification, "identify_mode", fails)
     found = mode_of(lab, ["no_washer/run01.txt"], "no_washer")
     assert found.mode is None
     assert found.error.startswith(

@@ -24,7 +24,7 @@ import pyarrow.parquet as pq
 import pytest
 from helpers import checksums, run_snakemake
 
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaigns import generate_campaign
 from workflow.runtime import locks
 
 REPO = Path(__file__).resolve().parents[1]

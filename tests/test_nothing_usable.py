@@ -12,8 +12,10 @@ import pytest
 from helpers import CHEAP, run_snakemake
 from system_format_files import write_tdms
 
-from workflow.io.campaign import load_campaign, read_run
-from workflow.measured.runs import NOTHING_ANALYSED, RUN_COLUMNS, nothing_analysed_message
+from workflow.io.campaign import load_campaign
+from workflow.io.run_files import read_run
+from workflow.measured.campaign_tables import NOTHING_ANALYSED, nothing_analysed_message
+from workflow.measured.runs import RUN_COLUMNS
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 
@@ -64,7 +66,7 @@ def test_runs_read_whose_every_segment_is_rejected_are_said_with_the_commonest_r
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     campaign = tmp_path_factory.mktemp("nothing_usable") / "campaign"
     generate_campaign(

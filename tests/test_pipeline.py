@@ -5,11 +5,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.io.campaign import list_runs, load_campaign
+from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
+from workflow.io.run_files import list_runs
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.lab.virtual_lab import generate_campaign
-from workflow.measured.runs import analyse_run_file, identify_configuration_mode
+from workflow.lab.campaigns import generate_campaign
+from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.runs import analyse_run_file
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,7 @@
 import numpy as np
 from helpers import failed_check_reasons
 
-from workflow.io.campaign import RunRecord
+from workflow.io.records import RunRecord
 from workflow.io.settings import QualitySettings
 from workflow.measured.quality import (
     check_clipping,

@@ -25,9 +25,16 @@ from helpers import CHEAP, run_snakemake, write_run_with_bad_cell
 from workflow.discovery.wording import discrepancy_sentence
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.io.units import SI
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaigns import generate_campaign
 from workflow.measured import curves
-from workflow.outputs import figures, report
+from workflow.outputs import (
+    figures,
+    landing_page,
+    report_html,
+    report_tables,
+    report_wording,
+    verdict_page,
+)
 
 REPO = Path(__file__).resolve().parents[1]
 FULL = os.environ.get("LAPJOINT_FULL_REPORT_TEST") == "1"
@@ -161,7 +168,7 @@ def hypotheses():
 
 # ------------------------------------------------------------------ the verdict in words
 def test_verdict_page_states_the_verdict_and_its_evidence(document, runs, hypotheses):
-    text = html.unescape(report.verdict_html(document, runs=runs, hypotheses=hypotheses))
+    text = html.unescape(verdict_page.verdict_html(document, runs=runs, hypotheses=hypotheses))
     # what the paper's model gets wrong, per configuration
     for item in document["configurations"].values():
         assert item["discrepancy"] in text
@@ -181,23 +188,23 @@ def test_verdict_page_states_the_verdict_and_its_evidence(document, runs, hypoth
 
 
 def test_campaign_headline_for_each_kind_of_verdict(document):
-    assert "falls short in 1 of 2 configurations (no_washer)" in report.campaign_headline(document)
+    assert "falls short in 1 of 2 configurations (no_washer)" in report_wording.campaign_headline(document)
     none = {**document, "cause": "none", "configurations": {"a": entry("none"), "b": entry("none")}}
-    assert "explains all 2 configurations" in report.campaign_headline(none)
+    assert "explains all 2 configurations" in report_wording.campaign_headline(none)
     unknown = {**document, "cause": "unknown", "configurations": {"a": entry("unknown")}}
-    assert "cause is unknown" in report.campaign_headline(unknown)
-    assert "No configuration" in report.campaign_headline({"cause": "none", "configurations": {}})
+    assert "cause is unknown" in report_wording.campaign_headline(unknown)
+    assert "No configuration" in report_wording.campaign_headline({"cause": "none", "configurations": {}})
 
 
 def test_candidate_margin():
-    margin = report.candidate_margin(entry("microslip_power_law", base_err=40.0, ext_err=5.0))
+    margin = report_wording.candidate_margin(entry("microslip_power_law", base_err=40.0, ext_err=5.0))
     assert margin["next"] == "none" and margin["ratio"] == pytest.approx(8.0)
     none = entry(
         "none", base_err=1.0, ranking=[{"cause": "run_drift", "score": 0.9}, {"cause": "none", "score": 1.0}]
     )
-    margin = report.candidate_margin(none)
+    margin = report_wording.candidate_margin(none)
     assert margin["next"] == "run_drift" and margin["ratio"] == pytest.approx(0.9)
-    assert report.candidate_margin({"cause": "none", "ranking": []}) is None
+    assert report_wording.candidate_margin({"cause": "none", "ranking": []}) is None
 
 
 def landing_text(verdict: str, description: str = "") -> str:
@@ -206,7 +213,7 @@ def landing_text(verdict: str, description: str = "") -> str:
     import jinja2
     from docutils.core import publish_parts
 
-    landing = report.landing_rst(verdict, description)
+    landing = landing_page.landing_rst(verdict, description)
     links = "\n\n.. _verdict.html: javascript:void(0)\n.. _1 Verdict: javascript:void(0)\n"
 
     class Snakemake:
@@ -227,7 +234,7 @@ def test_first_page_is_valid_rst_through_jinja(document, runs, hypotheses):
     """The landing page goes through Snakemake's Jinja then docutils: no markup error,
     and underscores or bars in names stay text."""
     text = landing_text(
-        report.verdict_rst(document, runs=runs, hypotheses=hypotheses),
+        landing_page.verdict_rst(document, runs=runs, hypotheses=hypotheses),
         'Config ``{{ snakemake.config["campaign"] }}``.\n',
     )
     assert "System Message" not in text
@@ -248,7 +255,7 @@ def test_runs_page_lists_runs_in_recorded_order():
             "record_start": ["2026-03-05T14:09:00", "2026-03-05T14:07:00", "2026-03-05T14:08:00", "", ""],
         }
     )
-    ordered, orders = report.runs_in_recorded_order(runs)
+    ordered, orders = report_tables.runs_in_recorded_order(runs)
     assert list(zip(ordered["configuration"], ordered["run"])) == [
         ("a", "r2"),
         ("a", "r3"),
@@ -260,14 +267,14 @@ def test_runs_page_lists_runs_in_recorded_order():
         "a": RECORD_START_ORDER,
         "b": f"{FILE_NAME_ORDER}: the files carry no recording start time",
     }
-    page = report.runs_html(runs)
+    page = report_tables.runs_html(runs)
     assert page.index("a/r2.tdms") < page.index("a/r3.tdms") < page.index("a/r1.tdms")
     assert "2026-03-05T14:07:00" in page and "a: run order: recording start times in the files" in page
 
 
 def test_tables_render(hypotheses, runs):
-    assert "supported" in report.hypotheses_html(hypotheses)
-    assert "excluded" in report.runs_html(runs)
+    assert "supported" in report_tables.hypotheses_html(hypotheses)
+    assert "excluded" in report_tables.runs_html(runs)
     quality = pd.DataFrame(
         {
             "configuration": ["a", "a", "a", "a"],
@@ -281,10 +288,10 @@ def test_tables_render(hypotheses, runs):
             "reason": ["", "", "r2: signal 12 dB above noise, below 20 dB", ""],
         }
     )
-    page = html.unescape(report.quality_html(quality))
+    page = html.unescape(report_tables.quality_html(quality))
     assert "signal 12 dB above noise" in page and "limit 20" in page
-    assert report.fmt(None) == "–" and report.fmt(float("nan")) == "–"
-    assert report.fmt(0.00012345) == "1.23e-04" and report.ratio(1.0) == "1.00"
+    assert report_html.fmt(None) == "–" and report_html.fmt(float("nan")) == "–"
+    assert report_html.fmt(0.00012345) == "1.23e-04" and report_html.ratio(1.0) == "1.00"
 
 
 # ------------------------------------------------------------------ the real report
@@ -396,16 +403,16 @@ def test_report_first_page_states_the_verdict(built_report):
     workdir, results, description, _ = built_report
     document = json.loads((workdir / "results" / "diagnosis.json").read_text())
     first_page = html.unescape(description)
-    assert f"Verdict: {report.cause_name(document['cause'])}" in first_page
+    assert f"Verdict: {report_wording.cause_name(document['cause'])}" in first_page
     for name, item in document["configurations"].items():
         assert name in first_page
-        assert report.cause_name(item["cause"]) in first_page
+        assert report_wording.cause_name(item["cause"]) in first_page
     assert "About this study" in first_page  # the workflow description follows
     # the full verdict page: discrepancy sentences, gains, and the unreadable run's reason
     verdict = html.unescape(decoded(results["results/report/verdict.html"]))
     for item in document["configurations"].values():
         assert item["discrepancy"] in verdict
-        assert report.ratio(item["gain"]["ratio"]) in verdict
+        assert report_html.ratio(item["gain"]["ratio"]) in verdict
     assert "How sure we are" in verdict
     assert "small_washer/run03.txt" in verdict and "1.2.3" in verdict
 
@@ -440,12 +447,13 @@ def segments_with(zeta_slope: float, frequency_slope: float) -> pd.DataFrame:
     [(-0.1, "the damping falls"), (0.2, "the damping rises"), (0.0, "the damping stays level")],
 )
 def test_measured_trend_is_said_in_the_direction_of_the_data(zeta_slope, words):
-    trend = report.measured_trends(segments_with(zeta_slope, -0.004))["t5nm"]
-    sentence = report.trend_sentence(trend)
+    trend = report_wording.measured_trends(segments_with(zeta_slope, -0.004))["t5nm"]
+    sentence = report_wording.trend_sentence(trend)
     assert words in sentence and "the frequency falls" in sentence
     # the numbers in the sentence are the two ends it compares
     assert (
-        report.fmt(100 * trend["zeta_low"]) in sentence and report.fmt(100 * trend["zeta_high"]) in sentence
+        report_html.fmt(100 * trend["zeta_low"]) in sentence
+        and report_html.fmt(100 * trend["zeta_high"]) in sentence
     )
     assert (trend["zeta_high"] < trend["zeta_low"]) == ("falls" in sentence.split("frequency")[0])
 
@@ -486,13 +494,13 @@ def test_trend_sentence_says_what_the_damping_figure_shows():
     # the sentence once used the lowest and highest 10 % of segments: "0.267 to 1.63 in/s,
     # 0.0795 % to 0.0855 %" beside a figure whose runs reach 4.4 in/s at 0.16 %
     segments = few_runs_reach_further()
-    sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"])
+    sentence = report_wording.trend_sentence(report_wording.measured_trends(segments)["large_washer"])
     x, y = _plotted_points(figures.damping_vs_amplitude(segments, title="t"))
-    assert f"Measured from {report.fmt(x.min())} to {report.fmt(x.max())} in/s" in sentence
+    assert f"Measured from {report_html.fmt(x.min())} to {report_html.fmt(x.max())} in/s" in sentence
     top = y[x >= 10 ** (np.floor(4 * np.log10(x.max())) / 4)]  # the figure's top quarter decade, in %
-    assert f"to {report.fmt(np.median(top))} % at" in sentence and "3 of 10 runs reach it" in sentence
+    assert f"to {report_html.fmt(np.median(top))} % at" in sentence and "3 of 10 runs reach it" in sentence
     # physics: the top end's damping is about double the low end's (0.16 % against 0.08 %)
-    trend = report.measured_trends(segments)["large_washer"]
+    trend = report_wording.measured_trends(segments)["large_washer"]
     assert 1.7 < trend["zeta_high"] / trend["zeta_low"] < 2.1 and "the damping rises" in sentence
 
 
@@ -516,15 +524,15 @@ def test_runs_at_levels_of_their_own_are_not_said_as_a_trend():
             ).assign(zeta=zeta, frequency_hz=116.0)
         )
     segments = pd.concat(rows, ignore_index=True)
-    trend = report.measured_trends(segments)["small_washer"]
+    trend = report_wording.measured_trends(segments)["small_washer"]
     assert trend["zeta_high"] / trend["zeta_low"] < 0.95  # the ends' medians differ by the runs' levels
     # each run's own change is zero within 3 standard errors; 1 % scatter per segment over
     # the dozen segments of each end bin makes that error a few tenths of a percent
     assert abs(trend["zeta_change_within_runs"]) < 3 * trend["zeta_change_error"]
     assert trend["zeta_change_error"] < 0.005
-    sentence = report.trend_sentence(trend)
+    sentence = report_wording.trend_sentence(trend)
     assert "the damping stays level within each run" in sentence and "falls" not in sentence
-    assert report.fmt(100 * trend["zeta_low"]) in sentence and "2 of 10 runs reach it" in sentence
+    assert report_html.fmt(100 * trend["zeta_low"]) in sentence and "2 of 10 runs reach it" in sentence
 
 
 @pytest.mark.parametrize("n_runs", [1, 3])
@@ -547,13 +555,15 @@ def test_damping_figure_legend_lists_the_band_only_when_drawn(n_runs):
 
 def test_trend_sentence_says_what_the_backbone_shows():
     segments = few_runs_reach_further()
-    sentence = report.trend_sentence(report.measured_trends(segments)["large_washer"], SI)
+    sentence = report_wording.trend_sentence(report_wording.measured_trends(segments)["large_washer"], SI)
     x, y = _plotted_points(figures.frequency_vs_amplitude(segments, title="t", units=SI))
-    assert f"Measured from {report.fmt(x.min())} to {report.fmt(x.max())} m/s" in sentence
+    assert f"Measured from {report_html.fmt(x.min())} to {report_html.fmt(x.max())} m/s" in sentence
     # the lowest and highest quarter decades of amplitude (in/s) the segments reach
     low = np.median(y[x < 0.0254 * 10 ** (np.ceil(4 * np.log10(0.27)) / 4)])
     high = np.median(y[x >= 0.0254 * 10 ** (np.floor(4 * np.log10(4.4)) / 4)])
-    assert f"the frequency falls from {report.fmt(low, 5)} Hz to {report.fmt(high, 5)} Hz" in sentence
+    assert (
+        f"the frequency falls from {report_html.fmt(low, 5)} Hz to {report_html.fmt(high, 5)} Hz" in sentence
+    )
 
 
 def test_damping_low_point_on_the_way_is_said():
@@ -567,11 +577,11 @@ def test_damping_low_point_on_the_way_is_said():
             "frequency_hz": 100.0,
         }
     )
-    trend = report.measured_trends(segments)["c"]
-    sentence = report.trend_sentence(trend)
-    assert f"the damping falls from {report.fmt(100 * trend['zeta_low'])} %" in sentence
+    trend = report_wording.measured_trends(segments)["c"]
+    sentence = report_wording.trend_sentence(trend)
+    assert f"the damping falls from {report_html.fmt(100 * trend['zeta_low'])} %" in sentence
     assert "to a low of 0.1" in sentence and 100 * trend["zeta_min"] == pytest.approx(0.1, rel=0.02)
-    assert f"in/s, then rises to {report.fmt(100 * trend['zeta_high'])} %" in sentence
+    assert f"in/s, then rises to {report_html.fmt(100 * trend['zeta_high'])} %" in sentence
     assert "damping stays level" not in sentence
 
 
@@ -584,37 +594,43 @@ def test_damping_hump_is_said_as_a_rise_then_a_fall():
     segments = pd.DataFrame(
         {"configuration": "t5nm", "run": "r", "velocity_amplitude_in_s": amplitude, "zeta": zeta}
     ).assign(frequency_hz=19.0)
-    trend = report.measured_trends(segments)["t5nm"]
-    sentence = report.trend_sentence(trend)
+    trend = report_wording.measured_trends(segments)["t5nm"]
+    sentence = report_wording.trend_sentence(trend)
     x_drawn, y_drawn = _plotted_points(figures.damping_vs_amplitude(segments, title="t"))
     peak = float(y_drawn.max())  # the figure's highest point, in %
     assert peak == pytest.approx(0.65, rel=0.01)
-    assert f"the damping rises from {report.fmt(100 * trend['zeta_low'])} %" in sentence
-    assert f"to a high of {report.fmt(100 * trend['zeta_max'])} % near" in sentence
+    assert f"the damping rises from {report_html.fmt(100 * trend['zeta_low'])} %" in sentence
+    assert f"to a high of {report_html.fmt(100 * trend['zeta_max'])} % near" in sentence
     assert 100 * trend["zeta_max"] == pytest.approx(peak, rel=0.02)
-    assert f", then falls to {report.fmt(100 * trend['zeta_high'])} %" in sentence
+    assert f", then falls to {report_html.fmt(100 * trend['zeta_high'])} %" in sentence
     assert "stays level" not in sentence.split("frequency")[0]
 
 
 def test_verdict_page_gives_amplitudes_and_areas_in_the_chosen_units(document, runs, hypotheses):
     segments = segments_with(-0.1, -0.004)
-    trend = report.measured_trends(segments)["t5nm"]
-    assert f"to {report.fmt(trend['amplitude_high_in_s'])} in/s (" in report.trend_sentence(trend)
-    in_si = report.trend_sentence(trend, SI)
-    assert f"to {report.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s (" in in_si and "in/s" not in in_si
-    assert report.amplitude_range(1.0, 10.0, SI) == "0.0254–0.254 m/s"
-    page = report.verdict_html(
+    trend = report_wording.measured_trends(segments)["t5nm"]
+    assert f"to {report_html.fmt(trend['amplitude_high_in_s'])} in/s (" in report_wording.trend_sentence(
+        trend
+    )
+    in_si = report_wording.trend_sentence(trend, SI)
+    assert (
+        f"to {report_html.fmt(0.0254 * trend['amplitude_high_in_s'])} m/s (" in in_si and "in/s" not in in_si
+    )
+    assert report_html.amplitude_range(1.0, 10.0, SI) == "0.0254–0.254 m/s"
+    page = verdict_page.verdict_html(
         document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36}, units=SI
     )
-    assert "area (m²)" in page and report.fmt(1.36 * 0.0254**2) in page
+    assert "area (m²)" in page and report_html.fmt(1.36 * 0.0254**2) in page
     assert "diagnosis.json and the tables keep in/s and in² (1 in/s = 0.0254 m/s)" in page
-    default = report.verdict_html(document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36})
+    default = verdict_page.verdict_html(document, runs=runs, hypotheses=hypotheses, areas={"no_washer": 1.36})
     assert "area (in²)" in default and "1 in/s =" not in default
 
 
 def test_cause_words_claim_no_trend_the_data_may_contradict():
     # the mechanism only: 'damping grows as a power of amplitude' was said of falling data
-    assert not any("grows" in words or "proportional" in words for words in report.CAUSE_WORDS.values())
+    assert not any(
+        "grows" in words or "proportional" in words for words in report_wording.CAUSE_WORDS.values()
+    )
 
 
 @pytest.mark.parametrize(
@@ -628,14 +644,14 @@ def test_cause_words_claim_no_trend_the_data_may_contradict():
     ],
 )
 def test_margin_words_scale_with_the_margin_and_the_confidence(margin, confidence, words):
-    assert report.margin_words(margin, confidence) == words
+    assert report_wording.margin_words(margin, confidence) == words
 
 
 def test_clearly_better_only_with_a_large_gain_and_a_clear_margin():
-    assert report.gain_words(0.3, 2.0, 0.9) == "clearly better"
-    assert report.gain_words(0.57, 2.0, 0.9) == "better"  # gain too small
-    assert report.gain_words(0.3, 1.09, 0.9) == "better"  # next candidate too close
-    assert report.gain_words(1.0, 2.0, 0.9) == "no better"
+    assert report_wording.gain_words(0.3, 2.0, 0.9) == "clearly better"
+    assert report_wording.gain_words(0.57, 2.0, 0.9) == "better"  # gain too small
+    assert report_wording.gain_words(0.3, 1.09, 0.9) == "better"  # next candidate too close
+    assert report_wording.gain_words(1.0, 2.0, 0.9) == "no better"
 
 
 def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
@@ -652,7 +668,9 @@ def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
     close["extended_model"]["flags"] = ["chi = -0.95 at its lower bound"]
     document = {"campaign": "unesp", "cause": "microslip_power_law", "configurations": {"t5nm": close}}
     text = html.unescape(
-        report.verdict_html(document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004))
+        verdict_page.verdict_html(
+            document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
+        )
     )
     assert "clearly" not in text.split("How sure we are")[0]
     assert "only marginally ahead of the next-best candidate" in text and "1.09 times" in text
@@ -660,9 +678,11 @@ def test_verdict_page_on_a_close_call_says_so(runs, hypotheses):
     assert "chi = -0.95 at its lower bound" in text
     assert "Run-order trend of the damping (file-name order, which may not be" in text
     close["evidence"]["run_order_trend"]["order"] = "file timestamps"
-    assert "Run-order trend of the damping (file timestamps)" in report.verdict_html(document)
+    assert "Run-order trend of the damping (file timestamps)" in verdict_page.verdict_html(document)
     landing = landing_text(
-        report.verdict_rst(document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004))
+        landing_page.verdict_rst(
+            document, runs=runs, hypotheses=hypotheses, segments=segments_with(-0.1, -0.004)
+        )
     )
     assert "only marginally ahead of the next best" in landing and "clearly" not in landing
     assert "chi = -0.95 at its lower bound" in landing
@@ -683,7 +703,7 @@ def test_a_test_that_cannot_run_is_not_applicable_not_dashes():
             "note": ["needs at least two configurations with different bearing areas"],
         }
     )
-    row = report.hypothesis_summary(table)[0]
+    row = verdict_page.hypothesis_summary(table)[0]
     assert "not applicable" in row[3] and "two configurations" in row[5]
     assert not any("–" in cell for cell in row)
 
@@ -723,16 +743,16 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
         "extended_model": {"model": "iwan"},
         "evidence": {"explains_data": {"limit": 2.0, "failing_bins": [failing]}},
     }
-    (sentence,) = report.explains_sentences(entry)
+    (sentence,) = report_wording.explains_sentences(entry)
     assert (
         "does not explain" in sentence and "frequency at 1.67–5.28 in/s" in sentence and "-10.1" in sentence
     )
-    (in_si,) = report.explains_sentences(entry, SI)
+    (in_si,) = report_wording.explains_sentences(entry, SI)
     assert "frequency at 0.0424–0.134 m/s" in in_si
     entry["explains_data"] = True
-    (sentence,) = report.explains_sentences(entry)
+    (sentence,) = report_wording.explains_sentences(entry)
     assert "explains the data" in sentence and "not" not in sentence
-    assert report.explains_sentences({"extended_model": {"model": "iwan"}}) == []
+    assert report_wording.explains_sentences({"extended_model": {"model": "iwan"}}) == []
 
 
 def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
@@ -763,7 +783,7 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
             }
         }
     }
-    head, shares = report.threshold_sentences(entry)
+    head, shares = report_wording.threshold_sentences(entry)
     assert (
         "2 half-decade cells" in head
         and "1.7" in head
@@ -771,13 +791,13 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
         and "it is the extended model" in head
     )
     assert "0.316–1 in/s: 0.4 ± 0.02 %" in shares and "(not identified)" in shares
-    _, in_si = report.threshold_sentences(entry, SI)
+    _, in_si = report_wording.threshold_sentences(entry, SI)
     assert "0.00803–0.0254 m/s" in in_si
     entry["evidence"]["threshold_distribution"]["adopted"] = False
-    assert "the power law stays the extended model" in report.threshold_sentences(entry)[0]
-    assert report.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []
+    assert "the power law stays the extended model" in report_wording.threshold_sentences(entry)[0]
+    assert report_wording.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []
     # no comma inside the name: "The extended model, NAME, predicts" and "NAME predicts" both read
-    assert report.model_name("iwan_cells_6") == "Iwan micro-slip with slip thresholds from the data"
+    assert report_wording.model_name("iwan_cells_6") == "Iwan micro-slip with slip thresholds from the data"
 
 
 def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_aside():
@@ -787,12 +807,14 @@ def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_asid
         "shows_signature": False,
     }
     entry = {"evidence": {"candidates": {"stiffness_nonlinearity": {"signature": signature}}}}
-    (sentence,) = report.signature_sentences(entry)
+    (sentence,) = report_wording.signature_sentences(entry)
     assert "not eligible" in sentence and "-0.003 %" in sentence and "-0.042 %" in sentence
-    assert any("not eligible" in item for item in report._sureness_items("joint", {**entry, "cause": "none"}))
+    assert any(
+        "not eligible" in item for item in verdict_page._sureness_items("joint", {**entry, "cause": "none"})
+    )
     signature["shows_signature"] = True
-    assert report.signature_sentences(entry) == []
-    assert report.signature_sentences({"evidence": {}}) == []
+    assert report_wording.signature_sentences(entry) == []
+    assert report_wording.signature_sentences({"evidence": {}}) == []
 
 
 def test_si_page_speaks_one_unit(document):
@@ -815,9 +837,9 @@ def test_si_page_speaks_one_unit(document):
     entry["evidence"]["binned_residuals"] = bins
     entry["discrepancy"] = discrepancy_sentence("lugre", bins, entry["evidence"]["run_order_trend"], 10)
     assert "1-3.16 in/s" in entry["discrepancy"]
-    assert "0.0254-0.0803 m/s" in report.discrepancy_text(entry, SI)
-    assert report.discrepancy_text(entry) == entry["discrepancy"]
-    page = report.verdict_html(document, units=SI)
+    assert "0.0254-0.0803 m/s" in report_wording.discrepancy_text(entry, SI)
+    assert report_wording.discrepancy_text(entry) == entry["discrepancy"]
+    page = verdict_page.verdict_html(document, units=SI)
     assert "0.0254-0.0803 m/s" in page and "1-3.16 in/s" not in page
     # H2's slope per in² is a slope per m² in SI, its amplitude in m/s
     table = pd.DataFrame(
@@ -828,7 +850,7 @@ def test_si_page_speaks_one_unit(document):
             "ci_high": [7.0e-4],
         }
     )
-    shown = report.hypotheses_in_units(table, SI).iloc[0]
+    shown = report_tables.hypotheses_in_units(table, SI).iloc[0]
     assert shown["statistic"].endswith("0.016 m/s, 1/m²")
     np.testing.assert_allclose(shown["estimate"], 6.66e-4 / 0.0254**2)
 
@@ -839,7 +861,7 @@ def test_unidentified_parameters_said_once_in_words(document):
     entry["baseline"]["flags"] = [flag, "slip_velocity_in_s = 5.96e+03 at the upper edge of its fit range: x"]
     entry["extended_model"]["flags"] = [flag]
     entry["confidence"] = {"microslip_power_law": 1.0}
-    page = report.verdict_html(document, units=SI)
+    page = verdict_page.verdict_html(document, units=SI)
     assert page.count("the stiction-to-friction ratio") == 1 and "stiction_ratio" not in page
     assert "the baseline and the extended model: 3" in page
     assert "151 m/s" in page and "slip_velocity_in_s" not in page  # 5960 in/s in SI
@@ -850,12 +872,12 @@ def test_unidentified_parameters_said_once_in_words(document):
 def test_one_run_campaign_is_not_said_to_predict_runs(document):
     for entry in document["configurations"].values():
         entry["evidence"]["n_runs"] = 1
-    headline = report.campaign_headline(document)
+    headline = report_wording.campaign_headline(document)
     assert "runs it was not fitted to" not in headline and "no run could be held out" in headline
     assert "predicts runs held out" not in headline
-    page = report.verdict_html(document)
+    page = verdict_page.verdict_html(document)
     assert "Based on 1 run and" in page and "nothing here says how a second run" in page
-    assert report.ONE_RUN_ERROR_UNIT.replace("'", "&#x27;") in page
+    assert report_wording.ONE_RUN_ERROR_UNIT.replace("'", "&#x27;") in page
 
 
 def test_model_fits_say_undetermined_parameters_with_their_units():
@@ -870,11 +892,11 @@ def test_model_fits_say_undetermined_parameters_with_their_units():
             "rms_rel_frequency": 1e-3,
         }
     )
-    page = report.model_fits_html(fits)
+    page = report_tables.model_fits_html(fits)
     assert "sigma0 = 6073 ± 290 lbf/in<br>" in page
     assert "alpha1 = 0.3504 ± 27 lbf <i>(not determined: the uncertainty exceeds the value)</i>" in page
     assert "v0 = 5.382 ± 0 in/s <i>(not determined: the fit does not change with it" in page
-    in_si = report.model_fits_html(fits, SI)
+    in_si = report_tables.model_fits_html(fits, SI)
     assert "m/s" in in_si and " N " in in_si and "lbf" not in in_si and "in/s" not in in_si
 
 
@@ -904,4 +926,4 @@ def test_verdict_sentences_agree_with_the_residual_and_damping_figures(built_rep
         # the trend sentence spans what figures 10-12 plot
         mine = segments[segments["configuration"] == name]
         low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
-        assert f"Measured from {report.fmt(low)} to {report.fmt(high)} in/s" in page, name
+        assert f"Measured from {report_html.fmt(low)} to {report_html.fmt(high)} in/s" in page, name

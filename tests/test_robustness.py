@@ -24,11 +24,12 @@ import pandas as pd
 import pytest
 from helpers import CHEAP, checksums, run_snakemake, write_run_with_bad_cell
 
-from workflow.lab import virtual_lab
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaign_files import format_run
+from workflow.lab.campaigns import generate_campaign
+from workflow.lab.settings import PRETRIGGER_SAMPLES, SAMPLE_RATE_HZ
 
-FS_HZ = virtual_lab.SAMPLE_RATE_HZ
-PRETRIGGER = virtual_lab.PRETRIGGER_SAMPLES
+FS_HZ = SAMPLE_RATE_HZ
+PRETRIGGER = PRETRIGGER_SAMPLES
 HEADER_LINES = 4  # title, sample rate, pre-trigger, column names: data start on line 5
 GOOD_CONFIGURATIONS = {"no_washer": 1.36, "small_washer": 0.17}
 OFF_MODE = "large_washer"  # readable runs whose mode lies far outside the search range
@@ -66,7 +67,7 @@ def read_columns(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def write_columns(path: Path, time_s, force_lbf, response_g) -> None:
-    path.write_text(virtual_lab.format_run(time_s, force_lbf, response_g))
+    path.write_text(format_run(time_s, force_lbf, response_g))
 
 
 def replace_cell(lines: list[str], line: int, column: int, text: str) -> list[str]:
@@ -447,7 +448,8 @@ def test_unknown_campaign_key_stops_before_any_job(tmp_path):
 def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
     from helpers import failed_check_reasons
 
-    from workflow.io.campaign import load_campaign, read_run
+    from workflow.io.campaign import load_campaign
+    from workflow.io.run_files import read_run
     from workflow.io.settings import QualitySettings
     from workflow.measured.quality import QC_COLUMNS, quality_rows
 
@@ -509,7 +511,7 @@ def test_quality_table_of_a_good_run_passes_with_margins(study):
 
 
 def test_quality_rows_mark_checks_that_do_not_apply():
-    from workflow.io.campaign import RunRecord
+    from workflow.io.records import RunRecord
     from workflow.io.settings import QualitySettings
     from workflow.measured.quality import analysis_rows, quality_rows
 
@@ -560,13 +562,13 @@ def test_configuration_with_every_run_excluded_is_listed_in_the_diagnosis(tmp_pa
 
 
 def test_a_reader_fault_on_one_file_excludes_that_run_and_names_it(tmp_path, monkeypatch):
-    from workflow.io import campaign as campaign_io
+    from workflow.io import run_files
     from workflow.measured.runs import read_with_quality
 
     def faulty(campaign_dir, path, campaign):
         raise OverflowError("cannot convert float infinity to integer")
 
-    monkeypatch.setattr(campaign_io, "read_run", faulty)
+    monkeypatch.setattr(run_files, "read_run", faulty)
     record, rows = read_with_quality(tmp_path, "cfg/run07.txt", None, None)
     assert record is None and len(rows) == 1 and not rows[0]["passed"]
     assert rows[0]["reason"].startswith(f"{tmp_path.as_posix()}/cfg/run07.txt: not read: OverflowError")

@@ -139,7 +139,7 @@ def outputs(workdir: Path) -> set[str]:
 def test_slurm_run_equals_local_run():
     if REASON is not None:
         pytest.fail(f"LAPJOINT_REQUIRE_SLURM=1 but {REASON}", pytrace=False)
-    from workflow.lab.virtual_lab import generate_campaign
+    from workflow.lab.campaigns import generate_campaign
 
     base = Path(tempfile.mkdtemp(prefix="lapjoint-slurm-test-"))
     try:

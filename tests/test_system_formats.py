@@ -21,7 +21,9 @@ from system_format_files import (
     write_uff58,
 )
 
-from workflow.io.campaign import CampaignFormatError, load_campaign, read_run
+from workflow.io.campaign import load_campaign
+from workflow.io.records import CampaignFormatError
+from workflow.io.run_files import read_run
 
 RAW = REALDATA / "raw"
 
@@ -470,7 +472,7 @@ def test_readers_are_imported_only_for_their_files(tmp_path):
     ascii_record(tmp_path, force, response)
     folder = str(tmp_path / "ascii" / "campaign")
     code = (
-        "import sys; from workflow.io.campaign import load_campaign, read_run; "
+        "import sys; from workflow.io.campaign import load_campaign; from workflow.io.run_files import read_run; "
         f"read_run({folder!r}, 'c/run.txt', load_campaign({folder!r})); "
         "print(sorted(m for m in ('scipy.io', 'h5py', 'pyuff', 'nptdms') if m in sys.modules))"
     )

@@ -6,23 +6,44 @@ import numpy as np
 import pytest
 import yaml
 
-from workflow.io import campaign
-from workflow.lab import virtual_lab as vl
+from workflow.io import campaign, run_files
+from workflow.lab.campaign_files import truth_path
+from workflow.lab.campaigns import generate_campaign, generate_one_hit, generate_sensor_campaigns
+from workflow.lab.configurations import (
+    ModeTable,
+    averaged_mode_response,
+    mode_table,
+    reference_modal_amplitude,
+    run_dahl_coulomb,
+    scale_slip_forces,
+    setup_configuration,
+    truth_curves,
+)
+from workflow.lab.sensors import Sensor, positions_with_mode1_gain, sensor_at_gain
+from workflow.lab.settings import (
+    EFFECT_CAUSES,
+    REFERENCE_VELOCITY_IN_S,
+    SAMPLE_RATE_HZ,
+    LabSettings,
+    RunPhysics,
+    draw_run_physics,
+)
+from workflow.lab.time_domain import time_domain_mode_response
 from workflow.models import contact
 
-SETTINGS = vl.LabSettings()
+SETTINGS = LabSettings()
 
 
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
     out = tmp_path_factory.mktemp("lab") / "demo"
-    truth = vl.generate_campaign(out, seed=7, runs_per_configuration=2)
+    truth = generate_campaign(out, seed=7, runs_per_configuration=2)
     return out, truth
 
 
 @pytest.fixture(scope="module")
 def no_washer():
-    return vl.setup_configuration("no_washer", 1.36, SETTINGS)
+    return setup_configuration("no_washer", 1.36, SETTINGS)
 
 
 def _read(path):
@@ -41,8 +62,8 @@ def test_campaign_layout_and_truth_beside(demo):
     assert meta["configurations"]["large_washer"]["bearing_area_in2"] == 0.66
     assert 110 < meta["mode_hz"] < 140
     assert not list(out.glob("*.json"))
-    saved = json.loads(vl.truth_path(out).read_text())
-    assert vl.truth_path(out).parent == out.parent
+    saved = json.loads(truth_path(out).read_text())
+    assert truth_path(out).parent == out.parent
     assert saved["expected_cause"] == truth["expected_cause"] == "microslip_power_law"
     assert sorted(p.name for p in (out / "no_washer").iterdir()) == ["run01.txt", "run02.txt"]
 
@@ -69,17 +90,17 @@ def test_run_file_format_trigger_and_quantisation(demo):
 def test_campaign_reader_accepts_it(demo):
     out, _ = demo
     meta = campaign.load_campaign(out)
-    runs = campaign.list_runs(out, meta)
+    runs = run_files.list_runs(out, meta)
     assert len(runs) == 6
-    record = campaign.read_run(out, runs[0], meta)
+    record = run_files.read_run(out, runs[0], meta)
     assert record.n_samples == 8192 and record.pretrigger_samples == 25
 
 
 def test_deterministic_for_a_seed(tmp_path):
     kwargs = dict(seed=11, runs_per_configuration=2, configurations={"beam": None})
-    vl.generate_campaign(tmp_path / "a", **kwargs)
-    vl.generate_campaign(tmp_path / "b", **kwargs)
-    vl.generate_campaign(tmp_path / "c", **{**kwargs, "seed": 12})
+    generate_campaign(tmp_path / "a", **kwargs)
+    generate_campaign(tmp_path / "b", **kwargs)
+    generate_campaign(tmp_path / "c", **{**kwargs, "seed": 12})
     a = (tmp_path / "a" / "beam" / "run02.txt").read_bytes()
     assert a == (tmp_path / "b" / "beam" / "run02.txt").read_bytes()
     assert a != (tmp_path / "c" / "beam" / "run02.txt").read_bytes()
@@ -141,7 +162,7 @@ def integrate_patch_ringdown(
 
 def test_slow_flow_matches_direct_integration(no_washer):
     setup, curves = no_washer
-    table = vl.mode_table(setup, curves, SETTINGS, "patches", None, None)
+    table = mode_table(setup, curves, SETTINGS, "patches", None, None)
     jm = setup.joint_modes
     w0 = setup.omega0_rad_s
     a0 = 3.0 / (abs(jm.mode.accelerometer_participation) * w0)  # 3 in/s
@@ -157,7 +178,7 @@ def test_slow_flow_matches_direct_integration(no_washer):
     shift = 0.5 * (y0 - y2) / (y0 - 2 * y1 + y2)
     t_peak = t[peaks] + shift * dt
     a_peak = y1 - 0.25 * (y0 - y2) * shift
-    a_slow, phase = vl.ModeTable.evolve(table, a0, t_peak)
+    a_slow, phase = ModeTable.evolve(table, a0, t_peak)
     # amplitude decay within 2 % over 50 cycles (the slow flow averages the
     # weak nonlinearity; the initial virgin loading differs slightly)
     assert np.allclose(a_peak[5:], a_slow[5:], rtol=0.02)
@@ -174,14 +195,12 @@ def test_slow_flow_matches_direct_integration(no_washer):
 def test_quadratic_damping_raises_damping_not_frequency(no_washer, size):
     setup, curves = no_washer
     v = np.logspace(-1, 1, 21)
-    base = vl.truth_curves(setup, vl.mode_table(setup, curves, SETTINGS, "dahl", None, None), v)
-    quad = vl.truth_curves(
-        setup, vl.mode_table(setup, curves, SETTINGS, "dahl", "quadratic_damping", size), v
-    )
+    base = truth_curves(setup, mode_table(setup, curves, SETTINGS, "dahl", None, None), v)
+    quad = truth_curves(setup, mode_table(setup, curves, SETTINGS, "dahl", "quadratic_damping", size), v)
     added = quad[0] - base[0]
     # zeta added grows linearly with amplitude: size at the reference velocity
     # (2 %: the modal amplitude of a velocity differs by the ~1 % frequency shift)
-    at_ref = np.interp(np.log(vl.REFERENCE_VELOCITY_IN_S), np.log(v), added)
+    at_ref = np.interp(np.log(REFERENCE_VELOCITY_IN_S), np.log(v), added)
     assert at_ref == pytest.approx(size, rel=0.02)
     assert np.polyfit(np.log(v), np.log(added), 1)[0] == pytest.approx(1.0, abs=0.02)
     # only the damped frequency's factor sqrt(1 - zeta^2) changes, by < zeta^2 / 2
@@ -192,11 +211,9 @@ def test_quadratic_damping_raises_damping_not_frequency(no_washer, size):
 def test_stiffness_nonlinearity_shifts_frequency_only(no_washer, size):
     setup, curves = no_washer
     v = np.logspace(-1, 1, 21)
-    base = vl.truth_curves(setup, vl.mode_table(setup, curves, SETTINGS, "dahl", None, None), v)
-    soft = vl.truth_curves(
-        setup, vl.mode_table(setup, curves, SETTINGS, "dahl", "stiffness_nonlinearity", size), v
-    )
-    ratio = np.interp(np.log(vl.REFERENCE_VELOCITY_IN_S), np.log(v), soft[1] / base[1])
+    base = truth_curves(setup, mode_table(setup, curves, SETTINGS, "dahl", None, None), v)
+    soft = truth_curves(setup, mode_table(setup, curves, SETTINGS, "dahl", "stiffness_nonlinearity", size), v)
+    ratio = np.interp(np.log(REFERENCE_VELOCITY_IN_S), np.log(v), soft[1] / base[1])
     assert ratio == pytest.approx(1 - size, abs=0.1 * size)
     assert np.all(np.diff(soft[1] / base[1]) < 0)
     # no dissipation added: damping changes only through omega in zeta's definition
@@ -204,7 +221,7 @@ def test_stiffness_nonlinearity_shifts_frequency_only(no_washer, size):
 
 
 def test_run_drift_shifts_damping_with_run_order(tmp_path):
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "drift",
         joint="dahl",
         effect="run_drift",
@@ -223,7 +240,7 @@ def test_run_drift_shifts_damping_with_run_order(tmp_path):
 
 
 def test_second_mode_appears_in_band(tmp_path):
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "two",
         joint="dahl",
         effect="second_mode",
@@ -240,12 +257,12 @@ def test_second_mode_appears_in_band(tmp_path):
     # the extra mode's peak is comparable to mode 1's (size 0.6 of its initial amplitude)
     assert near(1.08 * f1) > 0.2 * near(f1)
     with pytest.raises(ValueError, match="patches joint takes an effect in"):
-        vl.generate_campaign(tmp_path / "bad", effect="second_mode")
+        generate_campaign(tmp_path / "bad", effect="second_mode")
 
 
 # ------------------------------------------------- run-to-run variability
 
-NO_SPREAD = vl.LabSettings(frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
+NO_SPREAD = LabSettings(frequency_spread=0.0, damping_spread=0.0, slip_force_spread=0.0)
 
 
 def test_demo_settings_default_to_the_lab_spreads():
@@ -260,7 +277,7 @@ def test_slip_force_scaling_matches_recomputed_patches(no_washer):
     setup, (a, d, loss) = no_washer
     p = setup.joint_modes.patches
     for factor in (0.9, 1.08):
-        d_scaled, loss_scaled = vl.scale_slip_forces(a, d, loss, factor)
+        d_scaled, loss_scaled = scale_slip_forces(a, d, loss, factor)
         d_exact, loss_exact = contact_describing(setup, a, p.slip_force_lbf * factor)
         v = abs(setup.mode.accelerometer_participation) * setup.omega0_rad_s * a
         sel = (v > 0.01) & (v < 30) & (d_exact > 1e-6 * d_exact.max())
@@ -279,7 +296,7 @@ def contact_describing(setup, a, slip_force_lbf):
 
 
 def test_runs_get_their_own_physics(tmp_path):
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "spread", seed=5, runs_per_configuration=12, joint="dahl", configurations={"beam": 0.8}
     )
     entry = truth["configurations"]["beam"]
@@ -306,7 +323,7 @@ def test_runs_get_their_own_physics(tmp_path):
 def test_measured_frequencies_follow_the_drawn_ones(tmp_path):
     from workflow.lab.hidden_effects import campaign_segments
 
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "m", seed=9, runs_per_configuration=6, joint="dahl", configurations={"beam": 0.8}
     )
     segments = campaign_segments(tmp_path / "m")
@@ -328,7 +345,7 @@ def test_measured_frequencies_follow_the_drawn_ones(tmp_path):
 
 
 def test_no_spread_gives_the_same_beam_every_run(tmp_path):
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "same", seed=5, runs_per_configuration=3, configurations={"beam": 1.36}, settings=NO_SPREAD
     )
     entry = truth["configurations"]["beam"]
@@ -341,7 +358,7 @@ def test_no_spread_gives_the_same_beam_every_run(tmp_path):
 def test_variability_has_no_trend_with_run_order():
     # 400 runs: a trend of even 0.2 sigma over the runs would give a correlation of 0.06;
     # the draws' correlation with run index stays at sampling noise 1/sqrt(400)
-    runs = vl.draw_run_physics(SETTINGS, np.random.default_rng(1), 400)
+    runs = draw_run_physics(SETTINGS, np.random.default_rng(1), 400)
     order = np.arange(400)
     for name in ("frequency_factor", "zeta0", "slip_force_factor"):
         values = np.array([getattr(r, name) for r in runs])
@@ -362,13 +379,13 @@ def _peaks(t, x):
 @pytest.mark.parametrize("peak_force_lbf", [5.0, 40.0])
 def test_time_domain_agrees_with_the_averaged_model(no_washer, joint, peak_force_lbf):
     setup, curves = no_washer
-    run = vl.RunPhysics(frequency_factor=1.0003, zeta0=0.00085, slip_force_factor=0.97)
-    table = vl.mode_table(setup, curves, SETTINGS, joint, None, None, run=run)
-    coulomb = vl.run_dahl_coulomb(setup, None, None, 0.0, run.slip_force_factor)
-    t = np.arange(8192) / vl.SAMPLE_RATE_HZ
+    run = RunPhysics(frequency_factor=1.0003, zeta0=0.00085, slip_force_factor=0.97)
+    table = mode_table(setup, curves, SETTINGS, joint, None, None, run=run)
+    coulomb = run_dahl_coulomb(setup, None, None, 0.0, run.slip_force_factor)
+    t = np.arange(8192) / SAMPLE_RATE_HZ
     modal_peak = setup.mode.hammer_participation * peak_force_lbf
-    averaged = vl.averaged_mode_response(setup, table, run)(t, modal_peak, 0.8e-3)
-    direct = vl.time_domain_mode_response(setup, joint, coulomb, run)(t, modal_peak, 0.8e-3)
+    averaged = averaged_mode_response(setup, table, run)(t, modal_peak, 0.8e-3)
+    direct = time_domain_mode_response(setup, joint, coulomb, run)(t, modal_peak, 0.8e-3)
     ta, aa = _peaks(t, averaged)
     td, ad = _peaks(t, direct)
     n = min(ta.size, td.size) - 20
@@ -386,7 +403,7 @@ def test_time_domain_agrees_with_the_averaged_model(no_washer, joint, peak_force
 
 
 def test_time_domain_campaign_and_its_limits(tmp_path):
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "td",
         seed=3,
         runs_per_configuration=2,
@@ -400,14 +417,14 @@ def test_time_domain_campaign_and_its_limits(tmp_path):
     assert data.shape == (8192, 3) and np.argmax(data[:, 1] >= 1.0) == 25
     for effect in ("quadratic_damping", "stiffness_nonlinearity"):
         with pytest.raises(ValueError, match="time-domain"):
-            vl.generate_campaign(tmp_path / "x", joint="dahl", effect=effect, integrator="time_domain")
+            generate_campaign(tmp_path / "x", joint="dahl", effect=effect, integrator="time_domain")
 
 
 # ---------------------------------------------------------------- sensors
 
 
 def test_sensor_variants_share_the_decay_not_the_noise(tmp_path):
-    truths = vl.generate_sensor_campaigns(
+    truths = generate_sensor_campaigns(
         tmp_path,
         {"accelerometer": 1.0, "mid": 0.5},
         seed=4,
@@ -424,7 +441,7 @@ def test_sensor_variants_share_the_decay_not_the_noise(tmp_path):
     _, a = _read(tmp_path / "accelerometer" / "beam" / "run01.txt")
     _, b = _read(tmp_path / "mid" / "beam" / "run01.txt")
     assert np.array_equal(a[:, :2], b[:, :2])  # same hammer hit
-    freq = np.fft.rfftfreq(8192, 1 / vl.SAMPLE_RATE_HZ)
+    freq = np.fft.rfftfreq(8192, 1 / SAMPLE_RATE_HZ)
     band = (freq > 110) & (freq < 140)
     spectrum_a, spectrum_b = (np.fft.rfft(x[:, 2])[band] for x in (a, b))
     # mode 1 scaled by the gain (the band's noise is 1e-3 of the mode's energy)
@@ -453,16 +470,16 @@ def test_combined_truth_adds_the_term_to_the_joint(no_washer, tmp_path, effect, 
     interpolation in ``ln a`` (grid step 0.0115: a power of ``a`` is off by at most
     ``step^2 / 8`` = 1.7e-5 relative)."""
     setup, curves = no_washer
-    a_ref = vl.reference_modal_amplitude(setup)
-    alone = vl.mode_table(setup, curves, SETTINGS, "patches", None, None).at(a_ref)
-    both = vl.mode_table(setup, curves, SETTINGS, "patches", effect, size).at(a_ref)
+    a_ref = reference_modal_amplitude(setup)
+    alone = mode_table(setup, curves, SETTINGS, "patches", None, None).at(a_ref)
+    both = mode_table(setup, curves, SETTINGS, "patches", effect, size).at(a_ref)
     w0 = setup.omega0_rad_s
     if effect == "quadratic_damping":
         assert both[1] == pytest.approx(alone[1], rel=1e-12)
         assert both[0] - alone[0] == pytest.approx(size * w0**2 / both[1] ** 2, rel=2e-5)
     else:
         assert both[1] ** 2 - alone[1] ** 2 == pytest.approx(w0**2 * ((1 + size) ** 2 - 1), rel=2e-5)
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         tmp_path / "combined",
         seed=5,
         runs_per_configuration=1,
@@ -471,17 +488,17 @@ def test_combined_truth_adds_the_term_to_the_joint(no_washer, tmp_path, effect, 
         effect_size=size,
         configurations={"joint": 1.2},
     )
-    cause = vl.EFFECT_CAUSES[effect]
+    cause = EFFECT_CAUSES[effect]
     assert (
         truth["causes"] == ["microslip_power_law", cause] and truth["expected_cause"] == "microslip_power_law"
     )
     with pytest.raises(ValueError, match="patches joint takes an effect"):
-        vl.generate_campaign(tmp_path / "bad", joint="patches", effect="run_drift")
+        generate_campaign(tmp_path / "bad", joint="patches", effect="run_drift")
 
 
 def test_cubic_stiffness_is_a_hardening_spring(tmp_path):
     with pytest.raises(ValueError, match="hardening"):
-        vl.generate_campaign(tmp_path / "soft", joint="patches", effect="cubic_stiffness", effect_size=-0.01)
+        generate_campaign(tmp_path / "soft", joint="patches", effect="cubic_stiffness", effect_size=-0.01)
 
 
 def _first_harmonic_envelope(t, acceleration, low_hz=60.0, high_hz=250.0):
@@ -503,12 +520,12 @@ def test_time_domain_combination_agrees_with_the_averaged_model(no_washer, effec
     9e-5 there; the cubic's second-order Lindstedt term, ``21/256 (4/3 size)^2``, is 5e-6
     at the reference amplitude, growing as a^4)."""
     setup, curves = no_washer
-    run = vl.RunPhysics(zeta0=SETTINGS.zeta0)
-    table = vl.mode_table(setup, curves, SETTINGS, "patches", effect, size, run=run)
-    t = np.arange(8192) / vl.SAMPLE_RATE_HZ
+    run = RunPhysics(zeta0=SETTINGS.zeta0)
+    table = mode_table(setup, curves, SETTINGS, "patches", effect, size, run=run)
+    t = np.arange(8192) / SAMPLE_RATE_HZ
     modal_peak = setup.mode.hammer_participation * 40.0
-    averaged = vl.averaged_mode_response(setup, table, run)(t, modal_peak, 0.8e-3)
-    direct = vl.time_domain_mode_response(setup, "patches", 0.0, run, effect, size)(t, modal_peak, 0.8e-3)
+    averaged = averaged_mode_response(setup, table, run)(t, modal_peak, 0.8e-3)
+    direct = time_domain_mode_response(setup, "patches", 0.0, run, effect, size)(t, modal_peak, 0.8e-3)
     period = 1 / setup.mode.frequency_hz
     block = np.arange(0.1, 1.3, 0.1)  # later the record's wrap-around (FFT) ripples the envelope
     rates = []
@@ -535,7 +552,7 @@ def test_time_domain_combination_agrees_with_the_averaged_model(no_washer, effec
 # ------------------------------------------------------- sensor placement
 
 
-def _band_rms(x, low_hz, high_hz, sample_rate_hz=vl.SAMPLE_RATE_HZ):
+def _band_rms(x, low_hz, high_hz, sample_rate_hz=SAMPLE_RATE_HZ):
     """RMS spectral amplitude of a Hann-windowed record in a band (the window keeps a
     mode's leakage into another mode's band below 1e-4)."""
     spectrum = np.fft.rfft(x * np.hanning(x.size))
@@ -548,10 +565,10 @@ def _band_rms(x, low_hz, high_hz, sample_rate_hz=vl.SAMPLE_RATE_HZ):
 def three_sensors(tmp_path_factory, no_washer):
     setup, _ = no_washer
     mode = setup.mode
-    near_node = vl.sensor_at_gain(mode, SETTINGS, 0.05, "acc2")
-    sensors = (vl.Sensor("acc1"), near_node, vl.Sensor("acc3", 19.0, noise_g=0.004))
+    near_node = sensor_at_gain(mode, SETTINGS, 0.05, "acc2")
+    sensors = (Sensor("acc1"), near_node, Sensor("acc3", 19.0, noise_g=0.004))
     out = tmp_path_factory.mktemp("lab") / "sensors"
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         out, seed=9, runs_per_configuration=1, configurations={"no_washer": 1.36}, sensors=sensors
     )
     return out, truth, sensors
@@ -604,34 +621,34 @@ def test_multi_sensor_columns_take_the_input_contracts_roles(three_sensors):
     assert meta["response"] == {"quantity": "acceleration", "unit": "g", "channels": ["acc1", "acc2", "acc3"]}
     assert "mode_hz" in meta and "modes_hz" not in meta
     with pytest.raises(ValueError, match="must contain 'acc'"):
-        vl.generate_campaign(out.parent / "bad", sensors=(vl.Sensor("vel1"),))
+        generate_campaign(out.parent / "bad", sensors=(Sensor("vel1"),))
     with pytest.raises(ValueError, match="off the beam"):
-        vl.generate_campaign(out.parent / "bad", sensors=(vl.Sensor("acc", 30.0),))
+        generate_campaign(out.parent / "bad", sensors=(Sensor("acc", 30.0),))
 
 
 def test_positions_with_a_mode1_gain(no_washer):
     setup, _ = no_washer
     mode = setup.mode
     for gain in (0.05, 0.5, 1.0, 2.0):
-        positions = vl.positions_with_mode1_gain(mode, gain)
+        positions = positions_with_mode1_gain(mode, gain)
         assert positions.size >= 2
         ratios = [
             abs(np.interp(x, mode.x_in, mode.shape_in) / mode.accelerometer_participation) for x in positions
         ]
         assert np.allclose(ratios, gain, rtol=1e-9)
     # the free ends see mode 1 about 3 times the accelerometer: nothing sees it 8 times
-    assert vl.positions_with_mode1_gain(mode, 8.0).size == 0
+    assert positions_with_mode1_gain(mode, 8.0).size == 0
 
 
 # ---------------------------------------------------- two modes, MAT files
 
 
 def test_mat_runs_hold_the_ascii_runs_numbers(tmp_path):
-    sensors = (vl.Sensor("acc1"), vl.Sensor("acc2", 2.0), vl.Sensor("acc3", 12.0))
+    sensors = (Sensor("acc1"), Sensor("acc2", 2.0), Sensor("acc3", 12.0))
     kwargs = dict(seed=13, runs_per_configuration=1, configurations={"hit": None}, sensors=sensors)
-    vl.generate_campaign(tmp_path / "txt", **kwargs)
-    vl.generate_campaign(tmp_path / "mat", file_format="mat", **kwargs)
-    vl.generate_campaign(tmp_path / "mat2", file_format="mat", **kwargs)
+    generate_campaign(tmp_path / "txt", **kwargs)
+    generate_campaign(tmp_path / "mat", file_format="mat", **kwargs)
+    generate_campaign(tmp_path / "mat2", file_format="mat", **kwargs)
     scipy_io = pytest.importorskip("scipy.io")
     mat = scipy_io.loadmat(tmp_path / "mat" / "hit" / "run01.mat")
     _, data = _read(tmp_path / "txt" / "hit" / "run01.txt")
@@ -646,17 +663,17 @@ def test_mat_runs_hold_the_ascii_runs_numbers(tmp_path):
 
 def test_joint_on_two_modes_writes_a_truth_per_mode(tmp_path):
     out = tmp_path / "two"
-    truth = vl.generate_campaign(
+    truth = generate_campaign(
         out,
         seed=21,
         runs_per_configuration=2,
         configurations={"joint": 1.36},
-        sensors=(vl.Sensor("acc1"), vl.Sensor("acc2", 18.0)),
+        sensors=(Sensor("acc1"), Sensor("acc2", 18.0)),
         nonlinear_modes=2,
     )
     meta = yaml.safe_load((out / "campaign.yaml").read_text())
     assert len(meta["modes_hz"]) == 2 and "mode_hz" not in meta
-    mode2 = json.loads(vl.truth_path(out, 2).read_text())
+    mode2 = json.loads(truth_path(out, 2).read_text())
     assert truth["mode"] == 1 and mode2["mode"] == 2
     assert meta["modes_hz"] == [round(truth["mode_hz"]), round(mode2["mode_hz"])]
     assert 300 < mode2["mode_hz"] < 360
@@ -670,7 +687,7 @@ def test_joint_on_two_modes_writes_a_truth_per_mode(tmp_path):
     assert zeta[high] > 1.02 * zeta[low] and f[high] < f[low] * (1 - 1e-4)
     assert len(mode2["configurations"]["joint"]["runs"]) == 2
     with pytest.raises(ValueError, match="two modes"):
-        vl.generate_campaign(tmp_path / "bad", joint="dahl", nonlinear_modes=2)
+        generate_campaign(tmp_path / "bad", joint="dahl", nonlinear_modes=2)
 
 
 def test_one_hit_three_sensor_mat_file(tmp_path):
@@ -678,7 +695,7 @@ def test_one_hit_three_sensor_mat_file(tmp_path):
     acceleration variables, campaign.yaml asking for every mode and naming the channels."""
     scipy_io = pytest.importorskip("scipy.io")
     out = tmp_path / "hit"
-    vl.generate_one_hit(out)
+    generate_one_hit(out)
     assert sorted(p.name for p in (out / "hit").iterdir()) == ["run01.mat"]
     mat = scipy_io.loadmat(out / "hit" / "run01.mat")
     assert {"t", "force", "acc1", "acc2", "acc3"} <= set(mat)
@@ -686,4 +703,4 @@ def test_one_hit_three_sensor_mat_file(tmp_path):
     meta = yaml.safe_load((out / "campaign.yaml").read_text())
     assert meta["modes_hz"] == "auto" and meta["sample_rate_hz"] == 12800
     assert meta["response"]["channels"] == ["acc1", "acc2", "acc3"]
-    assert vl.truth_path(out, 2).exists()
+    assert truth_path(out, 2).exists()

@@ -11,7 +11,7 @@ from helpers import checksums, run_snakemake, write_run_with_bad_cell
 
 from workflow.io.tables import column_units
 from workflow.io.units import SI, SI_TWIN_COLUMNS
-from workflow.lab.virtual_lab import generate_campaign
+from workflow.lab.campaigns import generate_campaign
 from workflow.outputs import figures
 from workflow.outputs.readability import readability_problems
 

@@ -14,10 +14,11 @@ from helpers import REALDATA, checksums, needs_realdata, run_snakemake
 from system_format_files import FIRST_RECORDING, convert_run, write_mixed_format_copy
 
 from workflow.discovery.campaign import diagnose_campaign
-from workflow.io.campaign import list_runs, load_campaign, read_run
+from workflow.io.campaign import load_campaign
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
+from workflow.io.run_files import list_runs, read_run
+from workflow.lab.campaigns import generate_campaign
 from workflow.lab.hidden_effects import generate_case
-from workflow.lab.virtual_lab import generate_campaign
 
 snakemake = functools.partial(run_snakemake, timeout=900)
 

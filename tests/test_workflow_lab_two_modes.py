@@ -12,7 +12,9 @@ import pytest
 import yaml
 from helpers import CHEAP, run_snakemake
 
-from workflow.lab import virtual_lab as vl
+from workflow.lab.campaign_files import truth_path
+from workflow.lab.campaigns import generate_campaign
+from workflow.lab.sensors import Sensor
 
 CHANNELS = ("acc1", "acc2")
 CONFIGURATION = "joint"
@@ -32,18 +34,18 @@ def lab_run(tmp_path_factory):
     modes' shapes differ from acc1's), analysed once by ``snakemake -c2 all``."""
     root = tmp_path_factory.mktemp("lab_two_modes")
     campaign = root / "campaign"
-    vl.generate_campaign(
+    generate_campaign(
         campaign,
         seed=21,
         runs_per_configuration=4,
         configurations={CONFIGURATION: 1.36},
-        sensors=(vl.Sensor("acc1"), vl.Sensor("acc2", 18.0)),
+        sensors=(Sensor("acc1"), Sensor("acc2", 18.0)),
         nonlinear_modes=2,
     )
     work = root / "work"
     done = run_snakemake(work, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP, timeout=900)
     assert done.returncode == 0, done.stderr[-4000:]
-    truths = [json.loads(vl.truth_path(campaign, mode).read_text()) for mode in (1, 2)]
+    truths = [json.loads(truth_path(campaign, mode).read_text()) for mode in (1, 2)]
     listed_hz = yaml.safe_load((campaign / "campaign.yaml").read_text())["modes_hz"]
     return work, truths, listed_hz
 

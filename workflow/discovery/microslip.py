@@ -12,7 +12,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from workflow.discovery.heldout import cross_validate, effective_observations
-from workflow.models.averaged import MAX_THRESHOLD_CELLS, MODELS, AveragedModel, threshold_cell_edges
+from workflow.models.averaged import MAX_THRESHOLD_CELLS, MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
@@ -23,6 +23,7 @@ from workflow.models.averaged_fit import (
     fixed_params,
 )
 from workflow.models.configuration_data import ConfigurationData, Scatter
+from workflow.models.joint_averages import threshold_cell_edges
 
 __all__ = [
     "threshold_cells",

@@ -34,7 +34,7 @@ real campaign gives fits. Names are shown in figure titles, legends and table ce
 MAX_CAMPAIGN_NAME_CHARACTERS: int = 1000
 """Longest campaign name (campaign.yaml's free-text ``name``): a title of a dozen lines.
 Every page and the summary show a text of up to 2000 characters whole
-(:data:`workflow.outputs.escape.DISPLAY_LIMIT`), so the name is never cut; a 100 kB
+(:data:`workflow.io.escape.DISPLAY_LIMIT`), so the name is never cut; a 100 kB
 name made one figure job take 74 s and 3.7 GB. Names that are file names (run files,
 channels, the default campaign name: its folder's) keep :data:`MAX_NAME_CHARACTERS`."""
 

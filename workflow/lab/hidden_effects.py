@@ -24,15 +24,11 @@ import numpy as np
 import pandas as pd
 
 from workflow.io.settings import AnalysisSettings, QualitySettings
-from workflow.lab.virtual_lab import (
-    TIME_DOMAIN_EFFECTS,
-    LabSettings,
-    Sensor,
-    generate_campaign,
-    positions_with_mode1_gain,
-    setup_configuration,
-)
-from workflow.measured.runs import analyse_campaign
+from workflow.lab.campaigns import generate_campaign
+from workflow.lab.configurations import setup_configuration
+from workflow.lab.sensors import Sensor, positions_with_mode1_gain
+from workflow.lab.settings import TIME_DOMAIN_EFFECTS, LabSettings
+from workflow.measured.campaign_tables import analyse_campaign
 
 __all__ = [
     "CASES",
@@ -206,7 +202,7 @@ def generate_case(
 
     ``settings`` (default ``LabSettings()``, run-to-run variability on) and ``integrator``
     (default :func:`case_integrator`) are passed to
-    :func:`workflow.lab.virtual_lab.generate_campaign`. The campaign is recorded by a
+    :func:`workflow.lab.campaigns.generate_campaign`. The campaign is recorded by a
     sensor that sees mode 1 at ``mode1_gain`` times the reference accelerometer
     (:func:`placed_sensor`) with noise stream ``noise_stream``: the same case seen by
     another sensor has the same physics, hits and run-to-run variations. A tuple of

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from workflow.io.campaign import RunRecord
+from workflow.io.records import RunRecord
 from workflow.io.settings import QualitySettings
 
 __all__ = [

@@ -55,7 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from workflow.io.settings import AnalysisSettings, DecaySettings, ModelSettings
-from workflow.measured import decay
+from workflow.measured import decay, filters
 from workflow.models.ringdown import simulate_ringdown
 from workflow.models.sampling import scrambled_sobol_points
 
@@ -272,14 +272,14 @@ def analyse_batch(responses: np.ndarray, ctx: RingdownFitContext) -> list[dict[s
         amplitude.
     """
     out = []
-    tau = decay.filter_time_constant_s(ctx.band_hz)
+    tau = filters.filter_time_constant_s(ctx.band_hz)
     edge = int(np.ceil(ctx.analysis.edge_time_constants * tau * ctx.fs_hz))
     for x in np.atleast_2d(responses):
         empty = {k: np.empty(0) for k in ("velocity_amplitude_in_s", "zeta", "frequency_hz")}
         if not np.all(np.isfinite(x)) or not np.any(x):
             out.append(empty)
             continue
-        z = decay.analytic_bandpass(x, ctx.fs_hz, ctx.band_hz, ctx.analysis.filter_order)
+        z = filters.analytic_bandpass(x, ctx.fs_hz, ctx.band_hz, ctx.analysis.filter_order)
         env = np.abs(z)
         phase = np.unwrap(np.angle(z))
         start = int(np.argmax(env))

@@ -103,12 +103,12 @@ def averaged_fit_params(
 ) -> dict[str, float]:
     """The averaged model's fit to one configuration's segments, for a configuration the
     diagnosis did not fit (too few distinct amplitudes to validate models)."""
-    from workflow.models import averaged as describing
+    from workflow.models.averaged import RESPONSE_ORDER
     from workflow.models.averaged_fit import FitContext, FitSettings, fit_model
     from workflow.models.configuration_data import prepare_configuration, scatter_of
 
     data = prepare_configuration(
-        segments, str(segments["configuration"].iloc[0]), describing.RESPONSE_ORDER[response_quantity]
+        segments, str(segments["configuration"].iloc[0]), RESPONSE_ORDER[response_quantity]
     )
     velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
     context = FitContext(float(np.quantile(velocity, 0.9)))

@@ -54,8 +54,8 @@ import numpy as np  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 from matplotlib.backend_bases import DrawEvent  # noqa: E402
 
+from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
-from workflow.outputs.escape import plot_text  # noqa: E402
 from workflow.outputs.readability import readability_problems  # noqa: E402
 
 if TYPE_CHECKING:  # tables come in as DataFrames; figures 7-8 are drawn without pandas

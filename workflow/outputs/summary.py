@@ -8,9 +8,9 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-from workflow.outputs.escape import terminal_text
-from workflow.outputs.report import cause_name
+from workflow.io.escape import terminal_text
 from workflow.outputs.report_command import REPORT_COMMAND_FILE
+from workflow.outputs.report_wording import cause_name
 
 __all__ = [
     "REASONS_SHOWN",

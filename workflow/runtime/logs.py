@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 from types import TracebackType
 
-from workflow.outputs.escape import terminal_lines
+from workflow.io.escape import terminal_lines
 
 __all__ = [
     "COST_LINE",
@@ -57,7 +57,7 @@ def peak_resident_mb() -> float:
 
 class TerminalSafeFormatter(logging.Formatter):
     """Log lines with every character a terminal acts on written out as its escape
-    (:func:`workflow.outputs.escape.terminal_lines`): messages name the campaign's runs,
+    (:func:`workflow.io.escape.terminal_lines`): messages name the campaign's runs,
     channels and paths, and the job's log is echoed to the console."""
 
     def format(self, record: logging.LogRecord) -> str:

@@ -4,7 +4,7 @@ Each format module turns one file into :class:`~workflow.io.readers.channels.Cha
 objects (samples plus whatever the file records: unit, sample interval, start time);
 :func:`~workflow.io.readers.channels.assemble_record` then picks the response and force
 channels and checks them against campaign.yaml exactly as the ASCII reader does, so every
-format gives the same :class:`~workflow.io.campaign.RunRecord`.
+format gives the same :class:`~workflow.io.records.RunRecord`.
 
 The format libraries (scipy.io, h5py, pyuff, npTDMS) are imported only by the reader of a
 file that needs them, so a job reading ASCII runs never loads them.
@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from workflow.io.campaign import Campaign, RunRecord
+    from workflow.io.campaign import Campaign
+    from workflow.io.records import RunRecord
 
 
 __all__ = [
@@ -50,8 +51,8 @@ def read_system_run(full_path: Path, relative: str, shown: str, campaign: Campai
         sample interval, disagreement with campaign.yaml; the message names the file, the
         record or variable and the problem.
     """
-    from workflow.io.campaign import CampaignFormatError
     from workflow.io.readers.channels import assemble_record
+    from workflow.io.records import CampaignFormatError
 
     suffix = full_path.suffix.lower()
     if suffix == ".mat":

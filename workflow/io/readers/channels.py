@@ -23,22 +23,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from datetime import datetime
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
-from workflow.io.campaign import (
-    MIN_SAMPLES,
-    Campaign,
-    CampaignFormatError,
-    ResponseChannel,
-    RunRecord,
-    response_unit,
-)
+from workflow.io.campaign import response_unit
 from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
+from workflow.io.records import MIN_SAMPLES, CampaignFormatError, ResponseChannel, RunRecord
+
+if TYPE_CHECKING:
+    from workflow.io.campaign import Campaign
 
 __all__ = [
     "Channel",

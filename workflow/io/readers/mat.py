@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from workflow.io.campaign import CampaignFormatError
 from workflow.io.limits import quoted
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import parse_clock_time
+from workflow.io.records import CampaignFormatError
 
 __all__ = [
     "read_mat_channels",

@@ -15,10 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from workflow.io.campaign import CampaignFormatError
 from workflow.io.limits import quoted
 from workflow.io.readers.channels import Channel, FileChannels
 from workflow.io.recording_time import utc_from_datetime64
+from workflow.io.records import CampaignFormatError
 
 __all__ = [
     "read_tdms_channels",

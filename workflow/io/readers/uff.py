@@ -17,9 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from workflow.io.campaign import CampaignFormatError
 from workflow.io.readers.channels import Channel, FileChannels, unit_label
 from workflow.io.recording_time import parse_clock_time
+from workflow.io.records import CampaignFormatError
 
 __all__ = [
     "TIME_RESPONSE_FUNCTION",

@@ -1,0 +1,174 @@
+"""What campaign.yaml's reader and the run-file readers share: the error that names a
+file and line, the smallest run, the record of one run file, and the checks of a file's
+units and sample rate against campaign.yaml.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "MIN_SAMPLES",
+    "CampaignFormatError",
+    "RunFile",
+    "ResponseChannel",
+    "RunRecord",
+]
+
+
+MIN_SAMPLES: int = 256
+"""Fewest samples a run file must hold. Below this a record cannot hold even a few
+cycles of the mode plus the filter's settling time, and such short files are in
+practice truncated exports ("fewer than a few hundred samples" in the contract)."""
+
+
+# --------------------------------------------------------------------------------------
+# Errors
+
+
+class CampaignFormatError(ValueError):
+    """A campaign file breaks the input contract.
+
+    Attributes
+    ----------
+    path : str
+        The offending file.
+    line : int or None
+        1-based line number, or None when the problem is not tied to one line.
+    problem : str
+        What is wrong, in words a person can act on.
+    """
+
+    def __init__(self, path: str | Path, line: int | None, problem: str) -> None:
+        self.path = Path(path).as_posix() if isinstance(path, Path) else str(path)
+        self.line = line
+        self.problem = problem
+        super().__init__(self._message())
+
+    def _message(self) -> str:
+        if self.line is None:
+            return f"{self.path}: {self.problem}"
+        return f"{self.path}:{self.line}: {self.problem}"
+
+    def __str__(self) -> str:
+        return self._message()
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Exceptions are re-created from args when pickled (e.g. across processes).
+        return (type(self), (self.path, self.line, self.problem))
+
+
+# --------------------------------------------------------------------------------------
+# Run files: the record
+
+
+@dataclass(frozen=True)
+class RunFile:
+    """One run file of a configuration."""
+
+    configuration: str
+    run: str
+    """File name without extension."""
+    path: str
+    """Path relative to the campaign folder, with ``/`` separators."""
+
+
+@dataclass(frozen=True, eq=False)
+class ResponseChannel:
+    """One response channel of a run, in its own unit.
+
+    Attributes
+    ----------
+    name : str
+        The channel's name in every table: campaign.yaml's reference
+        (:meth:`workflow.io.campaign.ResponseSpec.channel_names`).
+    values : ndarray
+        The samples.
+    unit : str
+        Canonical unit of ``values``.
+    source : str
+        The file's own name for the channel (column name, system channel name; empty
+        for an unnamed ASCII column).
+    """
+
+    name: str
+    values: NDArray[np.float64]
+    unit: str
+    source: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class RunRecord:
+    """One run file, read and checked.
+
+    Attributes
+    ----------
+    path : str
+        The file's path relative to the campaign folder (``/`` separators).
+    sample_rate_hz : float
+        Samples per second.
+    pretrigger_samples : int
+        Samples recorded before the trigger.
+    time_s : ndarray or None
+        The file's time column in s, when it has one.
+    force_lbf : ndarray or None
+        Hammer force in lbf, when recorded.
+    response : ndarray
+        The response in the campaign's response unit, as in the file.
+    response_quantity : str
+        acceleration, velocity or displacement.
+    response_unit : str
+        Canonical unit of ``response``.
+    header : dict
+        The header's ``key: value`` lines (raw strings).
+    n_samples : int
+        Number of samples.
+    column_names : tuple of str
+        Names from the header's line of names (empty without one).
+    sample_rate_source : str
+        Where the sample rate came from: ``campaign.yaml``, ``header`` or ``time column``.
+    pretrigger_source : str
+        ``campaign.yaml``, ``header``, ``time column`` (a time column that starts before
+        0) or ``default`` (contract default 0, not stated).
+    record_start : str
+        Wall-clock time the recording started, ISO 8601, when the file states it
+        (:mod:`workflow.io.recording_time`); empty otherwise (ASCII files).
+    responses : tuple of ResponseChannel
+        Every response channel campaign.yaml asks for, in its order; ``response`` and
+        ``response_unit`` are the first's (:meth:`for_channel` picks another).
+    """
+
+    path: str
+    sample_rate_hz: float
+    pretrigger_samples: int
+    time_s: NDArray[np.float64] | None
+    force_lbf: NDArray[np.float64] | None
+    response: NDArray[np.float64]
+    response_quantity: str
+    response_unit: str
+    header: dict[str, str]
+    n_samples: int
+    column_names: tuple[str, ...] = ()
+    sample_rate_source: str = "campaign.yaml"
+    pretrigger_source: str = "default"
+    record_start: str = ""
+    responses: tuple[ResponseChannel, ...] = ()
+
+    def channel_names(self) -> tuple[str, ...]:
+        """The names of :attr:`responses`."""
+        return tuple(channel.name for channel in self.responses)
+
+    def for_channel(self, name: str) -> RunRecord:
+        """The record with ``response`` and ``response_unit`` of the response channel
+        ``name`` (KeyError when the record has none of that name)."""
+        for channel in self.responses:
+            if channel.name == name:
+                if channel.values is self.response:
+                    return self
+                return replace(self, response=channel.values, response_unit=channel.unit)
+        raise KeyError(f"{self.path}: no response channel {name!r} (has {', '.join(self.channel_names())})")
