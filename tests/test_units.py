@@ -71,3 +71,27 @@ def test_velocity_amplitude_rejects_force_and_bad_frequency():
         units.velocity_amplitude_in_s(1.0, "force", "lbf", 10.0)
     with pytest.raises(ValueError, match="positive"):
         units.velocity_amplitude_in_s(1.0, "acceleration", "g", 0.0)
+
+
+@pytest.mark.parametrize(
+    ("quantity", "unit", "si_per_unit", "si_label"),
+    [
+        # g is 9.80665 m/s^2 by definition (CGPM 1901); the inch is 0.0254 m exactly (1959).
+        ("acceleration", "g", 9.80665, "m/s²"),
+        ("acceleration", "in/s^2", 0.0254, "m/s²"),
+        ("acceleration", "m/s^2", 1.0, "m/s²"),
+        ("velocity", "in/s", 0.0254, "m/s"),
+        ("velocity", "m/s", 1.0, "m/s"),
+        ("displacement", "in", 0.0254, "m"),
+        ("displacement", "m", 1.0, "m"),
+    ],
+)
+def test_response_shown_in_si_and_in_its_own_unit(quantity, unit, si_per_unit, si_label):
+    """Under SI a recorded response is shown in m/s², m/s or m by the exact definitions;
+    under inch-second it keeps the campaign's own values and unit."""
+    recorded = [-2.5, 0.0, 1.0, 3.0e4]
+    shown, label = units.response_in_units(recorded, quantity, unit, units.SI)
+    np.testing.assert_allclose(shown, np.array(recorded) * si_per_unit, rtol=1e-14, atol=0.0)
+    assert label == si_label
+    kept, kept_label = units.response_in_units(recorded, quantity, unit, units.INCH_SECOND)
+    assert kept.dtype == np.float64 and kept.tolist() == recorded and kept_label == unit
