@@ -93,5 +93,7 @@ def test_response_shown_in_si_and_in_its_own_unit(quantity, unit, si_per_unit, s
     shown, label = units.response_in_units(recorded, quantity, unit, units.SI)
     np.testing.assert_allclose(shown, np.array(recorded) * si_per_unit, rtol=1e-14, atol=0.0)
     assert label == si_label
-    kept, kept_label = units.response_in_units(recorded, quantity, unit, units.INCH_SECOND)
-    assert kept.dtype == np.float64 and kept.tolist() == recorded and kept_label == unit
+    # whole numbers, as an integer export would hold them, still come back as float64
+    whole = [-2, 0, 1, 30000]
+    kept, kept_label = units.response_in_units(whole, quantity, unit, units.INCH_SECOND)
+    assert kept.dtype == np.float64 and kept.tolist() == whole and kept_label == unit
