@@ -189,7 +189,7 @@ def channel_index(channel_key):
 
 
 def mode_channel_diagnoses():
-    """rule diagnose_modes's outputs: every configuration's channels, the first only when
+    """The outputs of diagnose_modes (a rule): every configuration's channels, the first only when
     the campaign may have more than one mode (its first mode is diagnose_configuration's)."""
     first = 0 if SEVERAL_MODES else 1
     return [
@@ -200,7 +200,7 @@ def mode_channel_diagnoses():
 
 
 def joint_diagnoses():
-    """rule diagnose_joint's outputs: every configuration's, when the campaign has several
+    """The outputs of diagnose_joint (a rule): every configuration's, when the campaign has several
     response channels (one channel's diagnosis is the configuration's)."""
     if len(RESPONSE_CHANNELS) < 2:
         return []
