@@ -56,6 +56,7 @@ __all__ = [
     "load_campaign",
     "frequency_problem",
     "response_unit",
+    "force_unit",
 ]
 
 
@@ -666,5 +667,38 @@ def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
         raise ValueError(
             f"{what}: unit {quoted(file_unit)} in the file disagrees with campaign.yaml response unit "
             f"{yaml_unit!r} ({quantity})"
+        )
+    return canonical
+
+
+def force_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
+    """The unit of the force channel: the one its file records, which must be a force unit
+    and agree with campaign.yaml's ``force.unit`` when given; else campaign.yaml's; else the
+    original lab's lbf.
+
+    Parameters
+    ----------
+    file_unit : str or None
+        The unit the file records for the channel (None: none).
+    campaign : Campaign
+        The validated campaign.yaml.
+    what : str
+        How the message names the channel, e.g. ``force column``.
+
+    Raises
+    ------
+    ValueError
+        The file's unit is no force unit or disagrees with campaign.yaml; the message names
+        the channel (the caller adds the file).
+    """
+    yaml_unit = campaign.force.unit if campaign.force is not None else None
+    if file_unit is None:
+        return yaml_unit or "lbf"
+    canonical = units.normalize_unit(file_unit)
+    if canonical not in units.known_units("force"):
+        raise ValueError(f"{what} unit {quoted(file_unit)}: expected lbf or N")
+    if yaml_unit is not None and canonical != yaml_unit:
+        raise ValueError(
+            f"{what} unit {quoted(file_unit)} disagrees with campaign.yaml force unit {yaml_unit!r}"
         )
     return canonical

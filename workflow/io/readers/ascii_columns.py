@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
-from workflow.io.campaign import response_unit
+from workflow.io.campaign import force_unit, response_unit
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.readers.ascii_rows import (
     _KEY_VALUE,
@@ -493,22 +493,10 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
             raise CampaignFormatError(path, line, f"time column unit {quoted(time_unit)}: expected s or ms")
     force_factor_lbf = 1.0
     if "force" in columns.roles:
-        file_unit = columns.units.get("force")
-        yaml_unit = campaign.force.unit if campaign.force is not None else None
-        if file_unit:
-            canonical = units.normalize_unit(file_unit)
-            if canonical not in units.known_units("force"):
-                raise CampaignFormatError(
-                    path, line, f"force column unit {quoted(file_unit)}: expected lbf or N"
-                )
-            if yaml_unit is not None and canonical != yaml_unit:
-                raise CampaignFormatError(
-                    path,
-                    line,
-                    f"force column unit {quoted(file_unit)} disagrees with campaign.yaml force unit {yaml_unit!r}",
-                )
-        # The column's own unit first; else campaign.yaml's; else the original lab's lbf.
-        unit = units.normalize_unit(file_unit) if file_unit else (yaml_unit or "lbf")
+        try:
+            unit = force_unit(columns.units.get("force") or None, campaign, "force column")
+        except ValueError as error:
+            raise CampaignFormatError(path, line, str(error)) from None
         force_factor_lbf = units.factor_to_internal("force", unit)
     return time_factor_s, force_factor_lbf
 

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
-from workflow.io.campaign import response_unit
+from workflow.io.campaign import force_unit, response_unit
 from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
@@ -268,22 +268,11 @@ def _response_unit(channel: Channel, campaign: Campaign, shown: str) -> str:
 
 def _force_factor_lbf(channel: Channel, campaign: Campaign, shown: str) -> float:
     """Factor taking the force channel to lbf: the file's unit, else campaign.yaml's, else lbf."""
-    unit = unit_label(channel.unit)
-    yaml_unit = campaign.force.unit if campaign.force is not None else None
-    if unit is not None:
-        canonical = units.normalize_unit(unit)
-        if canonical not in units.known_units("force"):
-            raise CampaignFormatError(
-                shown, None, f"{channel.record}: force unit {unit!r} in the file: expected lbf or N"
-            )
-        if yaml_unit is not None and canonical != yaml_unit:
-            raise CampaignFormatError(
-                shown,
-                None,
-                f"{channel.record}: unit {unit!r} in the file disagrees with campaign.yaml force unit {yaml_unit!r}",
-            )
-        return units.factor_to_internal("force", canonical)
-    return units.factor_to_internal("force", yaml_unit or "lbf")
+    try:
+        unit = force_unit(unit_label(channel.unit), campaign, f"{channel.record}: force")
+    except ValueError as error:
+        raise CampaignFormatError(shown, None, str(error)) from None
+    return units.factor_to_internal("force", unit)
 
 
 def _time_channel(channels: list[Channel], n_samples: int, shown: str) -> Channel | None:
