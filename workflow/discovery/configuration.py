@@ -146,7 +146,7 @@ def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: Configurat
     return flags
 
 
-def add_combinations(
+def fit_combinations(
     data: ConfigurationData,
     scatter: Scatter,
     context: FitContext,
@@ -155,32 +155,12 @@ def add_combinations(
     cv: dict[str, dict],
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
-    result: dict,
     settings: FitSettings,
-    envelope_significant: bool,
-    extended_models: Mapping[str, str],
-) -> tuple[dict, dict[str, dict], list[VerdictOption]]:
-    """Fit the combinations of two mechanisms the single-cause decision points to, and name
-    one where it passes :func:`workflow.discovery.combined.combination_test`.
-
-    Tried after a named cause of the joint's physics, or after ``unknown``
-    (:func:`combinations_to_try`); the fits, held-out errors and residuals are added to
-    ``fits``, ``cv``, ``residuals`` and ``evidence``. A combination becomes the verdict when
-    it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
-    it has a stiffness term, predicts held-out data better than the single verdict's model,
-    and does not leave a significant misfit with less than
-    ``RESIDUAL_GAIN`` of the baseline's error; among several, the lower held-out error.
-
-    Returns
-    -------
-    result, combinations, options
-        The decision (``verdict``: its ``confidence`` key), per combination tried (its
-        key) the evidence, and the combinations as :class:`VerdictOption`.
-    """
-    result["verdict"] = result["cause"]
-    tried = [] if envelope_significant else combinations_to_try(result["cause"])
-    if not tried:
-        return result, {}, []
+    tried: list[str],
+) -> None:
+    """Fit and cross-validate the combined models ``tried`` from both single fits
+    (:func:`workflow.discovery.combined.combination_starts`); the fits, held-out errors,
+    residuals and evidence are added to ``fits``, ``cv``, ``residuals`` and ``evidence``."""
     for model in tried:
         started = time.perf_counter()
         extension = CAUSE_MODELS[COMBINATION_CAUSES[model][1]]
@@ -199,21 +179,37 @@ def add_combinations(
             time.perf_counter() - started,
             cv[model]["error"],
         )
-    verdict = result["cause"]
-    result = evaluate_decision(
-        data, evidence, envelope_significant=envelope_significant, extended_models=extended_models
-    )
-    result["verdict"] = verdict
+
+
+def judge_combinations(
+    data: ConfigurationData, result: dict, evidence: Mapping[str, ModelEvidence]
+) -> tuple[dict[str, dict], list[VerdictOption]]:
+    """The combinations fitted (those of ``evidence``), each judged by
+    :func:`workflow.discovery.combined.combination_test`; one replaces the single verdict.
+
+    A combination becomes the verdict (``result["verdict"]``, its ``confidence`` key) when
+    it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
+    it has a stiffness term, predicts held-out data better than the single verdict's model,
+    and does not leave a significant misfit with less than ``RESIDUAL_GAIN`` of the
+    baseline's error; among several, the lower held-out error.
+
+    Returns
+    -------
+    combinations, options
+        Per combination tried (its key) the evidence, and the combinations as
+        :class:`VerdictOption`.
+    """
+    verdict = result["verdict"]
     base, errors, bic = result["baseline"], result["errors"], result["bic"]
     combinations, options = {}, []
-    for model in tried:
+    for model in (m for m in COMBINATION_CAUSES if m in evidence):
         causes = COMBINATION_CAUSES[model]
         parts = {c: result["unit_squares"][result["extended_models"][c]] for c in causes}
         test = combination_test(
             result["unit_squares"][model], parts, result["unit_squares"][base], result["unit_weights"]
         )
-        bins = binned_discrepancy(data, residuals[model])
-        trend = run_order_trend(data, residuals[model], n_tests=RUN_ORDER_TESTS)
+        bins = binned_discrepancy(data, evidence[model].residuals)
+        trend = run_order_trend(data, evidence[model].residuals, n_tests=RUN_ORDER_TESTS)
         significant = any(b["significant"] for b in bins) or bool(trend and trend["significant"])
         ratio = errors[model]["error"] / errors[base]["error"]
         eligible = test["named"] and bic[model] < bic[base] and evidence[model].shows_signature
@@ -228,9 +224,6 @@ def add_combinations(
             "shows_signature": evidence[model].shows_signature,
             "residual_significant": bool(significant),
             "eligible": bool(eligible),
-            "in_sample_rms": float(np.sqrt(fits[model].cost)),
-            "params": fits[model].params,
-            "flags": bound_flags(model, fits[model].coords, data),
         }
         options.append(VerdictOption(key, model, bool(eligible), bool(significant)))
     # a combination replaces the single verdict only where it also predicts better than it
@@ -249,7 +242,52 @@ def add_combinations(
             f"{result['reason']}; two mechanisms, {combinations[best]['model']}, predict better still "
             f"({combinations[best]['rule']})"
         )
-    return result, combinations, options
+    return combinations, options
+
+
+def conclude(
+    data: ConfigurationData,
+    evidence: Mapping[str, ModelEvidence],
+    *,
+    envelope_significant: bool,
+    settings: FitSettings = FitSettings(),
+) -> tuple[dict, dict[str, dict], dict[str, float], list[dict]]:
+    """The verdict and its confidence on every model fitted (no fit is made here).
+
+    :func:`evaluate_decision` on ``evidence``; the slip-threshold refinement
+    (``iwan_cells_N`` in ``evidence``) becomes micro-slip's extended model where it lowers
+    both the held-out error and the BIC of ``iwan``; the combinations in ``evidence`` are
+    judged (:func:`judge_combinations`); the confidence (:func:`confidence_draws`); the
+    verdict is the most probable one of the confidence (:func:`most_probable_verdict`).
+
+    Returns
+    -------
+    result, combinations, confidence, resamples
+        The decision (``verdict``: its ``confidence`` key), the combinations' evidence,
+        the confidence and its per-draw decisions.
+    """
+    result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    errors, bic = result["errors"], result["bic"]
+    refined = next((m for m in evidence if m.startswith("iwan_cells_")), None)
+    if refined and errors[refined]["error"] < errors["iwan"]["error"] and bic[refined] < bic["iwan"]:
+        result["extended_models"]["microslip_power_law"] = refined
+    result["verdict"] = result["cause"]
+    combinations, combination_options = judge_combinations(data, result, evidence)
+    confidence, resamples = confidence_draws(
+        result,
+        verdict_options(result, combination_options),
+        envelope_significant=envelope_significant,
+        n_draws=settings.resamples,
+        seed=settings.seed,
+    )
+    verdict = most_probable_verdict(result["verdict"], confidence)
+    if verdict != result["verdict"]:
+        result["reason"] = (
+            f"{verdict}, the most probable verdict over reweightings of the runs "
+            f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
+        )
+    result["verdict"] = verdict
+    return result, combinations, confidence, resamples
 
 
 def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
@@ -305,46 +343,28 @@ def diagnose_configuration(
     evidence[stiffness_model].shows_signature = signature["shows_signature"]
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
     envelope_significant = bool(envelope and envelope["significant"])
-    result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
-    extended_models, refinement = {}, None
+    first = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    refined = None
     if (
-        result["cause"] == "microslip_power_law"
+        first["cause"] == "microslip_power_law"
         and not explains_data(data, residuals["iwan"])["explains_data"]
     ):
         started = time.perf_counter()
-        name = f"iwan_cells_{threshold_cells(data)}"
-        fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
-        residuals[name] = model_residuals(fits[name], data, scatter, context)
-        evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params))
-        # the same decision (the candidates are unchanged), now with the refinement's error and BIC
-        result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
-        errors, bic = result["errors"], result["bic"]
-        adopted = errors[name]["error"] < errors["iwan"]["error"] and bic[name] < bic["iwan"]
-        if adopted:
-            extended_models = {"microslip_power_law": name}
-            result["extended_models"].update(extended_models)
-        refinement = {
-            "model": name,
-            "adopted": bool(adopted),
-            "rule": "adopted as the extended model when it lowers both the held-out error and the BIC of iwan",
-            "heldout_error": errors[name]["error"],
-            "bic": bic[name],
-            "iwan_heldout_error": errors["iwan"]["error"],
-            "iwan_bic": bic["iwan"],
-            "cells": threshold_distribution(fits[name], data, scatter, context),
-            "standard_error": "Gauss-Newton, scaled by the fit cost and residuals over effective observations",
-        }
+        refined = f"iwan_cells_{threshold_cells(data)}"
+        fits[refined], cv[refined] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
+        residuals[refined] = model_residuals(fits[refined], data, scatter, context)
+        evidence[refined] = ModelEvidence(residuals[refined], cv[refined], len(MODELS[refined].params))
         log.info(
             "%s %s (slip thresholds from the data): fitted and cross-validated in %.1f s "
-            "(held-out error %.3g, iwan %.3g; %s)",
+            "(held-out error %.3g, iwan %.3g)",
             data.name,
-            name,
+            refined,
             time.perf_counter() - started,
-            errors[name]["error"],
-            errors["iwan"]["error"],
-            "adopted" if adopted else "not adopted",
+            cv[refined]["error"],
+            cv["iwan"]["error"],
         )
-    result, combinations, combination_options = add_combinations(
+    tried = [] if envelope_significant else combinations_to_try(first["cause"])
+    fit_combinations(
         data,
         scatter,
         context,
@@ -352,25 +372,33 @@ def diagnose_configuration(
         cv=cv,
         residuals=residuals,
         evidence=evidence,
-        result=result,
         settings=settings,
-        envelope_significant=envelope_significant,
-        extended_models=extended_models,
+        tried=tried,
     )
-    confidence, resamples = confidence_draws(
-        result,
-        verdict_options(result, combination_options),
-        envelope_significant=envelope_significant,
-        n_draws=settings.resamples,
-        seed=settings.seed,
+    result, combinations, confidence, resamples = conclude(
+        data, evidence, envelope_significant=envelope_significant, settings=settings
     )
-    verdict = most_probable_verdict(result["verdict"], confidence)
-    if verdict != result["verdict"]:
-        result["reason"] = (
-            f"{verdict}, the most probable verdict over reweightings of the runs "
-            f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
+    refinement = None
+    if refined:
+        errors, bic = result["errors"], result["bic"]
+        refinement = {
+            "model": refined,
+            "adopted": result["extended_models"]["microslip_power_law"] == refined,
+            "rule": "adopted as the extended model when it lowers both the held-out error and the BIC of iwan",
+            "heldout_error": errors[refined]["error"],
+            "bic": bic[refined],
+            "iwan_heldout_error": errors["iwan"]["error"],
+            "iwan_bic": bic["iwan"],
+            "cells": threshold_distribution(fits[refined], data, scatter, context),
+            "standard_error": "Gauss-Newton, scaled by the fit cost and residuals over effective observations",
+        }
+    for entry in combinations.values():
+        m = entry["model"]
+        entry.update(
+            in_sample_rms=float(np.sqrt(fits[m].cost)),
+            params=fits[m].params,
+            flags=bound_flags(m, fits[m].coords, data),
         )
-    result["verdict"] = verdict
     causes = combinations[result["verdict"]]["causes"] if result["verdict"] in combinations else None
     causes = causes or verdict_causes(result["verdict"])
     result["cause"] = causes[0]
