@@ -135,15 +135,13 @@ def test_the_joint_analysis_names_the_case(cause, three_sensor_cases):
 
 
 PER_SENSOR_MISCALIBRATION = {
-    cause: pytest.mark.xfail(
-        strict=True, reason=f"issue 31 item 3, per sensor: {why}; the joint analysis names the case"
+    "microslip_power_law+quadratic_damping": pytest.mark.xfail(
+        strict=True,
+        reason="issue 31 item 3, per sensor: the free-end sensor (x5) alone names stiffness nonlinearity "
+        "1.00 sure (held-out error 0.30 of the baseline's) while micro-slip + quadratic damping predicts at "
+        "0.05 but is not named (the quadratic term's share of the gain 0.16, under combined.MIN_GAIN_SHARE); "
+        "the other two sensors and the joint analysis name the combination",
     )
-    for cause, why in {
-        "run_drift": "the node sensor (x0.05) alone is 0.88 sure of none, the other two 1.00 of run drift",
-        "quadratic_damping": "the node sensor (x0.05) alone is 1.00 sure of none, the other two of quadratic damping",
-        "microslip_power_law+quadratic_damping": "the free-end sensor (x5) alone is at least 0.7 sure of "
-        "stiffness nonlinearity, the other two of the combination",
-    }.items()
 }
 
 
