@@ -30,14 +30,14 @@ STAGES = {
     "read_run": "record = read_run(root, 'long/run01.txt', campaign)",
     "identify_mode": (
         "found = identify_configuration_mode(root, RUNS, configuration='long', campaign=campaign,\n"
-        "    mode_search=AnalysisSettings().mode_search(), quality_settings=quality_settings)\n"
+        "    mode_search=AnalysisSettings(), quality_settings=quality_settings)\n"
         "write_mode(sys.argv[2], found)\n"
         "print(found.mode)"
     ),
     "analyse_runs": (
         "result = analyse_run_file(root, 'long/run01.txt', configuration='long', campaign=campaign,\n"
         "    mode=read_mode(sys.argv[2]), quality_settings=quality_settings,\n"
-        "    decay_settings=AnalysisSettings().decay())\n"
+        "    decay_settings=AnalysisSettings())\n"
         "print(result.status['status'], result.status['reason'])"
     ),
 }

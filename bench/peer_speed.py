@@ -141,12 +141,8 @@ def project_record(folder: Path) -> tuple[ConfigurationMode, RunAnalysis]:
         "campaign": campaign,
         "quality_settings": QualitySettings(),
     }
-    mode = identify_configuration_mode(
-        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), **options
-    )
-    result = analyse_run_file(
-        folder, run_file.path, mode=mode, decay_settings=AnalysisSettings().decay(), **options
-    )
+    mode = identify_configuration_mode(folder, [run_file.path], mode_search=AnalysisSettings(), **options)
+    result = analyse_run_file(folder, run_file.path, mode=mode, decay_settings=AnalysisSettings(), **options)
     if result.status["status"] != "used":
         raise RuntimeError(f"the project excluded the record: {result.status['reason']}")
     return mode, result

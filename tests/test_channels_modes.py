@@ -459,7 +459,7 @@ def identify(folder):
         ["c/run.mat"],
         configuration="c",
         campaign=load_campaign(folder),
-        mode_search=AnalysisSettings().mode_search(),
+        mode_search=AnalysisSettings(),
         quality_settings=QualitySettings(),
     )
 

@@ -286,7 +286,7 @@ def mode_of(root: Path, paths: list[str], configuration: str = "cfg"):
         paths,
         configuration=configuration,
         campaign=load_campaign(root),
-        mode_search=settings.mode_search(),
+        mode_search=settings,
         quality_settings=QualitySettings(),
     )
 
@@ -327,7 +327,7 @@ def analysis_status(root: Path, path: str, configuration: str, found) -> dict[st
         campaign=load_campaign(root),
         mode=found,
         quality_settings=QualitySettings(),
-        decay_settings=AnalysisSettings().decay(),
+        decay_settings=AnalysisSettings(),
     ).status
 
 

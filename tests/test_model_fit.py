@@ -248,7 +248,7 @@ def test_a_configuration_with_too_few_segments_gets_no_models_and_the_reason():
         pd.DataFrame(),  # not read: nothing is fitted
         {"few": None, "many": None},
         response_quantity="acceleration",
-        analysis=AnalysisSettings().decay(),
+        analysis=AnalysisSettings(),
         settings=ModelSettings(),
         averaged_params=None,
     )

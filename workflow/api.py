@@ -144,7 +144,7 @@ def ring_down_table(
         run="",
         mode=mode,
         window=window,
-        decay_settings=analysis.decay(),
+        decay_settings=analysis,
         quality_settings=quality,
     )
     table = pd.DataFrame(columns).drop(columns=["configuration", "run"])

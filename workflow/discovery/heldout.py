@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     calibration_segments,
     fit_model,
     model_residuals,
@@ -132,7 +132,7 @@ def cross_validate(
     context: FitContext,
     full_fit: FitResult,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
 ) -> dict:
     """Held-out error of a model: refit without each fold, predict the fold.
 

@@ -12,11 +12,11 @@ from collections.abc import Mapping
 import numpy as np
 
 from workflow.discovery.heldout import cross_validate, effective_observations
+from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MAX_THRESHOLD_CELLS, MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     at_bounds,
     fit_jacobian,
     fit_model,
@@ -87,7 +87,7 @@ def refine_microslip(
     context: FitContext,
     iwan_fit: FitResult,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
 ) -> tuple[FitResult, dict]:
     """Fit and cross-validate the Iwan joint whose slip-threshold density the data set.
 

@@ -8,7 +8,7 @@ silently ignored.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
@@ -23,8 +23,7 @@ if TYPE_CHECKING:
 __all__ = [
     "Seed",
     "AnalysisSettings",
-    "DecaySettings",
-    "ModeSearchSettings",
+    "DECAY_KEYS",
     "QualitySettings",
     "DampingFitSettings",
     "ModelSettings",
@@ -102,39 +101,21 @@ class AnalysisSettings:
     envelope settling time, 1 / (pi * bandwidth)) to the excitation peak or to
     the end of the record are dropped as filter end effects."""
 
-    def decay(self) -> DecaySettings:
-        """The keys one run's decay analysis reads."""
-        return DecaySettings(**{item.name: getattr(self, item.name) for item in fields(DecaySettings)})
-
-    def mode_search(self) -> ModeSearchSettings:
-        """The keys a configuration's mode search reads."""
-        return ModeSearchSettings(
-            **{item.name: getattr(self, item.name) for item in fields(ModeSearchSettings)}
-        )
+    def decay_options(self) -> dict[str, float]:
+        """The keys one run's decay analysis reads, as keyword arguments of
+        :func:`workflow.measured.decay.analyse_decay`."""
+        return {name: getattr(self, name) for name in DECAY_KEYS}
 
 
-# A rule passes the keys its step reads (as a plain dict: Snakemake re-runs a job when such
-# a param changes, and cannot see into a dataclass); its script rebuilds these, which have
-# no defaults, so a key left out is an error, never a silent default.
-@dataclass(frozen=True)
-class DecaySettings:
-    """The ``analysis`` keys of one run's decay analysis (see :class:`AnalysisSettings`);
-    keyword arguments of :func:`workflow.measured.decay.analyse_decay` as ``asdict``."""
-
-    filter_order: int
-    segment_cycles: float
-    segment_overlap: float
-    noise_floor_factor: float
-    edge_time_constants: float
-
-
-@dataclass(frozen=True)
-class ModeSearchSettings:
-    """The ``analysis`` keys of a configuration's mode search (see :class:`AnalysisSettings`)."""
-
-    band_half_width: float
-    mode_search_hz: tuple[float, float] | None
-    mode_search_fraction: float
+DECAY_KEYS = (
+    "filter_order",
+    "segment_cycles",
+    "segment_overlap",
+    "noise_floor_factor",
+    "edge_time_constants",
+)
+"""The :class:`AnalysisSettings` keys of one run's decay analysis (the others choose the mode
+and its band)."""
 
 
 @dataclass(frozen=True)
@@ -257,7 +238,10 @@ class ModelSettings:
 
 @dataclass(frozen=True)
 class DiscoverySettings:
-    """Fitting the averaged candidate models and deciding the cause (docs/discovery.md)."""
+    """Fitting the averaged candidate models and deciding the cause (docs/discovery.md):
+    the optimiser settings of :func:`workflow.models.averaged_fit.fit_model` (global
+    samples, local starts, seed), the folds of the held-out error and the resamples
+    behind each verdict's confidence."""
 
     __pydantic_config__ = FORBID_UNKNOWN_KEYS
 

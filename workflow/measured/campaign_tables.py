@@ -62,11 +62,9 @@ def analyse_campaign(
     for name, spec in campaign.configurations.items():
         paths = [run_file.path for run_file in run_files if run_file.configuration == name]
         options = {"configuration": name, "campaign": campaign, "quality_settings": quality_settings}
-        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis.mode_search(), **options)
+        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis, **options)
         for path in paths:
-            result = analyse_run_file(
-                campaign_dir, path, mode=mode, decay_settings=analysis.decay(), **options
-            )
+            result = analyse_run_file(campaign_dir, path, mode=mode, decay_settings=analysis, **options)
             if result.status["status"] != "used":
                 continue
             segments = pd.DataFrame(result.segments)
