@@ -48,7 +48,7 @@ from pathlib import Path
 from workflow.io.campaign import load_campaign
 from workflow.io.run_files import read_run
 from workflow.io.interim import read_mode, write_mode
-from workflow.io.settings import AnalysisSettings, QualitySettings
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_file
 root = Path(sys.argv[1])

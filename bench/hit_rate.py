@@ -199,11 +199,11 @@ def baseline_misfit_on_truth(
     where both stay within ``EXPLAINS_LIMIT`` the baseline explains the effect-laden
     truth itself, and ``none`` is the contract's reading of any campaign of that case.
     """
-    from workflow.io.settings import DiscoverySettings
     from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
     from workflow.lab.settings import LabSettings
     from workflow.models.averaged_fit import FitContext, fit_model, model_residuals
     from workflow.models.configuration_data import ConfigurationData, Scatter
+    from workflow.models.settings import DiscoverySettings
 
     lab = LabSettings()
     v = np.geomspace(*velocity_range_in_s, 60)

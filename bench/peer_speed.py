@@ -60,9 +60,9 @@ from scipy import signal
 from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RunAnalysis, analyse_run_file
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 NOMINAL_HZ = 151.0
 """The mode's approximate frequency, as the converted campaign gives it (mode_hz), Hz."""

@@ -7,10 +7,11 @@ import time
 from workflow.discovery.diagnosis_files import write_configuration_diagnosis
 from workflow.discovery.modes import diagnosed_outcome
 from workflow.io.interim import read_campaign
-from workflow.io.settings import AnalysisSettings, DiscoverySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
 from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.paper import configuration_models_document
+from workflow.models.settings import DiscoverySettings, ModelSettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose_configuration")

@@ -8,8 +8,9 @@ from pathlib import Path
 from workflow.discovery.diagnosis_files import write_configuration_diagnosis
 from workflow.discovery.modes import diagnosed_outcome, joint_outcome
 from workflow.io.interim import read_campaign
-from workflow.io.settings import AnalysisSettings, DiscoverySettings
 from workflow.io.tables import read_table
+from workflow.measured.settings import AnalysisSettings
+from workflow.models.settings import DiscoverySettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose_modes")

@@ -10,12 +10,12 @@ from workflow.discovery.wording import runs_words
 from workflow.io.escape import plot_text
 from workflow.io.interim import read_campaign
 from workflow.io.run_files import read_run
-from workflow.io.settings import AnalysisSettings
 from workflow.io.tables import read_table
 from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
 from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
 from workflow.measured.runs import analysis_window
+from workflow.measured.settings import AnalysisSettings
 from workflow.outputs import figures
 from workflow.runtime.logs import ScriptStop, setup_script_logging
 

@@ -3,8 +3,8 @@
 from pathlib import Path
 
 from workflow.io.interim import read_campaign, write_mode
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "identify_mode")

@@ -8,9 +8,9 @@ from test_decay import band, ring_down
 
 from workflow.io.interim import ModeInfo
 from workflow.io.records import RunRecord
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.decay import analyse_decay, segment_bounds
 from workflow.measured.runs import analyse_run_with_quality
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 F_HZ, ZETA, FS_HZ, DURATION_S = 125.0, 0.002, 2560.0, 3.2
 DAMPED_HZ = F_HZ * np.sqrt(1 - ZETA**2)

@@ -451,8 +451,8 @@ def assert_dwell_line_named_then_mode_found(folder, yaml_text):
 
 
 def identify(folder):
-    from workflow.io.settings import AnalysisSettings, QualitySettings
     from workflow.measured.mode_identification import identify_configuration_mode
+    from workflow.measured.settings import AnalysisSettings, QualitySettings
 
     return identify_configuration_mode(
         folder,

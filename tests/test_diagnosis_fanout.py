@@ -22,9 +22,9 @@ from workflow.discovery.diagnosis_files import (
     read_configuration_diagnosis,
     write_configuration_diagnosis,
 )
-from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MODELS
 from workflow.models.averaged_fit import FitContext, FitResult, model_residuals, to_coords
+from workflow.models.settings import DiscoverySettings
 
 
 def _campaign() -> pd.DataFrame:

@@ -23,7 +23,6 @@ from workflow.discovery.misfit import (
 )
 from workflow.discovery.wording import discrepancy_sentence, format_percent
 from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
-from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MODELS, CurveGrid
 from workflow.models.averaged_fit import (
     FitContext,
@@ -46,6 +45,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 MODEL_ACCURACY_LN_ZETA = 0.02
 """The averaged models' accuracy in ln zeta: their largest deviation from direct integration

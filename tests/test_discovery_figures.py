@@ -13,10 +13,10 @@ import pytest
 from tests.support.discovery import diagnose_with_details
 from tests.test_discovery import synthetic_segments
 from workflow.discovery.campaign import RESIDUAL_COLUMNS, residual_table
-from workflow.io.settings import DiscoverySettings
 from workflow.io.units import SI
 from workflow.models.averaged import CurveGrid, model_curves
 from workflow.models.averaged_fit import apply_run_offsets
+from workflow.models.settings import DiscoverySettings
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save
 from workflow.outputs.readability import readability_problems

@@ -8,10 +8,10 @@ import pytest
 from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.campaigns import generate_campaign
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_file
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 
 @pytest.fixture(scope="module")

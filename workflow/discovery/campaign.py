@@ -17,7 +17,7 @@ from workflow.discovery.configuration import (
 )
 from workflow.discovery.decision import CAUSE_MODELS, cause_fractions
 from workflow.discovery.heldout import HELD_OUT_METRIC, HELD_OUT_SCALE, amplitude_weights, weighted_rms
-from workflow.io.settings import AnalysisSettings, DiscoverySettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS
 from workflow.models.averaged_fit import (
     FitContext,
@@ -26,6 +26,7 @@ from workflow.models.averaged_fit import (
     model_residuals,
     to_physical,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "across_configurations",

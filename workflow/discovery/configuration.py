@@ -39,7 +39,7 @@ from workflow.discovery.misfit import (
     stiffness_signature,
 )
 from workflow.discovery.wording import discrepancy_sentence
-from workflow.io.settings import AnalysisSettings, DiscoverySettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
@@ -56,6 +56,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "NESTED_DAHL",

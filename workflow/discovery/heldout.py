@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
@@ -20,6 +19,7 @@ from workflow.models.averaged_fit import (
     model_residuals,
 )
 from workflow.models.configuration_data import ConfigurationData, Scatter
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "HELD_OUT_METRIC",

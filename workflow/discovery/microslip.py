@@ -12,7 +12,6 @@ from collections.abc import Mapping
 import numpy as np
 
 from workflow.discovery.heldout import cross_validate, effective_observations
-from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MAX_THRESHOLD_CELLS, MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
@@ -24,6 +23,7 @@ from workflow.models.averaged_fit import (
 )
 from workflow.models.configuration_data import ConfigurationData, Scatter
 from workflow.models.joint_averages import threshold_cell_edges
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "threshold_cells",

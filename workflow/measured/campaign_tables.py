@@ -16,9 +16,9 @@ import numpy as np
 
 from workflow.io.interim import ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
-from workflow.io.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_file, empty_segments
+from workflow.measured.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -16,10 +16,10 @@ from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
 from workflow.io.record_rules import rates_agree
 from workflow.io.records import RunRecord
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured import mode as modal_id
 from workflow.measured import quality
 from workflow.measured.runs import analysis_window, read_and_check, window_problems
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "mode_search_range",

@@ -23,8 +23,8 @@ from workflow.io.campaign import SINGLE_CHANNEL_NAME
 from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import QUOTED_CHARACTERS, quoted, shortened
 from workflow.io.records import RunRecord
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured import decay, quality
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "analysis_window",

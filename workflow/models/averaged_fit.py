@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MODELS, AveragedModel, CurveGrid
 from workflow.models.configuration_data import ConfigurationData, Scatter
 from workflow.models.sampling import scrambled_sobol_points
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "LOCAL_NFEV",

@@ -54,10 +54,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from workflow.io.settings import AnalysisSettings, ModelSettings
 from workflow.measured import decay, filters
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.ringdown import simulate_ringdown
 from workflow.models.sampling import scrambled_sobol_points
+from workflow.models.settings import ModelSettings
 
 __all__ = [
     "RingdownFitContext",

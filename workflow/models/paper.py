@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from workflow.io.settings import AnalysisSettings, DiscoverySettings, ModelSettings
+from workflow.measured.settings import AnalysisSettings
+from workflow.models.settings import DiscoverySettings, ModelSettings
 
 if TYPE_CHECKING:  # pandas is imported where tables are built: figures 7-8 draw without it
     import pandas as pd
