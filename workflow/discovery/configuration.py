@@ -39,12 +39,11 @@ from workflow.discovery.misfit import (
     stiffness_signature,
 )
 from workflow.discovery.wording import discrepancy_sentence
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     at_bounds,
     fit_model,
     model_residuals,
@@ -57,6 +56,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "NESTED_DAHL",
@@ -156,7 +156,7 @@ def add_combinations(
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
     result: dict,
-    settings: FitSettings,
+    settings: DiscoverySettings,
     envelope_significant: bool,
     extended_models: Mapping[str, str],
 ) -> tuple[dict, dict[str, dict], list[VerdictOption]]:
@@ -275,7 +275,7 @@ def diagnose_configuration(
     data: ConfigurationData,
     context: FitContext,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
     segment_cycles: float = AnalysisSettings.segment_cycles,
 ) -> ConfigurationDiagnosis:
     """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
@@ -485,7 +485,7 @@ def diagnose_configuration_segments(
     context: FitContext,
     *,
     response_quantity: str = "acceleration",
-    settings: FitSettings | None = None,
+    settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
     record_start: Mapping[str, str] | None = None,
 ) -> ConfigurationDiagnosis | str:
@@ -501,7 +501,7 @@ def diagnose_configuration_segments(
         The campaign's (:func:`~workflow.discovery.campaign.campaign_fit_context`).
     response_quantity : str
         The configuration's recorded quantity (campaign.yaml ``response.quantity``).
-    settings : FitSettings, optional
+    settings : DiscoverySettings, optional
     segment_cycles : float
         Log-decrement segment length, cycles.
     record_start : mapping, optional
@@ -511,5 +511,5 @@ def diagnose_configuration_segments(
     if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
         return f"only {data.n} usable segments: too few to fit and validate models"
     return diagnose_configuration(
-        data, context, settings=settings or FitSettings(), segment_cycles=segment_cycles
+        data, context, settings=settings or DiscoverySettings(), segment_cycles=segment_cycles
     )

@@ -15,7 +15,7 @@ import numpy as np
 from scipy import special
 
 from workflow.discovery.heldout import amplitude_bin, amplitude_weights
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import model_curves
 from workflow.models.averaged_fit import FitResult
 from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, robust_trend
