@@ -159,7 +159,7 @@ def add_threshold_cells(
     cv: dict[str, dict],
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
-    settings: FitSettings,
+    settings: DiscoverySettings,
 ) -> str:
     """Fit and cross-validate the Iwan joint with the slip thresholds from the data
     (:func:`refine_microslip`, from the power-law fit) and add it to ``fits``, ``cv``,
@@ -300,7 +300,7 @@ def curve_led_start(
     scatter: Scatter,
     context: FitContext,
     fits: Mapping[str, FitResult],
-    settings: FitSettings,
+    settings: DiscoverySettings,
 ) -> list[dict[str, float]]:
     """A start of a combined model from each mechanism's own curve.
 
