@@ -43,12 +43,11 @@ from workflow.discovery.misfit import (
     stiffness_signature,
 )
 from workflow.discovery.wording import discrepancy_sentence
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     at_bounds,
     fit_model,
     model_residuals,
@@ -61,6 +60,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "NESTED_DAHL",
@@ -159,7 +159,7 @@ def add_threshold_cells(
     cv: dict[str, dict],
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
-    settings: FitSettings,
+    settings: DiscoverySettings,
 ) -> str:
     """Fit and cross-validate the Iwan joint with the slip thresholds from the data
     (:func:`refine_microslip`, from the power-law fit) and add it to ``fits``, ``cv``,
@@ -181,7 +181,7 @@ def add_combinations(
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
     result: dict,
-    settings: FitSettings,
+    settings: DiscoverySettings,
     envelope_significant: bool,
     extended_models: Mapping[str, str],
 ) -> tuple[dict, dict[str, dict], list[VerdictOption]]:
@@ -300,7 +300,7 @@ def curve_led_start(
     scatter: Scatter,
     context: FitContext,
     fits: Mapping[str, FitResult],
-    settings: FitSettings,
+    settings: DiscoverySettings,
 ) -> list[dict[str, float]]:
     """A start of a combined model from each mechanism's own curve.
 
@@ -352,7 +352,7 @@ def diagnose_configuration(
     data: ConfigurationData,
     context: FitContext,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
     segment_cycles: float = AnalysisSettings.segment_cycles,
 ) -> ConfigurationDiagnosis:
     """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
@@ -568,7 +568,7 @@ def diagnose_configuration_segments(
     context: FitContext,
     *,
     response_quantity: str = "acceleration",
-    settings: FitSettings | None = None,
+    settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
     record_start: Mapping[str, str] | None = None,
 ) -> ConfigurationDiagnosis | str:
@@ -584,7 +584,7 @@ def diagnose_configuration_segments(
         The campaign's (:func:`~workflow.discovery.campaign.campaign_fit_context`).
     response_quantity : str
         The configuration's recorded quantity (campaign.yaml ``response.quantity``).
-    settings : FitSettings, optional
+    settings : DiscoverySettings, optional
     segment_cycles : float
         Log-decrement segment length, cycles.
     record_start : mapping, optional
@@ -594,5 +594,5 @@ def diagnose_configuration_segments(
     if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
         return f"only {data.n} usable segments: too few to fit and validate models"
     return diagnose_configuration(
-        data, context, settings=settings or FitSettings(), segment_cycles=segment_cycles
+        data, context, settings=settings or DiscoverySettings(), segment_cycles=segment_cycles
     )
