@@ -14,10 +14,11 @@ from workflow.lab.configurations import mode_table, setup_configuration, truth_c
 from workflow.lab.hidden_effects import campaign_segments, case_causes, generate_case
 from workflow.lab.settings import LabSettings
 from workflow.models.averaged import COMBINED_MODELS, model_curves
-from workflow.models.averaged_fit import FitContext, FitResult, FitSettings, fit_model, model_residuals
+from workflow.models.averaged_fit import FitContext, FitResult, fit_model, model_residuals
 from workflow.models.configuration_data import ConfigurationData, Scatter
+from workflow.models.settings import DiscoverySettings
 
-FAST = FitSettings(global_samples=128, local_starts=2, resamples=40)
+FAST = DiscoverySettings(global_samples=128, local_starts=2, resamples=40)
 EXPLAINS_SCATTERS = 2.0
 """``explains_data``'s limit: binned residuals within 2 measured scatters."""
 TYPICAL_SCATTER = (0.015, 2e-5)
