@@ -169,8 +169,9 @@ def signature_sentences(entry: Mapping) -> list[str]:
     return [
         f"{cause_name('stiffness_nonlinearity')} is not eligible: over the measured amplitudes its fit "
         f"changes the frequency by {fmt(100 * whole, 2)} %, less than its friction alone "
-        f"({fmt(100 * friction, 2)} %); its stiffness term cancels the friction's frequency change "
-        "instead of showing one the friction cannot explain (the contract's signature)."
+        f"({fmt(100 * friction, 2)} %), and never raises it with amplitude; its stiffness term cancels "
+        "the friction's frequency change instead of showing one the friction cannot explain (the "
+        "contract's signature)."
     ]
 
 
