@@ -141,8 +141,6 @@ PER_SENSOR_MISCALIBRATION = {
     for cause, why in {
         "run_drift": "the node sensor (x0.05) alone is 0.88 sure of none, the other two 1.00 of run drift",
         "quadratic_damping": "the node sensor (x0.05) alone is 1.00 sure of none, the other two of quadratic damping",
-        "microslip_power_law+quadratic_damping": "the free-end sensor (x5) alone is at least 0.7 sure of "
-        "stiffness nonlinearity, the other two of the combination",
     }.items()
 }
 
