@@ -13,8 +13,6 @@ from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import unidentified_sentence
 from workflow.outputs.report_html import fmt, ratio
 from workflow.outputs.report_wording import (
-    _n_runs,
-    _unidentified,
     campaign_headline,
     candidate_margin,
     candidate_name,
@@ -24,7 +22,9 @@ from workflow.outputs.report_wording import (
     margin_words,
     measured_trends,
     model_name,
+    n_runs_of,
     trend_sentence,
+    unidentified_parameters_of,
 )
 
 __all__ = [
@@ -67,7 +67,7 @@ def verdict_rst(
             if entry.get("cause") != "unknown":
                 text += (
                     f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
-                    f"{'held-out runs' if _n_runs(entry) > 1 else 'held-out amplitude ranges of the one run'} "
+                    f"{'held-out runs' if n_runs_of(entry) > 1 else 'held-out amplitude ranges of the one run'} "
                     f"with {ratio(gain.get('ratio'))} of {base}'s error "
                     f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))})."
                 )
@@ -81,7 +81,7 @@ def verdict_rst(
                     )
         if name in trends:
             text += " " + trend_sentence(trends[name], units)
-        unidentified = unidentified_sentence(_unidentified(entry, units))
+        unidentified = unidentified_sentence(unidentified_parameters_of(entry, units))
         if unidentified:
             text += " " + unidentified
         lines += [
