@@ -282,7 +282,7 @@ def analyse_batch(responses: np.ndarray, ctx: RingdownFitContext) -> list[dict[s
             continue
         z = filters.analytic_bandpass(x, ctx.fs_hz, ctx.band_hz, ctx.analysis.filter_order)
         env = np.abs(z)
-        phase = np.unwrap(np.angle(z))
+        phase = filters.unwrapped_phase_rad(z)
         start = int(np.argmax(env))
         n = x.size
         mode_hz = float(np.mean(np.diff(phase[start:])) * ctx.fs_hz / (2 * np.pi))
