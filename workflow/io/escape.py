@@ -24,6 +24,19 @@ import string
 import unicodedata
 from typing import Any
 
+__all__ = [
+    "visible_controls",
+    "shortened",
+    "display_text",
+    "html_text",
+    "rst_text",
+    "rst_strong",
+    "plot_text",
+    "terminal_text",
+    "terminal_lines",
+    "spreadsheet_text",
+]
+
 DISPLAY_LIMIT = 2000
 """Longest text shown in a page, a report or a terminal line, characters (a name is
 bounded when read; a sentence holding one stays far below this)."""

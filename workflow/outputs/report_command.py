@@ -13,6 +13,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+__all__ = [
+    "config_arguments",
+    "report_command",
+]
+
 REPORT_COMMAND_FILE = "results/report_command.txt"
 """Where the end of `all` writes :func:`report_command` (and prints it)."""
 
