@@ -42,11 +42,21 @@ def verdict_rst(
     segments: pd.DataFrame | None = None,
     units: UnitSystem = INCH_SECOND,
 ) -> str:
-    """The verdict in a few short paragraphs of reStructuredText (the report's first page).
+    r"""The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
     Narrow enough for the column Snakemake's report gives its workflow description:
     no tables, one bullet per configuration. The full page with the evidence is
     :func:`workflow.outputs.verdict_page.verdict_html`.
+
+    Examples
+    --------
+    reStructuredText's markup in the campaign's name is escaped:
+
+    >>> print("\n".join(verdict_rst({"campaign": "washers_*2*", "cause": "none", "configurations": {}}).splitlines()[:4]))
+    Verdict\: none \(paper\'s model suffices\)
+    ==========================================
+    <BLANKLINE>
+    Campaign **washers\_\*2\***.
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
@@ -131,6 +141,19 @@ def landing_rst(verdict: str, description: str) -> str:
     :func:`~workflow.io.escape.rst_text`, in which no Jinja tag can form, so it goes
     through Snakemake's Jinja rendering of the page as it is; ``description``
     (report/workflow.rst) keeps its Jinja expressions.
+
+    Examples
+    --------
+    >>> print(landing_rst("Verdict\\n=======\\n\\nNone.", "The workflow of {{ snakemake.config['campaign'] }}."))
+    Verdict
+    =======
+    <BLANKLINE>
+    None.
+    <BLANKLINE>
+    About this study
+    ================
+    <BLANKLINE>
+    The workflow of {{ snakemake.config['campaign'] }}.
     """
     heading = "About this study"
     return verdict + "\n\n" + heading + "\n" + "=" * len(heading) + "\n\n" + description

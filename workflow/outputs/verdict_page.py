@@ -339,6 +339,14 @@ def verdict_html(
     -------
     str
         A complete HTML page.
+
+    Examples
+    --------
+    The campaign's text reaches the page only escaped:
+
+    >>> page = verdict_html({"campaign": "<b>washers</b>", "cause": "none", "configurations": {}})
+    >>> page.startswith("<!DOCTYPE html>"), "<title>Verdict: &lt;b&gt;washers&lt;/b&gt;</title>" in page
+    (True, True)
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
