@@ -95,7 +95,13 @@ def display_text(text: Any, limit: int | None = DISPLAY_LIMIT) -> str:
 
 
 def html_text(text: Any, limit: int | None = DISPLAY_LIMIT) -> str:
-    """``text`` as HTML element content or a double-quoted attribute value."""
+    """``text`` as HTML element content or a double-quoted attribute value.
+
+    Examples
+    --------
+    >>> html_text('<script>alert("x")</script>')
+    '&lt;script&gt;alert(&quot;x&quot;)&lt;/script&gt;'
+    """
     return html.escape(display_text(text, limit), quote=True)
 
 

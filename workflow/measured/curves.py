@@ -282,6 +282,18 @@ def fit_damping_polynomial(
       degree could be scored), degree 0 (a constant) is used.
 
     The final polynomial is pooled least squares over all segments.
+
+    Examples
+    --------
+    Three runs of a damping ratio linear in log10(amplitude) with 1e-5 of noise: degree 1,
+    chosen by leave-one-run-out cross-validation, and no value outside the measured range:
+
+    >>> rng = np.random.default_rng(0)
+    >>> velocity_in_s = np.tile(np.geomspace(0.1, 10.0, 30), 3)
+    >>> zeta = 0.002 + 0.001 * np.log10(velocity_in_s) + 1e-5 * rng.standard_normal(velocity_in_s.size)
+    >>> fit = fit_damping_polynomial(velocity_in_s, zeta, np.repeat(["run01", "run02", "run03"], 30))
+    >>> fit.degree, np.round(evaluate(fit, np.array([0.1, 1.0, 10.0, 20.0])), 5).tolist()
+    (1, [0.001, 0.002, 0.003, nan])
     """
     amplitude, damping, labels = validated_damping_data(velocity_amplitude_in_s, zeta, run)
     if max_degree < 0:
