@@ -124,7 +124,17 @@ def validate_config(
     raw: dict[str, Any] | None, source: str = "config.yaml", command_line: Mapping[str, Any] | None = None
 ) -> WorkflowConfig:
     """Validate the merged Snakemake config; raise ConfigError naming every bad key and
-    where it came from (``command_line``: the keys given with ``--config``)."""
+    where it came from (``command_line``: the keys given with ``--config``).
+
+    Examples
+    --------
+    >>> validate_config({"units": "si"}).analysis.filter_order
+    10
+    >>> validate_config({"analysis": {"filter_order": 9}})
+    Traceback (most recent call last):
+        ...
+    workflow.config.ConfigError: config.yaml: analysis.filter_order: Value error, must be even (a band-pass has an even order), got 9
+    """
     from pydantic import ValidationError
 
     try:

@@ -70,6 +70,10 @@ __all__ = [
     "diagnose_configuration",
     "record_starts",
     "diagnose_configuration_segments",
+    "add_threshold_cells",
+    "add_combinations",
+    "curve_led_start",
+    "most_probable_verdict",
 ]
 
 log = logging.getLogger(__name__)

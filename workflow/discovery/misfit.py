@@ -32,6 +32,7 @@ __all__ = [
     "EXPLAINS_LIMIT",
     "explains_data",
     "stiffness_signature",
+    "bin_span_in_s",
 ]
 
 

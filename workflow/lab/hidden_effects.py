@@ -39,6 +39,11 @@ __all__ = [
     "campaign_segments",
     "draw_case",
     "generate_case",
+    "case_causes",
+    "case_integrator",
+    "time_domain_can_hide",
+    "placed_sensor",
+    "draw_mode1_gain",
 ]
 
 

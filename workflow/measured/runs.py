@@ -40,6 +40,7 @@ __all__ = [
     "read_and_check",
     "RunAnalysis",
     "analyse_run_file",
+    "window_problems",
 ]
 
 

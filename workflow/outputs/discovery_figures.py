@@ -27,7 +27,14 @@ from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
 from workflow.outputs.plain_words import left_out_caveat  # noqa: E402
 
-__all__ = ["binned_means", "residuals_figure", "candidates_figure", "heldout_figure"]
+__all__ = [
+    "binned_means",
+    "plain_number",
+    "residual_ticks",
+    "residuals_figure",
+    "candidates_figure",
+    "heldout_figure",
+]
 
 ROLE_COLOURS = {"baseline": "tab:red", "extended": "tab:blue"}
 CURVE_LABELS = {

@@ -13,8 +13,6 @@ from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import unidentified_sentence
 from workflow.outputs.report_html import fmt, ratio
 from workflow.outputs.report_wording import (
-    _n_runs,
-    _unidentified,
     campaign_headline,
     candidate_margin,
     candidate_name,
@@ -24,7 +22,9 @@ from workflow.outputs.report_wording import (
     margin_words,
     measured_trends,
     model_name,
+    n_runs_of,
     trend_sentence,
+    unidentified_parameters_of,
 )
 
 __all__ = [
@@ -42,11 +42,21 @@ def verdict_rst(
     segments: pd.DataFrame | None = None,
     units: UnitSystem = INCH_SECOND,
 ) -> str:
-    """The verdict in a few short paragraphs of reStructuredText (the report's first page).
+    r"""The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
     Narrow enough for the column Snakemake's report gives its workflow description:
     no tables, one bullet per configuration. The full page with the evidence is
     :func:`workflow.outputs.verdict_page.verdict_html`.
+
+    Examples
+    --------
+    reStructuredText's markup in the campaign's name is escaped:
+
+    >>> print("\n".join(verdict_rst({"campaign": "washers_*2*", "cause": "none", "configurations": {}}).splitlines()[:4]))
+    Verdict\: none \(paper\'s model suffices\)
+    ==========================================
+    <BLANKLINE>
+    Campaign **washers\_\*2\***.
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
@@ -67,7 +77,7 @@ def verdict_rst(
             if entry.get("cause") != "unknown":
                 text += (
                     f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
-                    f"{'held-out runs' if _n_runs(entry) > 1 else 'held-out amplitude ranges of the one run'} "
+                    f"{'held-out runs' if n_runs_of(entry) > 1 else 'held-out amplitude ranges of the one run'} "
                     f"with {ratio(gain.get('ratio'))} of {base}'s error "
                     f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))})."
                 )
@@ -81,7 +91,7 @@ def verdict_rst(
                     )
         if name in trends:
             text += " " + trend_sentence(trends[name], units)
-        unidentified = unidentified_sentence(_unidentified(entry, units))
+        unidentified = unidentified_sentence(unidentified_parameters_of(entry, units))
         if unidentified:
             text += " " + unidentified
         lines += [
@@ -131,6 +141,19 @@ def landing_rst(verdict: str, description: str) -> str:
     :func:`~workflow.io.escape.rst_text`, in which no Jinja tag can form, so it goes
     through Snakemake's Jinja rendering of the page as it is; ``description``
     (report/workflow.rst) keeps its Jinja expressions.
+
+    Examples
+    --------
+    >>> print(landing_rst("Verdict\\n=======\\n\\nNone.", "The workflow of {{ snakemake.config['campaign'] }}."))
+    Verdict
+    =======
+    <BLANKLINE>
+    None.
+    <BLANKLINE>
+    About this study
+    ================
+    <BLANKLINE>
+    The workflow of {{ snakemake.config['campaign'] }}.
     """
     heading = "About this study"
     return verdict + "\n\n" + heading + "\n" + "=" * len(heading) + "\n\n" + description

@@ -41,6 +41,8 @@ __all__ = [
     "trend_sentence",
     "campaign_headline",
     "discrepancy_text",
+    "unidentified_parameters_of",
+    "n_runs_of",
     "excluded_runs",
 ]
 
@@ -442,7 +444,7 @@ def discrepancy_text(entry: Mapping, units: UnitSystem = INCH_SECOND) -> str:
     return text[: len(text) - len(as_written)] + discrepancy_sentence(model, bins, trend, runs, units)
 
 
-def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
+def unidentified_parameters_of(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
     """The parameters of the baseline and the extended model that the data do not
     determine (their ``flags``), each once (:func:`~workflow.outputs.plain_words.unidentified_parameters`)."""
     return unidentified_parameters(
@@ -451,7 +453,7 @@ def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]
     )
 
 
-def _n_runs(entry: Mapping) -> int:
+def n_runs_of(entry: Mapping) -> int:
     """Runs behind a configuration's diagnosis (2 when the document does not say)."""
     runs = (entry.get("evidence") or {}).get("n_runs")
     return int(runs) if runs is not None else 2
@@ -489,7 +491,7 @@ def campaign_headline(document: Mapping) -> str:
         f"The paper's friction model (the better of Dahl and LuGre) falls short in "
         f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
         f"({which}): a model with the missing physics predicts "
-        f"{'runs' if all(_n_runs(entries[n]) > 1 for n in failing) else 'data'} held out of the fit "
+        f"{'runs' if all(n_runs_of(entries[n]) > 1 for n in failing) else 'data'} held out of the fit "
         f"{word}. "
     )
     ratios = [
@@ -504,7 +506,7 @@ def campaign_headline(document: Mapping) -> str:
         best = min(ratios)
         held_out = (
             "predicts runs it was not fitted to"
-            if all(_n_runs(entries[n]) > 1 for n in failing)
+            if all(n_runs_of(entries[n]) > 1 for n in failing)
             else "predicts amplitude ranges held out of the fit (with one run, no run could be held out)"
         )
         text += (
