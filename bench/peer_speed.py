@@ -61,9 +61,9 @@ from scipy import signal
 from workflow.io.campaign import Campaign, load_campaign
 from workflow.io.interim import ConfigurationMode, read_campaign, write_campaign
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RunAnalysis, analyse_run_file, read_runs
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 NOMINAL_HZ = 151.0
 """The mode's approximate frequency, as the converted campaign gives it (mode_hz), Hz."""
@@ -144,13 +144,13 @@ def project_record(folder: Path, campaign: Campaign) -> tuple[ConfigurationMode,
         "quality_settings": quality_settings,
     }
     mode = identify_configuration_mode(
-        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), reads=reads, **options
+        folder, [run_file.path], mode_search=AnalysisSettings(), reads=reads, **options
     )
     result = analyse_run_file(
         folder,
         run_file.path,
         mode=mode,
-        decay_settings=AnalysisSettings().decay(),
+        decay_settings=AnalysisSettings(),
         read=reads[run_file.path],
         **options,
     )

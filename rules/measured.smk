@@ -50,8 +50,7 @@ rule identify_mode:
         campaign=str(CAMPAIGN),
         first_group=lambda wildcards: [str(path) for path in first_run_group_files(wildcards)],
         strict=SETTINGS.strict,
-        mode_search=asdict(SETTINGS.analysis.mode_search()),
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/identify_mode.py"
@@ -79,7 +78,7 @@ rule analyse_runs:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/analyse_runs.py"

@@ -8,8 +8,8 @@ excluded with its reason and the others go on."""
 from pathlib import Path
 
 from workflow.io.interim import read_campaign, read_mode
-from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.measured.runs import analyse_run_group, write_run_group
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "analyse_runs")
@@ -22,6 +22,6 @@ results = analyse_run_group(
     campaign=read_campaign(snakemake.input.campaign_settings),
     mode=read_mode(snakemake.input.mode),
     quality_settings=QualitySettings(**snakemake.params.quality),
-    decay_settings=DecaySettings(**snakemake.params.decay),
+    decay_settings=AnalysisSettings(**snakemake.params.analysis),
 )
 write_run_group(snakemake.output.segments, snakemake.output.quality, snakemake.output.status, results)

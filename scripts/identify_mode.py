@@ -5,15 +5,16 @@ read for the mode search, so that no file of that group is read twice."""
 from pathlib import Path
 
 from workflow.io.interim import read_campaign, write_mode
-from workflow.io.settings import DecaySettings, ModeSearchSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_group, read_runs, write_run_group
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "identify_mode")
 configuration = snakemake.wildcards.configuration
 campaign_dir = Path(snakemake.params.campaign)
 campaign = read_campaign(snakemake.input.campaign_settings)
+analysis = AnalysisSettings(**snakemake.params.analysis)
 quality_settings = QualitySettings(**snakemake.params.quality)
 run_paths = [Path(path).relative_to(campaign_dir).as_posix() for path in snakemake.input.runs]
 reads = read_runs(campaign_dir, run_paths, campaign, quality_settings)
@@ -22,7 +23,7 @@ found = identify_configuration_mode(
     run_paths,
     configuration=configuration,
     campaign=campaign,
-    mode_search=ModeSearchSettings(**snakemake.params.mode_search),
+    mode_search=analysis,
     quality_settings=quality_settings,
     reads=reads,
 )
@@ -52,6 +53,6 @@ results = analyse_run_group(
     campaign=campaign,
     mode=found,
     quality_settings=quality_settings,
-    decay_settings=DecaySettings(**snakemake.params.decay),
+    decay_settings=analysis,
 )
 write_run_group(snakemake.output.segments, snakemake.output.quality, snakemake.output.status, results)

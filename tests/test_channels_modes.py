@@ -451,15 +451,15 @@ def assert_dwell_line_named_then_mode_found(folder, yaml_text):
 
 
 def identify(folder):
-    from workflow.io.settings import AnalysisSettings, QualitySettings
     from workflow.measured.mode_identification import identify_configuration_mode
+    from workflow.measured.settings import AnalysisSettings, QualitySettings
 
     return identify_configuration_mode(
         folder,
         ["c/run.mat"],
         configuration="c",
         campaign=load_campaign(folder),
-        mode_search=AnalysisSettings().mode_search(),
+        mode_search=AnalysisSettings(),
         quality_settings=QualitySettings(),
     )
 

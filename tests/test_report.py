@@ -825,6 +825,7 @@ def test_si_page_speaks_one_unit(document):
             "v_low_in_s": 1.0,
             "v_high_in_s": 3.16,
             "mean": 0.3,
+            "mean_over_scatter": 6.0,
             "t": 9.0,
             "p": 1e-8,
             "p_limit": 1e-3,

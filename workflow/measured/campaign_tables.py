@@ -16,9 +16,9 @@ import numpy as np
 
 from workflow.io.interim import ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
-from workflow.io.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_file, empty_segments, read_runs
+from workflow.measured.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -63,15 +63,13 @@ def analyse_campaign(
         paths = [run_file.path for run_file in run_files if run_file.configuration == name]
         options = {"configuration": name, "campaign": campaign, "quality_settings": quality_settings}
         reads = read_runs(campaign_dir, paths, campaign, quality_settings)
-        mode = identify_configuration_mode(
-            campaign_dir, paths, mode_search=analysis.mode_search(), reads=reads, **options
-        )
+        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis, reads=reads, **options)
         for path in paths:
             result = analyse_run_file(
                 campaign_dir,
                 path,
                 mode=mode,
-                decay_settings=analysis.decay(),
+                decay_settings=analysis,
                 read=reads.pop(path),
                 **options,
             )

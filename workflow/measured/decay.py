@@ -59,8 +59,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from workflow.io.settings import AnalysisSettings
 from workflow.measured.filters import analytic_bandpass, filter_time_constant_s, unwrapped_phase_rad
+from workflow.measured.settings import AnalysisSettings
 
 __all__ = [
     "DecayResult",

@@ -16,7 +16,7 @@ import functools
 
 import numpy as np
 
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 
 __all__ = [
     "analytic_signal",

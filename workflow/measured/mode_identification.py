@@ -17,10 +17,10 @@ from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
 from workflow.io.record_rules import rates_agree
 from workflow.io.records import RunRecord
-from workflow.io.settings import ModeSearchSettings, QualitySettings
 from workflow.measured import mode as modal_id
 from workflow.measured import quality
 from workflow.measured.runs import analysis_window, failed_checks, read_with_quality, window_problems
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "mode_search_range",
@@ -156,7 +156,7 @@ def identify_configuration_mode(
     *,
     configuration: str,
     campaign,
-    mode_search: ModeSearchSettings,
+    mode_search: AnalysisSettings,
     quality_settings: QualitySettings,
     reads: Mapping[str, tuple[RunRecord | None, list[dict]]] | None = None,
 ) -> ConfigurationMode:
@@ -177,7 +177,7 @@ def identify_configuration_mode(
         The configuration.
     campaign : Campaign
         The validated campaign.yaml.
-    mode_search : ModeSearchSettings
+    mode_search : AnalysisSettings
         Mode search range and band width.
     quality_settings : QualitySettings
         Record-level checks and the least prominence of a mode.
@@ -244,7 +244,7 @@ def identify_configuration_modes(
     windows: list[tuple[int, int]],
     configuration: str,
     campaign,
-    mode_search: ModeSearchSettings,
+    mode_search: AnalysisSettings,
     quality_settings: QualitySettings,
     skipped: dict[str, list[str]],
 ) -> ConfigurationMode:
