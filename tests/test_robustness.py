@@ -420,8 +420,8 @@ def test_strict_mode_stops_at_a_bad_run_with_its_message(tmp_path):
     assert result.returncode != 0
     reason = f"{campaign.as_posix()}/no_washer/run00.txt:60: non-numeric cell 'x1' in column 2"
     assert f"strict mode: run excluded: {reason}" in result.stderr
-    assert "Error in rule analyse_runs" in result.stderr
-    log = (workdir / "results/logs/analyse_runs/no_washer/runs01.log").read_text()
+    assert "Error in rule identify_mode" in result.stderr  # it analyses the first group of runs
+    log = (workdir / "results/logs/identify_mode/no_washer.log").read_text()
     assert f"WARNING excluded {reason}" in log
     assert not (workdir / "results/tables/runs.parquet").exists()
 

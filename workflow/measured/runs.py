@@ -37,10 +37,12 @@ __all__ = [
     "labelled",
     "analyse_every_mode_and_channel",
     "failed_checks",
-    "read_and_check",
     "RunAnalysis",
     "analyse_run_file",
     "window_problems",
+    "read_runs",
+    "analyse_run_group",
+    "write_run_group",
 ]
 
 
@@ -307,16 +309,6 @@ def failed_checks(path: str, rows: list[dict]) -> list[str]:
     ]
 
 
-def read_and_check(campaign_dir, path: str, campaign, quality_settings) -> tuple[RunRecord | None, list[str]]:
-    """Read one run file and apply the record-level quality checks.
-
-    Returns the record (None when it cannot be read) and the list of problems,
-    each a message that names the file and what is wrong.
-    """
-    record, rows = read_with_quality(campaign_dir, path, campaign, quality_settings)
-    return record, failed_checks(path, rows)
-
-
 @dataclass(frozen=True)
 class RunAnalysis:
     """What the workflow keeps of one run file: its segments (columns of
@@ -338,6 +330,7 @@ def analyse_run_file(
     mode: ConfigurationMode,
     quality_settings: QualitySettings,
     decay_settings: AnalysisSettings,
+    read: tuple[RunRecord | None, list[dict]] | None = None,
 ) -> RunAnalysis:
     """Read, check and analyse one run file; a run that cannot be used is excluded
     with its reason, never raised.
@@ -359,12 +352,17 @@ def analyse_run_file(
         Quality thresholds.
     decay_settings : AnalysisSettings
         The decay analysis settings.
+    read : (RunRecord or None, list of dict), optional
+        The run as :func:`read_with_quality` gave it, when the job has read it already
+        (for the mode search): the file is then not read again.
     """
     from pathlib import PurePosixPath
 
     run = PurePosixPath(run_path).stem
     segments = empty_segments()
-    record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
+    if read is None:
+        read = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
+    record, rows = read[0], list(read[1])
     problems = failed_checks(run_path, rows)
     if record is not None and not problems:
         problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
@@ -398,3 +396,50 @@ def analyse_run_file(
         "response_units": {} if record is None else {c.name: c.unit for c in record.responses},
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
+
+
+def read_runs(campaign_dir, run_paths: list[str], campaign, quality_settings) -> dict[str, tuple]:
+    """Run path -> the run as :func:`read_with_quality` gives it, for every path: a job
+    that searches a configuration's modes and analyses some of its runs reads each once."""
+    return {path: read_with_quality(campaign_dir, path, campaign, quality_settings) for path in run_paths}
+
+
+def analyse_run_group(
+    campaign_dir,
+    run_paths: list[str],
+    *,
+    strict: bool,
+    reads: dict[str, tuple] | None = None,
+    **options,
+) -> list[RunAnalysis]:
+    """:func:`analyse_run_file` for each of a job's runs (``options`` are its keywords),
+    with the runs in ``reads`` (:func:`read_runs`) not read again; each excluded run is
+    logged as a warning, and in ``strict`` mode the first one stops the job
+    (:class:`~workflow.runtime.logs.ScriptStop`, naming the run and why)."""
+    from workflow.runtime.logs import ScriptStop
+
+    log = logging.getLogger(__name__)
+    reads = reads or {}
+    results = []
+    for run_path in run_paths:
+        result = analyse_run_file(campaign_dir, run_path, read=reads.get(run_path), **options)
+        if result.status["status"] == "excluded":
+            log.warning("excluded %s", result.status["reason"])
+            if strict:
+                raise ScriptStop(f"strict mode: run excluded: {result.status['reason']}")
+        else:
+            kept = result.segments["kept"]
+            log.info("%s: %d segments kept of %d", run_path, int(kept.sum()), len(kept))
+        results.append(result)
+    return results
+
+
+def write_run_group(segments_path, quality_path, status_path, results: list[RunAnalysis]) -> None:
+    """A job's interim files of its runs: their segments and quality rows (column
+    files) and their statuses (JSON)."""
+    from workflow.io.interim import write_run_statuses
+    from workflow.io.tables import concatenate_columns, write_columns
+
+    write_columns(segments_path, concatenate_columns([result.segments for result in results]))
+    write_columns(quality_path, concatenate_columns([result.quality for result in results]))
+    write_run_statuses(status_path, [result.status for result in results])
