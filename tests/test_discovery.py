@@ -861,6 +861,28 @@ def test_discrepancy_sentence_names_both_curves():
     assert "over the 40 segments of the one run" in text and "1 runs" not in text
 
 
+def test_discrepancy_sentence_names_significant_misfits_on_both_sides_of_the_fit():
+    # UNESP t5nm: significant damping bins +4.4 scatters at 0.031-0.098 in/s and -4.1 at
+    # 0.31-0.98 in/s; "by up to +4.4 scatters" hid the figure's markers below zero
+    above = {
+        **_bin("damping", 0.5975, 29.8, 7e-12, significant=True, over_scatter=4.43),
+        "v_low_in_s": 0.031,
+        "v_high_in_s": 0.0981,
+    }
+    below = {
+        **_bin("damping", -0.13, -16.4, 1e-10, significant=True, over_scatter=-4.13),
+        "v_low_in_s": 0.31,
+        "v_high_in_s": 0.981,
+    }
+    text = discrepancy_sentence("dahl", [above, below], None, 14)
+    assert "between 0.031 and 0.981 in/s, by up to +4.4 scatters (+82 %; |t| = 29.8" in text
+    assert (
+        "at 0.031-0.0981 in/s and -4.1 scatters (-12 %; |t| = 16.4" in text and "at 0.31-0.981 in/s" in text
+    )
+    # one side only: one size
+    assert " and -4.1" not in discrepancy_sentence("dahl", [above, {**below, "significant": False}], None, 14)
+
+
 def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range():
     # the demo's no_washer: damping significant at 0.465-1.47 in/s only, while the residual
     # figure shows the baseline's mean 2.5 scatters (2.8 %) too low above 1.47 in/s over the

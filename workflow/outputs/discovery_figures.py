@@ -36,6 +36,9 @@ CURVE_LABELS = {
 }
 CURVE_NAMES = {"zeta": "damping", "frequency_hz": "frequency"}
 """The residual table's curves as the diagnosis evidence names them."""
+LINEAR_LIMIT = 4.0
+"""The residual axis is linear within this many scatters (the ±2 band stays readable),
+logarithmic beyond (misfits span decades)."""
 ERROR_LABEL = "held-out error (RMS residual / scatter, 1)"
 
 
@@ -113,9 +116,16 @@ def plain_number(value: float) -> str:
 
 
 def residual_ticks(limit: float) -> list[float]:
-    """Residual-axis ticks: 0, +-2 (the scatter band) and +-10, 100 ... up to ``limit``;
-    spaced so that their labels cannot meet on the linear-then-logarithmic axis."""
-    ticks = [2.0]
+    """Residual-axis ticks: 0, +-2 (the scatter band), +-4 (where the axis turns
+    logarithmic: without it a mean of 4.4 reads as 7) and +-10, 100 ... up to ``limit``;
+    spaced so that their labels cannot meet on the linear-then-logarithmic axis.
+
+    Examples
+    --------
+    >>> residual_ticks(12.0)
+    [-10.0, -4.0, -2.0, 0.0, 2.0, 4.0, 10.0]
+    """
+    ticks = [2.0, LINEAR_LIMIT]
     power = 10.0
     while power <= limit:
         ticks.append(power)
@@ -189,9 +199,9 @@ def residuals_figure(
             ax.set_ylabel(CURVE_LABELS[curve])
             finite = rows.loc[rows["curve"] == curve, "residual"].to_numpy(float)
             finite = finite[np.isfinite(finite)]
-            lim = max(4.0, float(np.max(np.abs(finite))) * 1.2) if finite.size else 4.0
+            lim = max(LINEAR_LIMIT, float(np.max(np.abs(finite))) * 1.2) if finite.size else LINEAR_LIMIT
             # linear within +-4 (the scatter band stays readable), logarithmic beyond
-            ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
+            ax.set_yscale("symlog", linthresh=LINEAR_LIMIT, linscale=1.5)
             ax.set_ylim(-lim, lim)
             ax.yaxis.set_major_locator(ticker.FixedLocator(residual_ticks(lim)))
             ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
