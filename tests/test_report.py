@@ -928,3 +928,21 @@ def test_verdict_sentences_agree_with_the_residual_and_damping_figures(built_rep
         mine = segments[segments["configuration"] == name]
         low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
         assert f"Measured from {report_html.fmt(low)} to {report_html.fmt(high)} in/s" in page, name
+
+
+@pytest.mark.parametrize("explains", [True, False])
+def test_first_page_says_of_a_none_verdict_what_the_residual_figure_shows(document, explains):
+    # the demo's large washer: "LuGre fits within the run-to-run scatter (held-out error
+    # 1.98)", an error twice the scatter; the figure shows no significant misfit and
+    # whether every half decade's mean lies within the ±2 band
+    entry = document["configurations"]["small_washer"]
+    failing = {"curve": "frequency", "v_low_in_s": 1.37, "v_high_in_s": 4.35, "mean_over_scatter": 2.4}
+    entry["explains_data"] = explains
+    entry["evidence"]["explains_data"] = {"limit": 2.0, "failing_bins": [] if explains else [failing]}
+    page = landing_page.verdict_rst(document).replace("\\", "")  # rst's escapes
+    assert "Dahl leaves no significant misfit (held-out error 1.03)." in page
+    assert "fits within the run-to-run scatter" not in page
+    if explains:
+        assert "Dahl explains the data: every half decade of amplitude is within 2 scatters." in page
+    else:
+        assert "misses by more than 2 scatters in frequency at 1.37–4.35 in/s (2.4 scatters)" in page
