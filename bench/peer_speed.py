@@ -60,9 +60,9 @@ from scipy import signal
 from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RunAnalysis, analyse_run_file
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 NOMINAL_HZ = 151.0
 """The mode's approximate frequency, as the converted campaign gives it (mode_hz), Hz."""
@@ -141,12 +141,8 @@ def project_record(folder: Path) -> tuple[ConfigurationMode, RunAnalysis]:
         "campaign": campaign,
         "quality_settings": QualitySettings(),
     }
-    mode = identify_configuration_mode(
-        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), **options
-    )
-    result = analyse_run_file(
-        folder, run_file.path, mode=mode, decay_settings=AnalysisSettings().decay(), **options
-    )
+    mode = identify_configuration_mode(folder, [run_file.path], mode_search=AnalysisSettings(), **options)
+    result = analyse_run_file(folder, run_file.path, mode=mode, decay_settings=AnalysisSettings(), **options)
     if result.status["status"] != "used":
         raise RuntimeError(f"the project excluded the record: {result.status['reason']}")
     return mode, result

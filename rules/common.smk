@@ -8,7 +8,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 
-from workflow.io.settings import ConfigError, validate_config
+from workflow.config import ConfigError, validate_config
 from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
 from workflow.io.escape import terminal_lines, terminal_text, visible_controls
 

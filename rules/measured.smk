@@ -39,7 +39,7 @@ rule identify_mode:
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
-        mode_search=asdict(SETTINGS.analysis.mode_search()),
+        analysis=asdict(SETTINGS.analysis),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/identify_mode.py"
@@ -67,7 +67,7 @@ rule analyse_runs:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/analyse_runs.py"

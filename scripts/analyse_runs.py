@@ -7,16 +7,16 @@ excluded with its reason and the others go on."""
 from pathlib import Path
 
 from workflow.io.interim import read_campaign, read_mode, write_run_statuses
-from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.io.tables import concatenate_columns, write_columns
 from workflow.measured.runs import analyse_run_file
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "analyse_runs")
 campaign_dir = Path(snakemake.params.campaign)
 campaign = read_campaign(snakemake.input.campaign_settings)
 mode = read_mode(snakemake.input.mode)
-decay_settings = DecaySettings(**snakemake.params.decay)
+decay_settings = AnalysisSettings(**snakemake.params.analysis)
 quality_settings = QualitySettings(**snakemake.params.quality)
 
 results = []

@@ -3,8 +3,8 @@
 from pathlib import Path
 
 from workflow.io.interim import read_campaign, write_mode
-from workflow.io.settings import ModeSearchSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "identify_mode")
@@ -15,7 +15,7 @@ found = identify_configuration_mode(
     [Path(path).relative_to(campaign_dir).as_posix() for path in snakemake.input.runs],
     configuration=configuration,
     campaign=read_campaign(snakemake.input.campaign_settings),
-    mode_search=ModeSearchSettings(**snakemake.params.mode_search),
+    mode_search=AnalysisSettings(**snakemake.params.analysis),
     quality_settings=QualitySettings(**snakemake.params.quality),
 )
 for run, problems in found.skipped_runs.items():

@@ -26,7 +26,6 @@ from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.models.averaged import MODELS, CurveGrid
 from workflow.models.averaged_fit import (
     FitContext,
-    FitSettings,
     _local_fit,
     _Problem,
     apply_run_offsets,
@@ -46,6 +45,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 MODEL_ACCURACY_LN_ZETA = 0.02
 """The averaged models' accuracy in ln zeta: their largest deviation from direct integration
@@ -59,7 +59,7 @@ EXPLAINS_SCATTERS = 2.0
 """The output contract's ``explains_data``: every half decade's mean residual within two
 measured scatters."""
 
-FAST = FitSettings(global_samples=128, local_starts=2, resamples=40)
+FAST = DiscoverySettings(global_samples=128, local_starts=2, resamples=40)
 DAHL = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01, "slip_velocity_in_s": 1.5}
 
 

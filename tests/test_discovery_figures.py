@@ -20,12 +20,13 @@ from workflow.discovery.heldout import amplitude_bin
 from workflow.discovery.wording import two_digits
 from workflow.io.units import SI
 from workflow.models.averaged import CurveGrid, model_curves
-from workflow.models.averaged_fit import FitSettings, apply_run_offsets
+from workflow.models.averaged_fit import apply_run_offsets
+from workflow.models.settings import DiscoverySettings
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save
 from workflow.outputs.readability import readability_problems
 
-FAST = FitSettings(global_samples=64, local_starts=2)
+FAST = DiscoverySettings(global_samples=64, local_starts=2)
 IWAN = {
     "f_lin_hz": 120.0,
     "zeta0": 8e-4,

@@ -450,8 +450,8 @@ def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
 
     from workflow.io.campaign import load_campaign
     from workflow.io.run_files import read_run
-    from workflow.io.settings import QualitySettings
     from workflow.measured.quality import QC_COLUMNS, quality_rows
+    from workflow.measured.settings import QualitySettings
 
     meta = load_campaign(campaign)
     record = read_run(campaign, path, meta)
@@ -512,8 +512,8 @@ def test_quality_table_of_a_good_run_passes_with_margins(study):
 
 def test_quality_rows_mark_checks_that_do_not_apply():
     from workflow.io.records import RunRecord
-    from workflow.io.settings import QualitySettings
     from workflow.measured.quality import analysis_rows, quality_rows
+    from workflow.measured.settings import QualitySettings
 
     t = np.arange(4096) / FS_HZ
     record = RunRecord(

@@ -11,10 +11,14 @@ import numpy as np
 import pandas as pd
 
 from workflow.discovery.combined import (
-    COMBINATION_CAUSES,
+    UNTOUCHED_CURVE,
+    combination_causes,
+    combination_parts,
     combination_starts,
     combination_test,
     combinations_to_try,
+    one_curve_scatter,
+    term_from_residuals,
 )
 from workflow.discovery.confidence import VerdictOption, verdict_causes, verdict_key
 from workflow.discovery.decision import (
@@ -39,12 +43,11 @@ from workflow.discovery.misfit import (
     stiffness_signature,
 )
 from workflow.discovery.wording import discrepancy_sentence
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     at_bounds,
     fit_model,
     model_residuals,
@@ -57,6 +60,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "NESTED_DAHL",
@@ -146,6 +150,27 @@ def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: Configurat
     return flags
 
 
+def add_threshold_cells(
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    *,
+    fits: dict[str, FitResult],
+    cv: dict[str, dict],
+    residuals: dict[str, dict[str, np.ndarray]],
+    evidence: dict[str, ModelEvidence],
+    settings: DiscoverySettings,
+) -> str:
+    """Fit and cross-validate the Iwan joint with the slip thresholds from the data
+    (:func:`refine_microslip`, from the power-law fit) and add it to ``fits``, ``cv``,
+    ``residuals`` and ``evidence``; returns its model id."""
+    name = f"iwan_cells_{threshold_cells(data)}"
+    fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
+    residuals[name] = model_residuals(fits[name], data, scatter, context)
+    evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params))
+    return name
+
+
 def add_combinations(
     data: ConfigurationData,
     scatter: Scatter,
@@ -156,7 +181,7 @@ def add_combinations(
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
     result: dict,
-    settings: FitSettings,
+    settings: DiscoverySettings,
     envelope_significant: bool,
     extended_models: Mapping[str, str],
 ) -> tuple[dict, dict[str, dict], list[VerdictOption]]:
@@ -178,13 +203,26 @@ def add_combinations(
         key) the evidence, and the combinations as :class:`VerdictOption`.
     """
     result["verdict"] = result["cause"]
-    tried = [] if envelope_significant else combinations_to_try(result["cause"])
+    joint = f"iwan_cells_{threshold_cells(data)}"
+    tried = [] if envelope_significant else combinations_to_try(result["cause"], joint)
     if not tried:
         return result, {}, []
+    if joint not in fits:
+        add_threshold_cells(
+            data,
+            scatter,
+            context,
+            fits=fits,
+            cv=cv,
+            residuals=residuals,
+            evidence=evidence,
+            settings=settings,
+        )
     for model in tried:
         started = time.perf_counter()
-        extension = CAUSE_MODELS[COMBINATION_CAUSES[model][1]]
+        extension = combination_parts(model)[1]
         starts = combination_starts(model, fits, NESTED_DAHL[extension](data))
+        starts += curve_led_start(model, data, scatter, context, fits, settings)
         fits[model] = fit_model(model, data, scatter, context, settings=settings, nested_start=starts)
         cv[model] = cross_validate(model, data, scatter, context, fits[model], settings=settings)
         residuals[model] = model_residuals(fits[model], data, scatter, context)
@@ -206,9 +244,12 @@ def add_combinations(
     result["verdict"] = verdict
     base, errors, bic = result["baseline"], result["errors"], result["bic"]
     combinations, options = {}, []
+    # micro-slip alone: the better predictor of the power law and the combination's own joint
+    microslip = min(("iwan", joint), key=lambda m: errors[m]["error"])
     for model in tried:
-        causes = COMBINATION_CAUSES[model]
-        parts = {c: result["unit_squares"][result["extended_models"][c]] for c in causes}
+        causes = combination_causes(model)
+        part_models = {causes[0]: microslip, causes[1]: result["extended_models"][causes[1]]}
+        parts = {c: result["unit_squares"][m] for c, m in part_models.items()}
         test = combination_test(
             result["unit_squares"][model], parts, result["unit_squares"][base], result["unit_weights"]
         )
@@ -220,6 +261,7 @@ def add_combinations(
         key = verdict_key(causes)
         combinations[key] = {
             "model": model,
+            "parts": part_models,
             **test,
             "heldout_error": errors[model]["error"],
             "ratio_to_baseline": ratio,
@@ -252,6 +294,41 @@ def add_combinations(
     return result, combinations, options
 
 
+def curve_led_start(
+    model: str,
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    fits: Mapping[str, FitResult],
+    settings: DiscoverySettings,
+) -> list[dict[str, float]]:
+    """A start of a combined model from each mechanism's own curve.
+
+    The extension's term leaves one curve alone (:data:`UNTOUCHED_CURVE`: a stiffness
+    term dissipates nothing, a velocity-squared loss stores nothing), so the joint is
+    fitted to that curve alone (from its fit to both), and the extension's term read off
+    what the joint leaves on the other (:func:`term_from_residuals`). Where the two
+    mechanisms pull the shared curve opposite ways (micro-slip's softening against a
+    hardening spring) the fit to both curves starts from a joint that explains neither,
+    and the extension's fit from a Dahl joint, which cannot carry micro-slip. Empty where
+    the term would be unphysical (a negative loss).
+    """
+    joint_model, extension_model = combination_parts(model)
+    joint = fit_model(
+        joint_model,
+        data,
+        one_curve_scatter(scatter, UNTOUCHED_CURVE[extension_model]),
+        context,
+        settings=settings,
+        nested_start=fits[joint_model].params,
+    )
+    residuals = model_residuals(joint, data, scatter, context)
+    term = term_from_residuals(
+        extension_model, data.velocity_in_s, residuals, scatter, context.reference_velocity_in_s
+    )
+    return [] if term is None else [{**joint.params, **term}]
+
+
 def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
     """The verdict with the largest confidence (``verdict`` itself on a tie).
 
@@ -275,7 +352,7 @@ def diagnose_configuration(
     data: ConfigurationData,
     context: FitContext,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
     segment_cycles: float = AnalysisSettings.segment_cycles,
 ) -> ConfigurationDiagnosis:
     """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
@@ -312,10 +389,16 @@ def diagnose_configuration(
         and not explains_data(data, residuals["iwan"])["explains_data"]
     ):
         started = time.perf_counter()
-        name = f"iwan_cells_{threshold_cells(data)}"
-        fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
-        residuals[name] = model_residuals(fits[name], data, scatter, context)
-        evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params))
+        name = add_threshold_cells(
+            data,
+            scatter,
+            context,
+            fits=fits,
+            cv=cv,
+            residuals=residuals,
+            evidence=evidence,
+            settings=settings,
+        )
         # the same decision (the candidates are unchanged), now with the refinement's error and BIC
         result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
         errors, bic = result["errors"], result["bic"]
@@ -485,7 +568,7 @@ def diagnose_configuration_segments(
     context: FitContext,
     *,
     response_quantity: str = "acceleration",
-    settings: FitSettings | None = None,
+    settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
     record_start: Mapping[str, str] | None = None,
 ) -> ConfigurationDiagnosis | str:
@@ -501,7 +584,7 @@ def diagnose_configuration_segments(
         The campaign's (:func:`~workflow.discovery.campaign.campaign_fit_context`).
     response_quantity : str
         The configuration's recorded quantity (campaign.yaml ``response.quantity``).
-    settings : FitSettings, optional
+    settings : DiscoverySettings, optional
     segment_cycles : float
         Log-decrement segment length, cycles.
     record_start : mapping, optional
@@ -511,5 +594,5 @@ def diagnose_configuration_segments(
     if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
         return f"only {data.n} usable segments: too few to fit and validate models"
     return diagnose_configuration(
-        data, context, settings=settings or FitSettings(), segment_cycles=segment_cycles
+        data, context, settings=settings or DiscoverySettings(), segment_cycles=segment_cycles
     )

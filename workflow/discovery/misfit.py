@@ -15,7 +15,7 @@ import numpy as np
 from scipy import special
 
 from workflow.discovery.heldout import amplitude_bin, amplitude_weights
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import model_curves
 from workflow.models.averaged_fit import FitResult
 from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, robust_trend
@@ -453,37 +453,49 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
     }
 
 
-def stiffness_signature(fit: FitResult, data: ConfigurationData) -> dict:
-    """Whether a ``dahl_stiffness`` fit shows the stiffness-nonlinearity signature.
+def stiffness_signature(fit: FitResult, data: ConfigurationData, *, n_grid: int = 48) -> dict:
+    """Whether a fit with a stiffness term (``dahl_stiffness``, ``iwan_stiffness``) shows
+    the stiffness-nonlinearity signature.
 
     The output contract's signature: the frequency shifts with amplitude more than the
     friction that fits the damping explains. Over the measured amplitudes the relative
     change of the fitted model's damped frequency is compared with that of its friction
     alone (the same fit with the stiffness term switched off); the signature is there
-    when the whole change is larger in magnitude.
+    when the whole change is larger in magnitude, or when the model's frequency rises
+    with amplitude anywhere by more than the models' accuracy (``TOL_REL_F``): a
+    friction joint (Dahl, LuGre, Iwan: Jenkins elements) only lowers the frequency as
+    the amplitude grows, and a velocity-squared loss leaves it put, so a rise is a
+    stiffness the friction cannot explain at all.
 
     Why: Dahl's pre-sliding damping grows in proportion to amplitude, its softening
     with its square, so a stiff Dahl joint deep in pre-sliding, with a stiffness term
     that cancels its softening, reproduces a velocity-squared loss (damping in
     proportion to amplitude, frequency put) as closely as ``dahl_quadratic`` does. Such
-    a fit's stiffness term works against the friction's frequency change; that of an
-    amplitude-dependent stiffness the data show adds to it or outgrows it.
+    a fit's stiffness term works against the friction's frequency change at every
+    amplitude; that of an amplitude-dependent stiffness the data show adds to it,
+    outgrows it, or (a hardening spring beside micro-slip, whose softening grows more
+    slowly than the spring's stiffening) turns the frequency back up.
 
     Returns
     -------
     dict
         ``relative_frequency_change`` (model, lowest to highest amplitude),
-        ``friction_relative_frequency_change`` (stiffness term off) and
+        ``friction_relative_frequency_change`` (stiffness term off),
+        ``frequency_rise`` (the model's largest relative rise of frequency from a lower
+        to a higher measured amplitude, 0 where it never rises), ``rise_limit`` and
         ``shows_signature`` (bool).
     """
-    velocity = np.array([float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s))])
-    changes = []
+    velocity = np.geomspace(float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s)), n_grid)
+    curves = []
     for params in (fit.params, {**fit.params, "stiffness_shift": 0.0}):
         _, frequency_hz = model_curves(fit.model, params, velocity, response_order=data.response_order)
-        changes.append(float(frequency_hz[1] / frequency_hz[0] - 1.0))
-    whole, friction = changes
+        curves.append(frequency_hz)
+    whole, friction = (float(f[-1] / f[0] - 1.0) for f in curves)
+    rise = float(np.max(curves[0] / np.minimum.accumulate(curves[0]) - 1.0))
     return {
         "relative_frequency_change": whole,
         "friction_relative_frequency_change": friction,
-        "shows_signature": bool(abs(whole) > abs(friction)),
+        "frequency_rise": rise,
+        "rise_limit": TOL_REL_F,
+        "shows_signature": bool(abs(whole) > abs(friction) or rise > TOL_REL_F),
     }

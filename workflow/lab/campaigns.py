@@ -27,7 +27,7 @@ from workflow.lab.configurations import (
     setup_configuration,
     truth_curves,
 )
-from workflow.lab.layout import PAPER_CONFIGURATIONS, run_name
+from workflow.lab.layout import PAPER_CONFIGURATIONS, DemoSettings, run_name
 from workflow.lab.sensors import Sensor, sensor_at_gain, sensor_view
 from workflow.lab.settings import (
     DEFAULT_EFFECT_SIZES,
@@ -69,8 +69,8 @@ def _check_sensors(sensors) -> tuple[Sensor, ...]:
 def generate_campaign(
     out_dir,
     *,
-    seed=2004,
-    runs_per_configuration=10,
+    seed=DemoSettings.seed,
+    runs_per_configuration=DemoSettings.runs_per_configuration,
     joint="patches",
     effect=None,
     effect_size=None,

@@ -1,4 +1,5 @@
-"""The paper's campaign layout: configurations, bearing areas and run names.
+"""The paper's campaign layout (configurations, bearing areas and run names) and the
+``demo`` section of config.yaml (:class:`DemoSettings`).
 
 The built-in demo campaign follows it. Kept apart from :mod:`workflow.lab.campaigns`
 (which simulates the runs) because the workflow plans the demo's DAG from it at parse
@@ -7,7 +8,15 @@ time, and every ``snakemake`` call would otherwise import the simulator's SciPy.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Annotated
+
+from annotated_types import Ge, Le
+
+from workflow.io.validation import FORBID_UNKNOWN_KEYS, Seed
+
 __all__ = [
+    "DemoSettings",
     "PAPER_CONFIGURATIONS",
     "run_name",
     "planned_run_files",
@@ -38,3 +47,24 @@ def planned_run_files(runs_per_configuration: int, configurations=None) -> list:
         for name in names
         for i in range(runs_per_configuration)
     ]
+
+
+@dataclass(frozen=True)
+class DemoSettings:
+    """config.yaml's ``demo``: the built-in virtual-lab campaign generated when ``campaign``
+    points at ``path``; the virtual lab's run-to-run spreads (:class:`workflow.lab.settings.LabSettings`)
+    and :func:`workflow.lab.campaigns.generate_campaign` take their defaults from here."""
+
+    __pydantic_config__ = FORBID_UNKNOWN_KEYS
+
+    path: str = "results/demo_campaign"
+    seed: Seed = 2004
+    # 200 runs in each of the demo's three configurations: 600 run files to generate and analyse.
+    runs_per_configuration: Annotated[int, Ge(1), Le(200)] = 10
+    frequency_spread: Annotated[float, Ge(0.0), Le(0.01)] = 3e-4
+    """Run-to-run relative standard deviation of the natural frequency (the virtual lab's
+    ``LabSettings.frequency_spread``; docs/virtual-lab.md). 0 turns it off."""
+    damping_spread: Annotated[float, Ge(0.0), Le(0.5)] = 0.03
+    """Run-to-run relative standard deviation of the linear modal damping."""
+    slip_force_spread: Annotated[float, Ge(0.0), Le(0.5)] = 0.03
+    """Run-to-run relative standard deviation of the joint's slip forces."""

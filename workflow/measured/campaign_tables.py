@@ -16,9 +16,9 @@ import numpy as np
 
 from workflow.io.interim import ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
-from workflow.io.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_file, empty_segments
+from workflow.measured.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -62,11 +62,9 @@ def analyse_campaign(
     for name, spec in campaign.configurations.items():
         paths = [run_file.path for run_file in run_files if run_file.configuration == name]
         options = {"configuration": name, "campaign": campaign, "quality_settings": quality_settings}
-        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis.mode_search(), **options)
+        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis, **options)
         for path in paths:
-            result = analyse_run_file(
-                campaign_dir, path, mode=mode, decay_settings=analysis.decay(), **options
-            )
+            result = analyse_run_file(campaign_dir, path, mode=mode, decay_settings=analysis, **options)
             if result.status["status"] != "used":
                 continue
             segments = pd.DataFrame(result.segments)

@@ -16,10 +16,10 @@ from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
 from workflow.io.record_rules import rates_agree
 from workflow.io.records import RunRecord
-from workflow.io.settings import ModeSearchSettings, QualitySettings
 from workflow.measured import mode as modal_id
 from workflow.measured import quality
 from workflow.measured.runs import analysis_window, read_and_check, window_problems
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "mode_search_range",
@@ -155,7 +155,7 @@ def identify_configuration_mode(
     *,
     configuration: str,
     campaign,
-    mode_search: ModeSearchSettings,
+    mode_search: AnalysisSettings,
     quality_settings: QualitySettings,
 ) -> ConfigurationMode:
     """First mode of one configuration from its run files; never raises for bad data.
@@ -175,7 +175,7 @@ def identify_configuration_mode(
         The configuration.
     campaign : Campaign
         The validated campaign.yaml.
-    mode_search : ModeSearchSettings
+    mode_search : AnalysisSettings
         Mode search range and band width.
     quality_settings : QualitySettings
         Record-level checks and the least prominence of a mode.
@@ -235,7 +235,7 @@ def identify_configuration_modes(
     windows: list[tuple[int, int]],
     configuration: str,
     campaign,
-    mode_search: ModeSearchSettings,
+    mode_search: AnalysisSettings,
     quality_settings: QualitySettings,
     skipped: dict[str, list[str]],
 ) -> ConfigurationMode:

@@ -13,7 +13,7 @@ run-analysis job then starts without pandas.
 from __future__ import annotations
 
 import logging
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -23,8 +23,8 @@ from workflow.io.campaign import SINGLE_CHANNEL_NAME
 from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import QUOTED_CHARACTERS, quoted, shortened
 from workflow.io.records import RunRecord
-from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.measured import decay, quality
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "analysis_window",
@@ -122,7 +122,7 @@ def analyse_run_with_quality(
     run: str,
     mode: ModeInfo,
     window: tuple[int, int],
-    decay_settings: DecaySettings,
+    decay_settings: AnalysisSettings,
     quality_settings: QualitySettings,
 ) -> tuple[dict[str, np.ndarray], list[dict]]:
     """Band-pass, envelope and segmented log decrement of one run, with its checks.
@@ -137,7 +137,7 @@ def analyse_run_with_quality(
         The configuration's mode and band.
     window : (int, int)
         Sample indices [start, stop) to analyse (:func:`analysis_window`).
-    decay_settings : DecaySettings
+    decay_settings : AnalysisSettings
         The decay analysis settings (filter order, segment length and overlap, noise
         floor factor, edge time constants).
     quality_settings : QualitySettings
@@ -159,7 +159,7 @@ def analyse_run_with_quality(
         record.sample_rate_hz,
         mode.band_hz,
         mode_hz=mode.mode_hz,
-        **asdict(decay_settings),
+        **decay_settings.decay_options(),
         start_index=start if window != (0, record.n_samples) else None,
         stop_index=stop,
     )
@@ -270,7 +270,7 @@ def analyse_every_mode_and_channel(
     run: str,
     mode: ConfigurationMode,
     window: tuple[int, int],
-    decay_settings: DecaySettings,
+    decay_settings: AnalysisSettings,
     quality_settings: QualitySettings,
 ) -> tuple[dict[str, np.ndarray], list[dict]]:
     """:func:`analyse_run_with_quality` for every mode of the configuration on every
@@ -336,7 +336,7 @@ def analyse_run_file(
     campaign,
     mode: ConfigurationMode,
     quality_settings: QualitySettings,
-    decay_settings: DecaySettings,
+    decay_settings: AnalysisSettings,
 ) -> RunAnalysis:
     """Read, check and analyse one run file; a run that cannot be used is excluded
     with its reason, never raised.
@@ -356,7 +356,7 @@ def analyse_run_file(
         without a mode, the run is excluded with the reason none was found.
     quality_settings : QualitySettings
         Quality thresholds.
-    decay_settings : DecaySettings
+    decay_settings : AnalysisSettings
         The decay analysis settings.
     """
     from pathlib import PurePosixPath
