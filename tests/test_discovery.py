@@ -769,12 +769,14 @@ def test_run_drift_seen_only_in_the_order_of_the_recording_start_times():
     assert trend["runs"] == sorted(recorded_order)
 
 
-def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3, over_scatter=None):
+def _bin(
+    curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3, over_scatter=None, span=(1.0, 3.16)
+):
     tolerance = tolerance or (MODEL_ACCURACY_LN_ZETA if curve == "damping" else MODEL_ACCURACY_REL_F)
     return {
         "curve": curve,
-        "v_low_in_s": 1.0,
-        "v_high_in_s": 3.16,
+        "v_low_in_s": span[0],
+        "v_high_in_s": span[1],
         "mean": mean,
         # the residual figure's binned mean: a scatter of 4 tolerances unless said
         "mean_over_scatter": over_scatter if over_scatter is not None else mean / (4 * tolerance),
@@ -817,16 +819,8 @@ def test_discrepancy_sentence_is_true_of_its_numbers():
 def test_discrepancy_sentence_names_the_bin_the_figure_shows_furthest_out():
     # PFF: the sentence named the bin of largest |t| (+0.044 % at 0.1-0.2 in/s) while the
     # residual figure's largest excursion was -7 scatters near 1 in/s, not significant
-    low = {
-        **_bin("frequency", 1.9e-4, 3.4, 0.0096, over_scatter=1.4),
-        "v_low_in_s": 0.213,
-        "v_high_in_s": 0.674,
-    }
-    high = {
-        **_bin("frequency", -1.9e-4, -2.7, 0.12, over_scatter=-7.2),
-        "v_low_in_s": 0.674,
-        "v_high_in_s": 2.13,
-    }
+    low = _bin("frequency", 1.9e-4, 3.4, 0.0096, over_scatter=1.4, span=(0.213, 0.674))
+    high = _bin("frequency", -1.9e-4, -2.7, 0.12, over_scatter=-7.2, span=(0.674, 2.13))
     text = discrepancy_sentence("lugre", [low, high], None, 1)
     assert "7.2 scatters (0.019 %) below the lugre fit at 0.674-2.13 in/s" in text
     assert "1.4 scatters" not in text and "not statistically significant (|t| = 2.7" in text
@@ -861,26 +855,39 @@ def test_discrepancy_sentence_names_both_curves():
     assert "over the 40 segments of the one run" in text and "1 runs" not in text
 
 
+def test_discrepancy_sentence_names_significant_misfits_on_both_sides_of_the_fit():
+    # UNESP t5nm: significant damping bins +4.4 scatters at 0.031-0.098 in/s and -4.1 at
+    # 0.31-0.98 in/s; "by up to +4.4 scatters" hid the figure's markers below zero
+    above = _bin("damping", 0.5975, 29.8, 7e-12, significant=True, over_scatter=4.43, span=(0.031, 0.0981))
+    below = _bin("damping", -0.13, -16.4, 1e-10, significant=True, over_scatter=-4.13, span=(0.31, 0.981))
+    text = discrepancy_sentence("dahl", [above, below], None, 14)
+    assert "between 0.031 and 0.981 in/s, by up to +4.4 scatters (+82 %; |t| = 29.8" in text
+    assert (
+        "at 0.031-0.0981 in/s and -4.1 scatters (-12 %; |t| = 16.4" in text and "at 0.31-0.981 in/s" in text
+    )
+    # one side only: one size
+    assert " and -4.1" not in discrepancy_sentence("dahl", [above, {**below, "significant": False}], None, 14)
+
+
 def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range():
     # the demo's no_washer: damping significant at 0.465-1.47 in/s only, while the residual
     # figure shows the baseline's mean 2.5 scatters (2.8 %) too low above 1.47 in/s over the
     # 7 runs reaching it
-    significant = {
-        **_bin("damping", -0.0517, -6.7, 9.2e-5, significant=True, p_limit=6.3e-4, over_scatter=-4.6),
-        "v_low_in_s": 0.465,
-        "v_high_in_s": 1.47,
-    }
+    significant = _bin(
+        "damping",
+        -0.0517,
+        -6.7,
+        9.2e-5,
+        significant=True,
+        p_limit=6.3e-4,
+        over_scatter=-4.6,
+        span=(0.465, 1.47),
+    )
     above = {
-        **_bin("damping", 0.0279, 1.4, 0.22, p_limit=6.3e-4, over_scatter=2.5),
-        "v_low_in_s": 1.47,
-        "v_high_in_s": 4.65,
+        **_bin("damping", 0.0279, 1.4, 0.22, p_limit=6.3e-4, over_scatter=2.5, span=(1.47, 4.65)),
         "n_runs": 7,
     }
-    below = {
-        **_bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4, over_scatter=0.8),
-        "v_low_in_s": 0.147,
-        "v_high_in_s": 0.465,
-    }
+    below = _bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4, over_scatter=0.8, span=(0.147, 0.465))
     text = discrepancy_sentence("lugre", [below, significant, above], None, 10)
     assert (
         "the largest damping misfit that is not significant, where the measured damping lies 2.5 scatters "

@@ -147,20 +147,32 @@ def _largest(rows: list[Mapping]) -> Mapping:
 
 
 def _significant_words(model_name: str, curve: str, significant: list[Mapping], units: UnitSystem) -> str:
-    """``the measured damping differs from the lugre fit between A and B, by up to ... at ...``."""
+    """``the measured damping differs from the lugre fit between A and B, by up to ... at ...``:
+    the bin furthest from zero on each side the significant bins lie (the figure's
+    markers above and below zero), the larger first."""
     lo = min(b["v_low_in_s"] for b in significant)
     hi = max(b["v_high_in_s"] for b in significant)
-    worst = _largest(significant)
-    size = (
-        f"{scatters_words(worst['mean_over_scatter'], signed=True)} "
-        f"({format_percent(_misfit_percent(curve, worst['mean']))}; {statistic_words(worst)})"
-    )
+    sides = [
+        _largest(side)
+        for side in (
+            [b for b in significant if b["mean_over_scatter"] > 0],
+            [b for b in significant if b["mean_over_scatter"] <= 0],
+        )
+        if side
+    ]
+    sides.sort(key=lambda b: -abs(b["mean_over_scatter"]))
+
+    def size(row: Mapping) -> str:
+        return (
+            f"{scatters_words(row['mean_over_scatter'], signed=True)} "
+            f"({format_percent(_misfit_percent(curve, row['mean']))}; {statistic_words(row)})"
+        )
+
     if len(significant) == 1:
-        where = f"at {_span(lo, hi, units)}, by {size}"
+        where = f"at {_span(lo, hi, units)}, by {size(sides[0])}"
     else:
-        where = (
-            f"between {_span(lo, hi, units, ' and ')}, by up to {size} "
-            f"at {_span(worst['v_low_in_s'], worst['v_high_in_s'], units)}"
+        where = f"between {_span(lo, hi, units, ' and ')}, by up to " + " and ".join(
+            f"{size(row)} at {_span(row['v_low_in_s'], row['v_high_in_s'], units)}" for row in sides
         )
     return f"the measured {curve} differs from the {model_name} fit {where}"
 
@@ -181,7 +193,7 @@ def discrepancy_sentence(
     zero never reads as ``0.00 %``), with its side in words. A misfit is significant by
     :func:`~workflow.discovery.misfit.misfit_significant` (statistically clear and larger
     than the models' accuracy). Each curve is named: where it has significant bins, their
-    range and the one furthest from zero, then the furthest of its other bins when that
+    range and the one furthest from zero (on each side of zero where they lie on both), then the furthest of its other bins when that
     one lies outside the figure's ±2 scatter band (:data:`~workflow.discovery.misfit.EXPLAINS_LIMIT`),
     said not significant and why; where it has none, its bin furthest from zero and
     which half of the rule that bin fails. So the figure's largest excursion of each

@@ -22,6 +22,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
+from workflow.discovery.confidence import verdict_key  # noqa: E402
 from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
@@ -32,6 +33,7 @@ __all__ = [
     "plain_number",
     "residual_ticks",
     "residuals_figure",
+    "candidate_rows",
     "candidates_figure",
     "heldout_figure",
 ]
@@ -43,6 +45,9 @@ CURVE_LABELS = {
 }
 CURVE_NAMES = {"zeta": "damping", "frequency_hz": "frequency"}
 """The residual table's curves as the diagnosis evidence names them."""
+LINEAR_LIMIT = 4.0
+"""The residual axis is linear within this many scatters (the ±2 band stays readable),
+logarithmic beyond (misfits span decades)."""
 ERROR_LABEL = "held-out error (RMS residual / scatter, 1)"
 
 
@@ -120,9 +125,16 @@ def plain_number(value: float) -> str:
 
 
 def residual_ticks(limit: float) -> list[float]:
-    """Residual-axis ticks: 0, +-2 (the scatter band) and +-10, 100 ... up to ``limit``;
-    spaced so that their labels cannot meet on the linear-then-logarithmic axis."""
-    ticks = [2.0]
+    """Residual-axis ticks: 0, +-2 (the scatter band), +-4 (where the axis turns
+    logarithmic: without it a mean of 4.4 reads as 7) and +-10, 100 ... up to ``limit``;
+    spaced so that their labels cannot meet on the linear-then-logarithmic axis.
+
+    Examples
+    --------
+    >>> residual_ticks(12.0)
+    [-10.0, -4.0, -2.0, 0.0, 2.0, 4.0, 10.0]
+    """
+    ticks = [2.0, LINEAR_LIMIT]
     power = 10.0
     while power <= limit:
         ticks.append(power)
@@ -196,9 +208,9 @@ def residuals_figure(
             ax.set_ylabel(CURVE_LABELS[curve])
             finite = rows.loc[rows["curve"] == curve, "residual"].to_numpy(float)
             finite = finite[np.isfinite(finite)]
-            lim = max(4.0, float(np.max(np.abs(finite))) * 1.2) if finite.size else 4.0
+            lim = max(LINEAR_LIMIT, float(np.max(np.abs(finite))) * 1.2) if finite.size else LINEAR_LIMIT
             # linear within +-4 (the scatter band stays readable), logarithmic beyond
-            ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
+            ax.set_yscale("symlog", linthresh=LINEAR_LIMIT, linscale=1.5)
             ax.set_ylim(-lim, lim)
             ax.yaxis.set_major_locator(ticker.FixedLocator(residual_ticks(lim)))
             ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
@@ -232,6 +244,47 @@ def residuals_figure(
     return fig
 
 
+def candidate_rows(entry: Mapping) -> list[dict]:
+    """The candidates a configuration's panel of :func:`candidates_figure` shows, best first.
+
+    Each ranked cause (``ranking``) with its model and held-out error; where the verdict's
+    extended model is not its cause's candidate (the slip thresholds recovered from the
+    data, ``evidence.threshold_distribution``), that model too, with its own held-out error
+    (``gain.extended``, the error the verdict page quotes for it). ``verdict`` marks the
+    row of the verdict's extended model.
+
+    Examples
+    --------
+    >>> entry = {"cause": "microslip_power_law", "causes": ["microslip_power_law"],
+    ...     "baseline": {"model": "lugre"}, "extended_model": {"model": "iwan_cells_6"},
+    ...     "gain": {"extended": 1.7},
+    ...     "ranking": [{"cause": "microslip_power_law", "score": 5.1}, {"cause": "none", "score": 63.0}],
+    ...     "evidence": {"candidates": {"microslip_power_law": {"model": "iwan"}}}}
+    >>> [(r["model"], r["score"], r["verdict"]) for r in candidate_rows(entry)]
+    [('iwan_cells_6', 1.7, True), ('iwan', 5.1, False), ('lugre', 63.0, False)]
+    """
+    evidence = entry.get("evidence") or {}
+    candidates = evidence.get("candidates") or {}
+    combinations = evidence.get("combinations") or {}
+    extended = (entry.get("extended_model") or {}).get("model")
+    verdict = verdict_key(entry.get("causes") or [entry.get("cause") or "?"])
+    rows = []
+    for ranked in entry.get("ranking", []):
+        cause = ranked["cause"]
+        if cause == "none":
+            model = (entry.get("baseline") or {}).get("model", "?")
+        else:
+            model = (candidates.get(cause) or combinations.get(cause) or {}).get("model", "?")
+        rows.append({"cause": cause, "model": model, "score": ranked["score"], "verdict": False})
+    own = [r for r in rows if r["cause"] == verdict]
+    if own and extended and own[0]["model"] != extended and verdict not in ("none", "unknown"):
+        score = (entry.get("gain") or {}).get("extended")
+        rows.append({"cause": verdict, "model": extended, "score": score, "verdict": True})
+    elif own:
+        own[0]["verdict"] = True
+    return sorted(rows, key=lambda r: np.inf if r["score"] is None else r["score"])
+
+
 def candidates_figure(document: Mapping) -> plt.Figure:
     """Held-out error of every candidate cause, per configuration, baseline marked.
 
@@ -251,7 +304,7 @@ def candidates_figure(document: Mapping) -> plt.Figure:
     entries = document.get("configurations", {})
     names = list(entries)
     with plt.rc_context(STYLE):
-        rows = [len(entries[name].get("ranking", [])) for name in names] or [1]
+        rows = [len(candidate_rows(entries[name])) for name in names] or [1]
         heights = [max(count, 1) * 0.32 + 0.9 for count in rows]
         fig, axes = plt.subplots(
             len(rows),
@@ -267,32 +320,25 @@ def candidates_figure(document: Mapping) -> plt.Figure:
             )
             axes[0].set_axis_off()
         for ax, name in zip(axes, names):
-            entry = entries[name]
-            ranking = entry.get("ranking", [])
-            causes = [r["cause"] for r in ranking][::-1]
-            scores = np.array(
-                [r["score"] if r["score"] is not None else np.nan for r in ranking][::-1], dtype=float
-            )
-            candidates = entry.get("evidence", {}).get("candidates", {})
-            base_model = entry["baseline"]["model"]
+            rows = candidate_rows(entries[name])[::-1]
+            causes = [r["cause"] for r in rows]
+            scores = np.array([r["score"] if r["score"] is not None else np.nan for r in rows], dtype=float)
             labels = [
-                f"none ({base_model}, baseline)"
-                if c == "none"
-                else f"{c} ({candidates.get(c, {}).get('model', '?')})"
-                for c in causes
+                f"none ({r['model']}, baseline)" if r["cause"] == "none" else f"{r['cause']} ({r['model']})"
+                for r in rows
             ]
-            positions = np.arange(len(causes))
+            positions = np.arange(len(rows))
             finite = np.isfinite(scores)
-            for position, cause, score in zip(positions, causes, scores):
+            for position, row, score in zip(positions, rows, scores):
                 if not np.isfinite(score):
                     continue
-                verdict = cause == entry.get("cause")
+                verdict = row["verdict"]
                 ax.plot(
                     score,
                     position,
                     "o",
                     ms=10 if verdict else 6,
-                    color="0.55" if cause == "none" else "tab:blue",
+                    color="0.55" if row["cause"] == "none" else "tab:blue",
                     mec="black" if verdict else "none",
                     mew=2.0 if verdict else 0.0,
                 )
@@ -308,7 +354,9 @@ def candidates_figure(document: Mapping) -> plt.Figure:
             ax.set_yticks(positions, labels)
             ax.set_ylim(-0.6, len(causes) - 0.4)
             ax.set_title(
-                f"{plot_text(name)}: verdict {entry.get('cause', '?')} (large outlined dot)", loc="left"
+                f"{plot_text(name)}: verdict {next((r['cause'] for r in rows if r['verdict']), '?')} "
+                "(large outlined dot)",
+                loc="left",
             )
         axes[-1].set_xlabel(ERROR_LABEL + "; dashed: baseline")
         lay_out(fig)

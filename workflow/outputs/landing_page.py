@@ -19,6 +19,7 @@ from workflow.outputs.report_wording import (
     cause_name,
     discrepancy_text,
     excluded_runs,
+    explains_sentences,
     margin_words,
     measured_trends,
     model_name,
@@ -71,7 +72,14 @@ def verdict_rst(
         gain = entry.get("gain") or {}
         base = model_name(entry.get("baseline", {}).get("model"))
         if entry.get("cause") == "none":
-            text = f"{base} fits within the run-to-run scatter (held-out error {fmt(gain.get('baseline'))})."
+            # what the residual figure shows: no significant misfit, and whether every
+            # half decade's mean lies within the ±2 band
+            text = " ".join(
+                [
+                    f"{base} leaves no significant misfit (held-out error {fmt(gain.get('baseline'))}).",
+                    *explains_sentences(entry, units),
+                ]
+            )
         else:
             text = discrepancy_text(entry, units)
             if entry.get("cause") != "unknown":

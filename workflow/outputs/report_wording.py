@@ -12,6 +12,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.confidence import verdict_key
 from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import unidentified_parameters
@@ -130,6 +131,12 @@ def candidate_name(cause: str | None) -> str:
 def candidate_margin(entry: Mapping) -> dict | None:
     """How far the chosen cause is from the next candidate, by held-out error.
 
+    The verdict's error is that of its extended model (``gain.extended``, the error the
+    table and the candidates figure give it: the slip thresholds recovered from the data
+    where they replaced the power law); the next candidate is the best of the other
+    causes of the ranking (a combination counts as its own cause, keyed as in
+    :func:`~workflow.discovery.confidence.verdict_key`).
+
     Returns
     -------
     dict or None
@@ -139,19 +146,20 @@ def candidate_margin(entry: Mapping) -> dict | None:
         the other candidate scored lower but was not accepted, see ``decision_rule``).
     """
     ranking = [r for r in entry.get("ranking", []) if r.get("score") is not None]
-    chosen = entry.get("cause")
-    if chosen == "unknown":
-        chosen = "none"  # unknown keeps the baseline: compare it with the best candidate
+    cause = entry.get("cause")
+    # unknown keeps the baseline: compare it with the best candidate
+    chosen = "none" if cause in ("none", "unknown") else verdict_key(entry.get("causes") or [cause])
     mine = [r for r in ranking if r["cause"] == chosen]
     others = [r for r in ranking if r["cause"] != chosen]
     if not mine or not others:
         return None
     best_other = min(others, key=lambda r: r["score"])
-    chosen_score = float(mine[0]["score"])
+    extended = (entry.get("gain") or {}).get("extended")
+    chosen_score = float(extended if chosen != "none" and extended is not None else mine[0]["score"])
     next_score = float(best_other["score"])
     ratio = next_score / chosen_score if chosen_score > 0 else None
     return {
-        "chosen": entry.get("cause"),
+        "chosen": cause,
         "chosen_score": chosen_score,
         "next": best_other["cause"],
         "next_score": next_score,

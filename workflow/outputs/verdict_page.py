@@ -142,10 +142,11 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
             )
         items.append(text + ".")
         if candidate.get("residual_significant"):
+            # the candidate's, which may not be the extended model the residual figure draws
             items.append(
-                f"Some misfit remains after the extension ({candidate.get('significant_bins', '?')} "
-                "amplitude bin(s) still significant): the extended model is better, "
-                "not perfect."
+                f"{model_name(candidate.get('model'))} leaves some misfit "
+                f"({candidate.get('significant_bins', '?')} amplitude bin(s) still significant): "
+                "it is better, not perfect."
             )
     items.extend(signature_sentences(entry))
     margin = candidate_margin(entry)
