@@ -30,14 +30,14 @@ STAGES = {
     "read_run": "record = read_run(root, 'long/run01.txt', campaign)",
     "identify_mode": (
         "found = identify_configuration_mode(root, RUNS, configuration='long', campaign=campaign,\n"
-        "    mode_search=AnalysisSettings().mode_search(), quality_settings=quality_settings)\n"
+        "    mode_search=AnalysisSettings(), quality_settings=quality_settings)\n"
         "write_mode(sys.argv[2], found)\n"
         "print(found.mode)"
     ),
     "analyse_runs": (
         "result = analyse_run_file(root, 'long/run01.txt', configuration='long', campaign=campaign,\n"
         "    mode=read_mode(sys.argv[2]), quality_settings=quality_settings,\n"
-        "    decay_settings=AnalysisSettings().decay())\n"
+        "    decay_settings=AnalysisSettings())\n"
         "print(result.status['status'], result.status['reason'])"
     ),
 }
@@ -48,7 +48,7 @@ from pathlib import Path
 from workflow.io.campaign import load_campaign
 from workflow.io.run_files import read_run
 from workflow.io.interim import read_mode, write_mode
-from workflow.io.settings import AnalysisSettings, QualitySettings
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_file
 root = Path(sys.argv[1])

@@ -9,9 +9,9 @@ first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run w
 nothing to do, and a run after changing ``analysis.segment_cycles``. ``--scale``
 adds, each repeated as often and cold: one impact hit recorded by three sensors at
 12.8 kHz for 5 s (64000 samples a channel, analysed as three one-run
-configurations; ``mat_hit``: the same hit as one MAT file of time and three
-accelerations with ``modes_hz: auto``, every mode on every channel), a 300-run campaign (10 configurations x 30 runs) for the growth with
-runs, and the demo's 30 runs with records 4 times as long (32768 samples) for the
+configurations; ``mat_hit``: the virtual lab's one-hit MAT file of time, force and
+three accelerations with ``modes_hz: auto``, every mode on every channel), a 300-run
+campaign (10 configurations x 30 runs) for the growth with runs, and the demo's 30 runs with records 4 times as long (32768 samples) for the
 growth with record length; ``--only`` runs just the named ones of these (cold, no demo).
 Per rule: wall time from Snakemake's
 ``benchmark:`` files, and each job's CPU split into start-up (interpreter, Snakemake's
@@ -217,30 +217,21 @@ def high_rate_hit(root: Path) -> Path:
 
 
 def mat_hit(root: Path) -> Path:
-    """The same hit as :func:`high_rate_hit` stored as one MAT file: time and the three
-    sensors' accelerations (g) as plain variables, ``modes_hz: auto`` and
-    ``response.channels`` naming the three (issue 32's done-when campaign)."""
-    import numpy as np
-    import scipy.io
+    """One hit recorded by three accelerometers at 12.8 kHz for 5 s, stored as one MAT
+    file (time, force and the three accelerations), ``modes_hz: auto`` and every channel
+    asked for (issue 32's done-when campaign): the virtual lab's
+    :func:`~workflow.lab.campaigns.generate_one_hit`."""
+    from workflow.lab.campaigns import generate_one_hit
 
-    sensors = high_rate_hit(root / "sources")
-    columns = {
-        sensor: np.loadtxt(sensors / sensor / "run01.txt", skiprows=4, usecols=2) for sensor in SENSOR_GAINS
-    }
     campaign = root / "mat_hit"
-    (campaign / "hit").mkdir(parents=True)
-    time_s = np.arange(HIGH_RATE_SAMPLES) / HIGH_RATE_HZ
-    scipy.io.savemat(campaign / "hit" / "run01.mat", {"t": time_s, **columns})
-    (campaign / "campaign.yaml").write_text(
-        "name: one-hit-three-sensors\nmodes_hz: auto\n"
-        f"response: {{quantity: acceleration, unit: g, channels: [{', '.join(SENSOR_GAINS)}]}}\n"
-        'configurations:\n  hit: {files: "hit/*.mat"}\n'
+    generate_one_hit(
+        campaign, seed=7, sample_rate_hz=HIGH_RATE_HZ, duration_s=HIGH_RATE_SAMPLES / HIGH_RATE_HZ
     )
     return campaign
 
 
 SCALE_CAMPAIGNS = {
-    "mat_hit": "one hit, three sensors at 12.8 kHz for 5 s in one MAT file, modes_hz: auto",
+    "mat_hit": "one hit, three sensors at 12.8 kHz for 5 s in one MAT file with the force, modes_hz: auto",
     "high_rate": "one hit, three sensors at 12.8 kHz for 5 s (three one-run configurations)",
     "runs300": "300 runs (10 x 30)",
     "long": "30 runs of 32768 samples (4 x longer records)",

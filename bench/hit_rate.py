@@ -201,14 +201,15 @@ def baseline_misfit_on_truth(
     """
     from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
     from workflow.lab.settings import LabSettings
-    from workflow.models.averaged_fit import FitContext, FitSettings, fit_model, model_residuals
+    from workflow.models.averaged_fit import FitContext, fit_model, model_residuals
     from workflow.models.configuration_data import ConfigurationData, Scatter
+    from workflow.models.settings import DiscoverySettings
 
     lab = LabSettings()
     v = np.geomspace(*velocity_range_in_s, 60)
     area = case["bearing_area_in2"]
     noise = Scatter(*(np.full(v.size, x) for x in (scatter_ln_zeta, scatter_rel_f) * 2))
-    settings = FitSettings(global_samples=256, local_starts=4, max_nfev=200)
+    settings = DiscoverySettings(global_samples=256, local_starts=4)
     setup, curves = setup_configuration("x", area, lab)
     table = mode_table(setup, curves, lab, case["joint"], case["effect"], case["effect_size"])
     zeta, frequency_hz = truth_curves(setup, table, v)
@@ -216,7 +217,7 @@ def baseline_misfit_on_truth(
     context = FitContext(float(np.quantile(v, 0.9)))
     best = None
     for model in ("dahl", "lugre"):
-        fit = fit_model(model, data, noise, context, settings=settings)
+        fit = fit_model(model, data, noise, context, settings=settings, max_nfev=200)
         r = model_residuals(fit, data, noise, context)
         rms = float(np.sqrt(np.mean(0.5 * (r["z_noise"] ** 2 + r["f_noise"] ** 2))))
         if best is None or rms < best[0]:

@@ -16,6 +16,8 @@ import numpy as np
 import pandas as pd
 from peer_speed import project_record
 
+from workflow.io.campaign import load_campaign
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -25,7 +27,7 @@ def main() -> None:
     args = parser.parse_args()
     folder = args.realdata / "pff-lms-sample"
     reference = pd.read_csv(args.realdata / "pff-lms-sample.reference.csv")
-    found, result = project_record(folder)
+    found, result = project_record(folder, load_campaign(folder))
     mode = found.mode
     segments = pd.DataFrame(result.segments)
     kept = segments[segments["kept"]]

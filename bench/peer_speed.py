@@ -25,13 +25,14 @@ On the sample record it reproduces the method's published output
 (../shared/realdata/pff-lms-sample.reference.csv) between 0.3 and 1.8 s: damping -1.7 %
 in the median (5.5 % median absolute difference, point by point), frequency +0.014 Hz.
 
-The project's work on the same file is what its two per-record jobs do
-(``identify_mode`` and ``analyse_runs``, each a process of its own that reads the
-file): read the MAT file and find the mode (:func:`identify_configuration_mode`), read
-it again and run the decay analysis (:func:`analyse_run_file`). Each is run in turn,
-alternating, in this one process after a warm-up of both (imports, caches of the
-first call), and the medians are printed with their ratio and the machine's speed (the reference
-loop of bench_workflow.py).
+The project's work on the same file is what its ``identify_mode`` job does for a
+configuration of one run: read the campaign's settings (the JSON that the
+``campaign_settings`` job wrote once from campaign.yaml), read the MAT file once
+(:func:`read_runs`), find the mode (:func:`identify_configuration_mode`) and run the
+decay analysis on the record already read (:func:`analyse_run_file`). Each side is run
+in turn, alternating, in this one process after a warm-up of both (imports, caches of
+the first call), and the medians are printed with their ratio and the machine's speed
+(the reference loop of bench_workflow.py).
 
 Both run single-threaded, as the workflow's jobs do (Snakemake gives a ``threads: 1``
 job one BLAS thread): a threaded BLAS call leaves its threads spinning on a loaded
@@ -57,12 +58,12 @@ import scipy.io
 from bench_workflow import REFERENCE_ADDITIONS, reference_loop_s
 from scipy import signal
 
-from workflow.io.campaign import load_campaign
-from workflow.io.interim import ConfigurationMode
+from workflow.io.campaign import Campaign, load_campaign
+from workflow.io.interim import ConfigurationMode, read_campaign, write_campaign
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
-from workflow.measured.runs import RunAnalysis, analyse_run_file
+from workflow.measured.runs import RunAnalysis, analyse_run_file, read_runs
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 NOMINAL_HZ = 151.0
 """The mode's approximate frequency, as the converted campaign gives it (mode_hz), Hz."""
@@ -130,22 +131,28 @@ def peer_record(mat_path: Path) -> dict[str, np.ndarray]:
     return pff_extraction(t, x, nominal_hz=NOMINAL_HZ, start_s=t[np.argmax(x)] + 0.05, stop_s=2.0)
 
 
-def project_record(folder: Path) -> tuple[ConfigurationMode, RunAnalysis]:
-    """The project's per-record work on the one run of the campaign in ``folder``: the
-    mode search and the decay analysis, through the library calls of the workflow's
-    rules ``identify_mode`` and ``analyse_runs`` (each reads the file)."""
-    campaign = load_campaign(folder)
+def project_record(folder: Path, campaign: Campaign) -> tuple[ConfigurationMode, RunAnalysis]:
+    """The project's per-record work on the one run of the campaign in ``folder``, as its
+    ``identify_mode`` job does it once the campaign is read: the file read once, the mode
+    search and the decay analysis."""
     run_file = list_runs(folder, campaign)[0]
+    quality_settings = QualitySettings()
+    reads = read_runs(folder, [run_file.path], campaign, quality_settings)
     options = {
         "configuration": run_file.configuration,
         "campaign": campaign,
-        "quality_settings": QualitySettings(),
+        "quality_settings": quality_settings,
     }
     mode = identify_configuration_mode(
-        folder, [run_file.path], mode_search=AnalysisSettings().mode_search(), **options
+        folder, [run_file.path], mode_search=AnalysisSettings(), reads=reads, **options
     )
     result = analyse_run_file(
-        folder, run_file.path, mode=mode, decay_settings=AnalysisSettings().decay(), **options
+        folder,
+        run_file.path,
+        mode=mode,
+        decay_settings=AnalysisSettings(),
+        read=reads[run_file.path],
+        **options,
     )
     if result.status["status"] != "used":
         raise RuntimeError(f"the project excluded the record: {result.status['reason']}")
@@ -167,9 +174,12 @@ def main() -> None:
         # a copy: a link leading outside the campaign is not read (docs/input-safety.md)
         shutil.copyfile(mat_path, folder / "decay" / "run01.mat")
         (folder / "campaign.yaml").write_text(CAMPAIGN_YAML)
+        # campaign.yaml validated once, as the workflow's campaign_settings job does
+        settings_json = folder / "campaign.json"
+        write_campaign(settings_json, load_campaign(folder))
         work = {
             "peer (PFF)": lambda: peer_record(mat_path),
-            "project": lambda: project_record(folder)[1].segments,
+            "project": lambda: project_record(folder, read_campaign(settings_json))[1].segments,
         }
         seconds = {name: [] for name in work}
         outputs = {}

@@ -8,7 +8,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 
-from workflow.io.settings import ConfigError, validate_config
+from workflow.config import ConfigError, validate_config
 from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
 from workflow.io.escape import terminal_lines, terminal_text, visible_controls
 
@@ -237,12 +237,20 @@ def configuration_run_files(wildcards):
     return [CAMPAIGN / run.path for run in RUNS[wildcards.configuration]]
 
 
+FIRST_RUN_GROUP = "runs01"
+"""The first group of every configuration's runs: analysed by its identify_mode job."""
+
+
 def run_groups(configuration):
-    """The configuration's runs in groups of ``runs_per_job`` (campaign order), one
-    analyse_runs job each: name -> runs."""
+    """The configuration's runs in groups of ``runs_per_job`` (campaign order), one job
+    each (identify_mode for the first, analyse_runs for the others): name -> runs."""
     runs = RUNS[configuration]
     size = SETTINGS.runs_per_job
     return {f"runs{index // size + 1:02d}": runs[index : index + size] for index in range(0, len(runs), size)}
+
+
+def first_run_group_files(wildcards):
+    return [CAMPAIGN / run.path for run in run_groups(wildcards.configuration)[FIRST_RUN_GROUP]]
 
 
 def run_group_files(wildcards):

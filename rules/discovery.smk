@@ -30,7 +30,7 @@ rule diagnose_configuration:
         mem_mb=3000,
         runtime=60,
     params:
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         discovery=asdict(SETTINGS.discovery),
         models=asdict(SETTINGS.models),
     script:
@@ -61,7 +61,7 @@ rule diagnose_modes:
     params:
         channel=lambda wildcards: RESPONSE_CHANNELS[channel_index(wildcards.channel_key)],
         first_channel=lambda wildcards: channel_index(wildcards.channel_key) == 0,
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         discovery=asdict(SETTINGS.discovery),
     script:
         "../scripts/diagnose_modes.py"
@@ -90,7 +90,7 @@ rule diagnose_joint:
     params:
         channel=None,
         first_channel=False,
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         discovery=asdict(SETTINGS.discovery),
     script:
         "../scripts/diagnose_modes.py"

@@ -72,7 +72,7 @@ rule figures_measured:
     params:
         units=SETTINGS.units,
         configurations=CONFIGURATIONS,
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/figures_measured.py"

@@ -21,12 +21,21 @@ rule campaign_settings:
         "../scripts/campaign_settings.py"
 
 
+# identify_mode also analyses the configuration's first group of runs (analyse_runs's
+# work) with the runs it has read for the mode search: no file of that group is read
+# twice, and a configuration of at most runs_per_job runs is one job.
+ruleorder: identify_mode > analyse_runs
+
+
 rule identify_mode:
     input:
         campaign_settings="results/interim/campaign.json",
         runs=configuration_run_files,
     output:
-        "results/interim/mode/{configuration}.json",
+        mode="results/interim/mode/{configuration}.json",
+        segments=f"results/interim/segments/{{configuration}}/{FIRST_RUN_GROUP}.npz",
+        quality=f"results/interim/quality/{{configuration}}/{FIRST_RUN_GROUP}.npz",
+        status=f"results/interim/status/{{configuration}}/{FIRST_RUN_GROUP}.json",
     log:
         "results/logs/identify_mode/{configuration}.log",
     benchmark:
@@ -35,11 +44,13 @@ rule identify_mode:
         LAPJOINT_ENV
     threads: 1
     resources:
-        mem_mb=lambda wildcards, input: identify_mode_mem_mb(input.runs),
+        mem_mb=lambda wildcards, input: identify_mode_mem_mb(input.runs, first_run_group_files(wildcards)),
         runtime=10,
     params:
         campaign=str(CAMPAIGN),
-        mode_search=asdict(SETTINGS.analysis.mode_search()),
+        first_group=lambda wildcards: [str(path) for path in first_run_group_files(wildcards)],
+        strict=SETTINGS.strict,
+        analysis=asdict(SETTINGS.analysis),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/identify_mode.py"
@@ -67,7 +78,7 @@ rule analyse_runs:
     params:
         campaign=str(CAMPAIGN),
         strict=SETTINGS.strict,
-        decay=asdict(SETTINGS.analysis.decay()),
+        analysis=asdict(SETTINGS.analysis),
         quality=asdict(SETTINGS.quality),
     script:
         "../scripts/analyse_runs.py"

@@ -7,11 +7,11 @@ import time
 from workflow.discovery.diagnosis_files import write_configuration_diagnosis
 from workflow.discovery.modes import diagnosed_outcome
 from workflow.io.interim import read_campaign
-from workflow.io.settings import DecaySettings, ModelSettings
 from workflow.io.tables import read_table, write_json
 from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
-from workflow.models.averaged_fit import FitSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.paper import configuration_models_document
+from workflow.models.settings import DiscoverySettings, ModelSettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose_configuration")
@@ -19,14 +19,14 @@ configuration = snakemake.wildcards.configuration
 campaign = read_campaign(snakemake.input.campaign_settings)
 # the first mode, seen by the first channel (docs/outputs.md)
 segments = first_mode_and_channel(read_table(snakemake.input.segments), campaign.response.channel_names()[0])
-decay = DecaySettings(**snakemake.params.decay)
+decay = AnalysisSettings(**snakemake.params.analysis)
 started = time.perf_counter()
 outcome = diagnosed_outcome(
     segments,
     read_table(snakemake.input.runs),
     configuration,
     response_quantity=campaign.response.quantity,
-    settings=FitSettings(**snakemake.params.discovery),
+    settings=DiscoverySettings(**snakemake.params.discovery),
     segment_cycles=decay.segment_cycles,
 )
 diagnosis = outcome.diagnosis

@@ -8,9 +8,9 @@ from pathlib import Path
 from workflow.discovery.diagnosis_files import write_configuration_diagnosis
 from workflow.discovery.modes import diagnosed_outcome, joint_outcome
 from workflow.io.interim import read_campaign
-from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
-from workflow.models.averaged_fit import FitSettings
+from workflow.measured.settings import AnalysisSettings
+from workflow.models.settings import DiscoverySettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "diagnose_modes")
@@ -32,8 +32,8 @@ for index, mode_hz in enumerate(sorted(segments["mode_hz"].dropna().unique())):
         runs,
         configuration,
         response_quantity=campaign.response.quantity,
-        settings=FitSettings(**snakemake.params.discovery),
-        segment_cycles=DecaySettings(**snakemake.params.decay).segment_cycles,
+        settings=DiscoverySettings(**snakemake.params.discovery),
+        segment_cycles=AnalysisSettings(**snakemake.params.analysis).segment_cycles,
     )
     verdict = outcome.skipped if outcome.diagnosis is None else outcome.diagnosis.document["cause"]
     seen_by = "every channel" if channel is None else f"channel {channel!r}"

@@ -2,7 +2,6 @@
 figures 10-12 (damping vs velocity amplitude, one per configuration), figure 13 (damping
 fits against bearing area) and the backbones (frequency vs velocity amplitude)."""
 
-from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -11,12 +10,12 @@ from workflow.discovery.wording import runs_words
 from workflow.io.escape import plot_text
 from workflow.io.interim import read_campaign
 from workflow.io.run_files import read_run
-from workflow.io.settings import DecaySettings
 from workflow.io.tables import read_table
 from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
 from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
 from workflow.measured.runs import analysis_window
+from workflow.measured.settings import AnalysisSettings
 from workflow.outputs import figures
 from workflow.runtime.logs import ScriptStop, setup_script_logging
 
@@ -54,7 +53,7 @@ result = decay.analyse_decay(
     mode_hz=float(modes.loc[configuration, "mode_hz"]),
     start_index=start if (start, stop) != (0, record.n_samples) else None,
     stop_index=stop,
-    **asdict(DecaySettings(**snakemake.params.decay)),
+    **AnalysisSettings(**snakemake.params.analysis).decay_options(),
 )
 time_s = np.arange(record.n_samples) / record.sample_rate_hz
 # in SI the record's unit (g, in/s, ...) is converted: one factor for all three curves

@@ -1,9 +1,9 @@
 """Rule fit_curves: damping polynomial fits, bootstrap bands, hypotheses, area fits."""
 
 from workflow.io.interim import read_campaign
-from workflow.io.settings import DampingFitSettings
 from workflow.io.tables import read_table, write_table
 from workflow.measured.campaign_tables import fit_damping_curves
+from workflow.measured.settings import DampingFitSettings
 from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_curves")

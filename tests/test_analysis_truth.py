@@ -8,9 +8,9 @@ from test_decay import band, ring_down
 
 from workflow.io.interim import ModeInfo
 from workflow.io.records import RunRecord
-from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.measured.decay import analyse_decay, segment_bounds
 from workflow.measured.runs import analyse_run_with_quality
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 F_HZ, ZETA, FS_HZ, DURATION_S = 125.0, 0.002, 2560.0, 3.2
 DAMPED_HZ = F_HZ * np.sqrt(1 - ZETA**2)
@@ -90,7 +90,7 @@ def test_velocity_uses_each_segments_own_frequency_not_the_mode_frequency():
         run="run01",
         mode=mode,
         window=(0, record.n_samples),
-        decay_settings=DecaySettings(
+        decay_settings=AnalysisSettings(
             filter_order=10,
             segment_cycles=10.0,
             segment_overlap=0.5,

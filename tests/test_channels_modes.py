@@ -451,15 +451,15 @@ def assert_dwell_line_named_then_mode_found(folder, yaml_text):
 
 
 def identify(folder):
-    from workflow.io.settings import AnalysisSettings, QualitySettings
     from workflow.measured.mode_identification import identify_configuration_mode
+    from workflow.measured.settings import AnalysisSettings, QualitySettings
 
     return identify_configuration_mode(
         folder,
         ["c/run.mat"],
         configuration="c",
         campaign=load_campaign(folder),
-        mode_search=AnalysisSettings().mode_search(),
+        mode_search=AnalysisSettings(),
         quality_settings=QualitySettings(),
     )
 
@@ -676,3 +676,20 @@ def test_listed_modes_are_found_each_in_its_band_and_auto_finds_both(tmp_path):
     found = identify(folder)
     assert [mode.mode_hz for mode in found.modes] == pytest.approx([80.5, 297.7], abs=0.3)
     assert found.left_out == ()
+
+
+def test_line_track_equals_the_full_complex_transform():
+    """The track from real transforms equals the definition: the magnitude of the inverse
+    complex FFT of the whole spectrum times the Gaussian gain, to rounding."""
+    from workflow.measured.mode import _line_track
+
+    rng = np.random.default_rng(8)
+    fs_hz = 1024.0
+    for n, line_hz in ((8192, 18.79), (8192, 400.0), (8191, 400.0)):
+        x = rng.normal(size=n)
+        sigma_hz = 0.01 * line_hz
+        frequency_hz = np.fft.fftfreq(n, 1.0 / fs_hz)
+        gain = np.exp(-0.5 * ((frequency_hz - line_hz) / sigma_hz) ** 2)
+        definition = np.abs(np.fft.ifft(np.fft.fft(x) * gain))
+        got = _line_track(x, fs_hz, line_hz, sigma_hz)
+        assert np.max(np.abs(got - definition)) < 1e-13 * np.max(definition)

@@ -192,6 +192,25 @@ def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
     assert not combination_test(combined, parts, baseline, w, paired_standard_errors=0.0)["named"]
 
 
+def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leaves():
+    """The lab's micro-slip + velocity-squared case seen by three sensors (base seed, squared
+    held-out errors in scatter units): the baseline at 6700, the threshold-distribution joint
+    alone at 1290, the loss alone at 2210, both at 1.7. The loss carries only 0.19 of the
+    gain over the baseline, but removes all but a 700th of what micro-slip alone leaves: two
+    mechanisms. Micro-slip that removes a tenth of what the loss leaves only polishes it."""
+    rng = np.random.default_rng(5)
+    w = np.ones(N_UNITS)
+    combined = 1.7 * (1.0 + 0.3 * rng.standard_normal(N_UNITS))
+    spread = 1.0 + 0.3 * rng.standard_normal(N_UNITS)
+    parts = {"microslip": combined + 1290.0 * spread, "loss": combined + 2210.0 * spread}
+    result = combination_test(combined, parts, combined + 6700.0, w)
+    assert result["shares"]["loss"] < 0.2  # what the old share-of-gain rule refused
+    assert result["removed"]["loss"] > 0.99
+    assert result["named"] and result["causes"] == ["microslip", "loss"]
+    polish = {"microslip": combined + 1290.0 * spread, "loss": combined + 0.1 * 1.7 * spread}
+    assert not combination_test(combined, polish, combined + 6700.0, w, paired_standard_errors=0.0)["named"]
+
+
 def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():
     """All-ones weights are the data: the bin's t test and the trend's regression p value
     (scipy's linregress) decide as on the data; reweightings then spread around it."""

@@ -328,3 +328,30 @@ def test_the_band_power_kept_between_records_gives_the_same_filter():
     _, _, padded = filters._zero_phase_spectrum(records[0], fs_hz, band_hz, 10)
     with pytest.raises(ValueError):
         filters._padded_band_power(padded, fs_hz, band_hz, 10)[0] = 0.0
+
+
+def test_analytic_bandpass_equals_the_two_sided_inverse_transform():
+    """The two real inverse transforms give the analytic signal of the definition (the
+    one-sided spectrum doubled, one complex inverse transform), to rounding."""
+    rng = np.random.default_rng(6)
+    fs_hz, band_hz = 2560.0, (100.0, 150.0)
+    for n in (4095, 4096):
+        x = rng.normal(size=n)
+        spectrum, extension, padded = filters._zero_phase_spectrum(x, fs_hz, band_hz, 10)
+        two_sided = np.zeros(padded, dtype=complex)
+        two_sided[: spectrum.size] = spectrum
+        two_sided[1 : (padded + 1) // 2] *= 2.0
+        definition = np.fft.ifft(two_sided)[extension : extension + n]
+        got = filters.analytic_bandpass(x, fs_hz, band_hz, 10)
+        assert np.max(np.abs(got - definition)) < 1e-14 * np.max(np.abs(definition))
+        assert np.array_equal(got.real, filters.bandpass(x, fs_hz, band_hz, 10))
+
+
+def test_unwrapped_phase_equals_numpys_unwrap_bit_for_bit():
+    """Jumps of every size, exact multiples of pi included (np.unwrap's ambiguous case)."""
+    rng = np.random.default_rng(7)
+    steps = rng.choice([0.3, -0.3, np.pi, -np.pi, 2 * np.pi, 3.5, -4.0, 7.0], size=5000)
+    z = np.exp(1j * np.cumsum(steps)) * rng.uniform(0.5, 2.0, size=steps.size)
+    assert np.array_equal(filters.unwrapped_phase_rad(z), np.unwrap(np.angle(z)))
+    tone = np.exp(1j * 2 * np.pi * 151.0 * np.arange(20000) / 51200.0)
+    assert np.array_equal(filters.unwrapped_phase_rad(tone), np.unwrap(np.angle(tone)))

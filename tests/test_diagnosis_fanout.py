@@ -23,7 +23,8 @@ from workflow.discovery.diagnosis_files import (
     write_configuration_diagnosis,
 )
 from workflow.models.averaged import MODELS
-from workflow.models.averaged_fit import FitContext, FitResult, FitSettings, model_residuals, to_coords
+from workflow.models.averaged_fit import FitContext, FitResult, model_residuals, to_coords
+from workflow.models.settings import DiscoverySettings
 
 
 def _campaign() -> pd.DataFrame:
@@ -103,7 +104,7 @@ def test_paper_fits_start_from_the_diagnosis_fits_no_worse_than_their_own():
     from workflow.models.paper import averaged_fit_params
 
     segments = synthetic_segments("dahl", DAHL, seed=5, n_runs=4)
-    settings = FitSettings()
+    settings = DiscoverySettings()
     diagnosis = diagnose_configuration_segments(
         segments, "c", campaign_fit_context(segments), settings=settings
     )

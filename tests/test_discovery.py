@@ -26,7 +26,6 @@ from workflow.io.recording_time import FILE_NAME_ORDER, RECORD_START_ORDER
 from workflow.models.averaged import MODELS, CurveGrid
 from workflow.models.averaged_fit import (
     FitContext,
-    FitSettings,
     _local_fit,
     _Problem,
     apply_run_offsets,
@@ -46,6 +45,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 MODEL_ACCURACY_LN_ZETA = 0.02
 """The averaged models' accuracy in ln zeta: their largest deviation from direct integration
@@ -59,7 +59,7 @@ EXPLAINS_SCATTERS = 2.0
 """The output contract's ``explains_data``: every half decade's mean residual within two
 measured scatters."""
 
-FAST = FitSettings(global_samples=128, local_starts=2, resamples=40)
+FAST = DiscoverySettings(global_samples=128, local_starts=2, resamples=40)
 DAHL = {"f_lin_hz": 120.0, "zeta0": 8e-4, "joint_stiffness_fraction": 0.01, "slip_velocity_in_s": 1.5}
 
 
@@ -123,7 +123,9 @@ def test_dahl_data_gives_none_with_unit_gain():
     assert conf["baseline"]["model"] in ("dahl", "lugre")
     assert conf["baseline"]["error"]["metric"] == HELD_OUT_METRIC
     assert {r["cause"] for r in conf["ranking"]} == {"none", *CAUSE_MODELS}
-    assert "within the run-to-run scatter" in conf["discrepancy"]
+    assert conf["discrepancy"].startswith(
+        f"No misfit of the {conf['baseline']['model']} baseline is significant"
+    )
     # Whichever baseline is chosen recovers the joint's linear part: LuGre holds Dahl (its
     # stiction term near 0; at this seed it is the baseline, stiction ratio 0.04). Achieved:
     # f_lin within 3.1e-6 (tolerance 3e-5, the per-segment frequency scatter, which a fit to
@@ -245,6 +247,8 @@ def _data_with_offset(offset, n_runs=6, seed=0):
         "ln_zeta": offset * (v > TOP_BIN_LOW_IN_S) + 0.01 * rng.standard_normal(v.size),
         "rel_f": 1e-5 * rng.standard_normal(v.size),
     }
+    # over the measured scatter: 0.01 in ln zeta, 1e-5 in frequency
+    res["z_noise"], res["f_noise"] = res["ln_zeta"] / 0.01, res["rel_f"] / 1e-5
     return data, res
 
 
@@ -260,6 +264,35 @@ def test_binned_discrepancy_flags_a_consistent_misfit_only():
     # significant but below the model accuracy: not a misfit
     data, res = _data_with_offset(0.5 * MODEL_ACCURACY_LN_ZETA)
     assert not any(r["significant"] for r in binned_discrepancy(data, res))
+
+
+def test_binned_means_in_scatters_are_the_tested_means_over_the_scatter():
+    # the number the residual figure draws and the sentence quotes is the tested mean
+    # over the measured scatter (one scatter everywhere here), averaged the same way
+    data, res = _data_with_offset(0.05)
+    drop = data.velocity_in_s > 1.0
+    keep = ~drop | (data.run_index < 3)  # runs 3-5 stop at 1 in/s: unequal segment counts
+    data = ConfigurationData(
+        "c",
+        data.velocity_in_s[keep],
+        data.zeta[keep],
+        data.frequency_hz[keep],
+        data.run_index[keep],
+        data.run_names,
+        None,
+    )
+    res = {k: v[keep] for k, v in res.items()}
+    rows = binned_discrepancy(data, res)
+    for row in rows:
+        scatter = 0.01 if row["curve"] == "damping" else 1e-5
+        assert row["mean_over_scatter"] == pytest.approx(row["mean"] / scatter, rel=1e-12)
+    explained = {
+        (b["curve"], b["v_low_in_s"]): b["mean_over_scatter"] for b in explains_data(data, res)["bins"]
+    }
+    for row in rows:
+        assert explained[(row["curve"], row["v_low_in_s"])] == pytest.approx(
+            row["mean_over_scatter"], rel=1e-12
+        )
 
 
 def test_misfit_bins_span_only_measured_amplitudes():
@@ -736,13 +769,17 @@ def test_run_drift_seen_only_in_the_order_of_the_recording_start_times():
     assert trend["runs"] == sorted(recorded_order)
 
 
-def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3):
+def _bin(
+    curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3, over_scatter=None, span=(1.0, 3.16)
+):
     tolerance = tolerance or (MODEL_ACCURACY_LN_ZETA if curve == "damping" else MODEL_ACCURACY_REL_F)
     return {
         "curve": curve,
-        "v_low_in_s": 1.0,
-        "v_high_in_s": 3.16,
+        "v_low_in_s": span[0],
+        "v_high_in_s": span[1],
         "mean": mean,
+        # the residual figure's binned mean: a scatter of 4 tolerances unless said
+        "mean_over_scatter": over_scatter if over_scatter is not None else mean / (4 * tolerance),
         "t": t,
         "p": p,
         "p_limit": p_limit,
@@ -754,73 +791,114 @@ def _bin(curve, mean, t, p, *, significant=False, tolerance=None, p_limit=1e-3):
 
 def test_discrepancy_sentence_is_true_of_its_numbers():
     # a tiny, precisely measured frequency misfit: clear but negligible, never "0.00 %"
-    text = discrepancy_sentence("lugre", [_bin("frequency", -4.2e-5, -13.1, 1e-9)], None, 8)
-    assert "0.0042 % below the lugre fit" in text
+    text = discrepancy_sentence(
+        "lugre", [_bin("frequency", -4.2e-5, -13.1, 1e-9, over_scatter=-0.21)], None, 8
+    )
+    assert "0.21 scatters (0.0042 %) below the lugre fit" in text
     assert "statistically clear" in text and "physically negligible" in text and "0.42 of it" in text
     assert "not significant" not in text and "0.00 %" not in text
-    assert "within the run-to-run scatter or the models' accuracy" in text  # not both: the misfit is clear
+    assert text.startswith("No misfit of the lugre baseline is significant")
     # larger than the accuracy but not significant
     text = discrepancy_sentence("dahl", [_bin("damping", 0.05, 1.5, 0.2)], None, 8)
-    assert "5.1 % above the dahl fit" in text
+    assert "0.62 scatters (5.1 %) above the dahl fit" in text
     assert "larger than the 2 % in damping" in text and "but not statistically significant" in text
-    assert "statistically clear" not in text
+    assert "physically negligible" not in text
     # neither
     text = discrepancy_sentence("dahl", [_bin("damping", -0.01, -0.8, 0.45)], None, 8)
-    assert "1.0 % below" in text and "neither statistically significant" in text
-    # the bin with the largest |t| is the one described
-    bins = [_bin("damping", -0.01, -0.8, 0.45), _bin("frequency", 3e-5, 4.0, 1e-4)]
-    assert "0.0030 % above" in discrepancy_sentence("dahl", bins, None, 8)
+    assert "(1.0 %) below" in text and "neither statistically significant" in text
     # a real misfit: its size with its sign, and a drift with the order it was measured in
     trend = {"significant": True, "change_over_sequence": -0.3, "t": -6.2, "order": RECORD_START_ORDER}
     text = discrepancy_sentence("lugre", [_bin("damping", -0.3, -9.0, 1e-8, significant=True)], trend, 8)
     assert (
         text.startswith("The measured damping differs from the lugre fit")
-        and "at 1-3.16 in/s, by -26 %" in text
+        and "at 1-3.16 in/s, by -3.8 scatters (-26 %; |t| = 9.0" in text
     )
     assert "shifts with run order (recording start times in the files) by -26 %" in text
+
+
+def test_discrepancy_sentence_names_the_bin_the_figure_shows_furthest_out():
+    # PFF: the sentence named the bin of largest |t| (+0.044 % at 0.1-0.2 in/s) while the
+    # residual figure's largest excursion was -7 scatters near 1 in/s, not significant
+    low = _bin("frequency", 1.9e-4, 3.4, 0.0096, over_scatter=1.4, span=(0.213, 0.674))
+    high = _bin("frequency", -1.9e-4, -2.7, 0.12, over_scatter=-7.2, span=(0.674, 2.13))
+    text = discrepancy_sentence("lugre", [low, high], None, 1)
+    assert "7.2 scatters (0.019 %) below the lugre fit at 0.674-2.13 in/s" in text
+    assert "1.4 scatters" not in text and "not statistically significant (|t| = 2.7" in text
 
 
 def test_discrepancy_sentence_names_both_curves():
     # UNESP and PFF: a significant frequency misfit was the only one named while the
     # residual figure showed larger damping residuals over three runs (not significant)
-    damping = {**_bin("damping", -0.25, -6.5, 0.0013, p_limit=0.00083), "n_runs": 3}
-    frequency = _bin("frequency", 4e-4, 26.5, 1e-9, significant=True)
+    damping = {**_bin("damping", -0.25, -6.5, 0.0013, p_limit=0.00083, over_scatter=-1.9), "n_runs": 3}
+    frequency = _bin("frequency", 4e-4, 26.5, 1e-9, significant=True, over_scatter=11.0)
     text = discrepancy_sentence("lugre", [damping, frequency], None, 10)
-    assert text.startswith("The measured frequency differs from the lugre fit")
-    assert "its largest damping misfit, where the measured damping lies 22 % below the lugre fit" in text
+    assert text.startswith(
+        "The measured frequency differs from the lugre fit at 1-3.16 in/s, by +11 scatters"
+    )
+    assert (
+        "its largest damping misfit, where the measured damping lies 1.9 scatters (22 %) below the lugre fit"
+        in text
+    )
     assert (
         "larger than the 2 % in damping the models are accurate to but not statistically significant" in text
     )
     # the |t| is quoted with what decides: the runs behind it and p against its limit
     assert "|t| = 6.5 over 3 runs, p = 0.0013 against 0.00083 after correction" in text
+    # both curves significant: both named with their figure numbers
+    damping = {**damping, "significant": True, "p": 1e-6}
+    text = discrepancy_sentence("lugre", [damping, frequency], None, 10)
+    assert "The measured damping differs from the lugre fit at 1-3.16 in/s, by -1.9 scatters (-22 %" in text
+    assert "; the measured frequency differs from the lugre fit at 1-3.16 in/s, by +11 scatters" in text
     # one run: the segments are the observations, never "over 1 runs"
     one = {**_bin("damping", 0.3, 11.0, 1e-9, significant=True), "n_runs": 1, "n_segments": 40}
     text = discrepancy_sentence("dahl", [one], None, 1)
     assert "over the 40 segments of the one run" in text and "1 runs" not in text
 
 
+def test_discrepancy_sentence_names_significant_misfits_on_both_sides_of_the_fit():
+    # UNESP t5nm: significant damping bins +4.4 scatters at 0.031-0.098 in/s and -4.1 at
+    # 0.31-0.98 in/s; "by up to +4.4 scatters" hid the figure's markers below zero
+    above = _bin("damping", 0.5975, 29.8, 7e-12, significant=True, over_scatter=4.43, span=(0.031, 0.0981))
+    below = _bin("damping", -0.13, -16.4, 1e-10, significant=True, over_scatter=-4.13, span=(0.31, 0.981))
+    text = discrepancy_sentence("dahl", [above, below], None, 14)
+    assert "between 0.031 and 0.981 in/s, by up to +4.4 scatters (+82 %; |t| = 29.8" in text
+    assert (
+        "at 0.031-0.0981 in/s and -4.1 scatters (-12 %; |t| = 16.4" in text and "at 0.31-0.981 in/s" in text
+    )
+    # one side only: one size
+    assert " and -4.1" not in discrepancy_sentence("dahl", [above, {**below, "significant": False}], None, 14)
+
+
 def test_discrepancy_sentence_names_a_large_misfit_outside_the_significant_range():
     # the demo's no_washer: damping significant at 0.465-1.47 in/s only, while the residual
-    # figure shows the baseline 2.8 % too low above 1.47 in/s over the 7 runs reaching it
-    significant = {
-        **_bin("damping", -0.0517, -6.7, 9.2e-5, significant=True, p_limit=6.3e-4),
-        "v_low_in_s": 0.465,
-        "v_high_in_s": 1.47,
+    # figure shows the baseline's mean 2.5 scatters (2.8 %) too low above 1.47 in/s over the
+    # 7 runs reaching it
+    significant = _bin(
+        "damping",
+        -0.0517,
+        -6.7,
+        9.2e-5,
+        significant=True,
+        p_limit=6.3e-4,
+        over_scatter=-4.6,
+        span=(0.465, 1.47),
+    )
+    above = {
+        **_bin("damping", 0.0279, 1.4, 0.22, p_limit=6.3e-4, over_scatter=2.5, span=(1.47, 4.65)),
+        "n_runs": 7,
     }
-    above = {**_bin("damping", 0.0279, 1.4, 0.22, p_limit=6.3e-4), "v_low_in_s": 1.47, "v_high_in_s": 4.65}
-    above["n_runs"] = 7
-    below = {**_bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4), "v_low_in_s": 0.147, "v_high_in_s": 0.465}
+    below = _bin("damping", 0.0085, 1.2, 0.26, p_limit=6.3e-4, over_scatter=0.8, span=(0.147, 0.465))
     text = discrepancy_sentence("lugre", [below, significant, above], None, 10)
     assert (
-        "the largest damping misfit outside that range, where the measured damping lies 2.8 % above "
-        "the lugre fit at 1.47-4.65 in/s, is larger than the 2 % in damping" in text
+        "the largest damping misfit that is not significant, where the measured damping lies 2.5 scatters "
+        "(2.8 %) above the lugre fit at 1.47-4.65 in/s, is larger than the 2 % in damping" in text
     )
     assert "|t| = 1.4 over 7 runs" in text
-    # a bin within the models' accuracy outside the range is not named
+    # a bin inside the figure's ±2 scatter band is not named beside a significant one
     assert "0.147-0.465" not in text and "0.85 %" not in text
-    assert "outside that range" not in discrepancy_sentence("lugre", [below, significant], None, 10)
+    assert "not significant" not in discrepancy_sentence("lugre", [below, significant], None, 10)
     # one significant bin: its range once, not "between A and B ... at A-B"
-    assert "differs from the lugre fit at 0.465-1.47 in/s, by -5.0 % (|t| = 6.7" in text
+    assert "differs from the lugre fit at 0.465-1.47 in/s, by -4.6 scatters (-5.0 %; |t| = 6.7" in text
     assert "between" not in text
 
 

@@ -6,21 +6,27 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import re
+
 import numpy as np
 import pandas as pd
 import pytest
+from matplotlib.colors import same_color
 
 from tests.support.discovery import diagnose_with_details
 from tests.test_discovery import synthetic_segments
 from workflow.discovery.campaign import RESIDUAL_COLUMNS, residual_table
+from workflow.discovery.heldout import amplitude_bin
+from workflow.discovery.wording import two_digits
 from workflow.io.units import SI
 from workflow.models.averaged import CurveGrid, model_curves
-from workflow.models.averaged_fit import FitSettings, apply_run_offsets
+from workflow.models.averaged_fit import apply_run_offsets
+from workflow.models.settings import DiscoverySettings
 from workflow.outputs import discovery_figures as dfig
 from workflow.outputs.figures import save
 from workflow.outputs.readability import readability_problems
 
-FAST = FitSettings(global_samples=64, local_starts=2)
+FAST = DiscoverySettings(global_samples=64, local_starts=2)
 IWAN = {
     "f_lin_hz": 120.0,
     "zeta0": 8e-4,
@@ -167,3 +173,65 @@ def test_heldout_figure_says_not_applicable():
     )
     texts = " ".join(t.get_text() for t in fig.axes[0].texts)
     assert "not applicable" in texts and "3 are needed" in texts
+
+
+def _drawn_means(fig, panel: int, role: str) -> list[tuple[float, float, bool]]:
+    """(centre, mean, filled) of the binned-mean markers ``role`` draws in a panel."""
+    drawn = []
+    for line in fig.axes[panel].get_lines():
+        if line.get_gid() == f"{role} binned mean":
+            filled = not same_color(line.get_markerfacecolor(), "white")
+            drawn += [(x, y, filled) for x, y in zip(line.get_xdata(), line.get_ydata())]
+    return sorted(drawn)
+
+
+def test_residual_figure_draws_the_binned_means_the_verdict_quotes(diagnosis):
+    # PFF: the sentence ranked misfits in percent and named +0.044 % at 0.1-0.2 in/s while
+    # the figure's quarter-decade means reached -10 scatters near 1 in/s; now the figure
+    # draws the evidence's half-decade means and the sentences quote those
+    _, document, details = diagnosis
+    table = residual_table(details)
+    for name, entry in document["configurations"].items():
+        fig = dfig.residuals_figure(table, name, document)
+        data = details[name].data
+        sentence = entry["discrepancy"]
+        for panel, (curve, column) in enumerate((("damping", "zeta"), ("frequency", "frequency_hz"))):
+            for role in ("baseline", "extended"):
+                bins = sorted(
+                    (b for b in dfig.binned_means(entry, role) if b["curve"] == curve),
+                    key=lambda b: b["v_low_in_s"],
+                )
+                drawn = _drawn_means(fig, panel, role)
+                assert len(drawn) == len(bins)
+                for b, (centre, mean, filled) in zip(bins, drawn):
+                    assert centre == pytest.approx(np.sqrt(b["v_low_in_s"] * b["v_high_in_s"]))
+                    assert filled == b.get("significant", True)
+                    # the marker is the mean of the figure's own points in that half decade:
+                    # each run's mean, then the mean over runs
+                    points = table[
+                        (table["configuration"] == name)
+                        & (table["role"] == role)
+                        & (table["curve"] == column)
+                    ]
+                    code = amplitude_bin(
+                        points["velocity_amplitude_in_s"].to_numpy(), data.anchor_velocity_in_s, 2
+                    )
+                    v = points["velocity_amplitude_in_s"].to_numpy()
+                    inside = points[code == code[np.argmin(np.abs(v - centre))]]
+                    by_run = inside.groupby("run")["residual"].mean()
+                    assert mean == pytest.approx(by_run.mean(), rel=1e-9, abs=1e-12)
+            # the curve's largest excursion the figure shows for the baseline is the one named
+            baseline = _drawn_means(fig, panel, "baseline")
+            if baseline:
+                largest = max(abs(mean) for _, mean, _ in baseline)
+                assert f"{two_digits(largest)} scatters" in sentence, (name, curve)
+        # every number in scatters the sentence quotes is a baseline marker's
+        drawn = [abs(mean) for panel in (0, 1) for _, mean, _ in _drawn_means(fig, panel, "baseline")]
+        for quoted in re.findall(r"([-+]?[\d.]+) scatters", sentence):
+            assert any(two_digits(value) == quoted.lstrip("+-") for value in drawn), (name, quoted)
+        # the sentence on whether the extended model explains the data quotes its markers
+        extended = [mean for panel in (0, 1) for _, mean, _ in _drawn_means(fig, panel, "extended")]
+        for failing in (entry["evidence"]["explains_data"]["failing_bins"] or [])[:4]:
+            assert any(mean == pytest.approx(failing["mean_over_scatter"]) for mean in extended)
+            assert abs(failing["mean_over_scatter"]) > 2.0
+        assert (max(abs(m) for m in extended) <= 2.0) == entry["explains_data"]

@@ -10,8 +10,8 @@ import pytest
 
 from workflow.io.campaign import load_campaign
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.campaign_tables import analyse_campaign
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 DATA = Path(__file__).resolve().parent / "data"
 CAMPAIGN = DATA / "example_campaign"

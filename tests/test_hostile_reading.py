@@ -24,9 +24,9 @@ from workflow.io.campaign import load_campaign
 from workflow.io.interim import read_mode, write_mode
 from workflow.io.records import CampaignFormatError
 from workflow.io.run_files import read_run, scan_campaign
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_file
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 ONE_CONFIGURATION = BASE_YAML + "configurations:\n  cfg: {}\n"
 SECRET = "root:$6$SECRETHASH$abc:19000:0:99999:7:::"
@@ -286,7 +286,7 @@ def mode_of(root: Path, paths: list[str], configuration: str = "cfg"):
         paths,
         configuration=configuration,
         campaign=load_campaign(root),
-        mode_search=settings.mode_search(),
+        mode_search=settings,
         quality_settings=QualitySettings(),
     )
 
@@ -327,7 +327,7 @@ def analysis_status(root: Path, path: str, configuration: str, found) -> dict[st
         campaign=load_campaign(root),
         mode=found,
         quality_settings=QualitySettings(),
-        decay_settings=AnalysisSettings().decay(),
+        decay_settings=AnalysisSettings(),
     ).status
 
 

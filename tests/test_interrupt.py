@@ -45,7 +45,8 @@ TARGETS = [
 
 
 snakemake = functools.partial(run_snakemake, timeout=600)
-# One analyse_runs job per run: the kill then lands between per-run results.
+# One run per job (a configuration's first in its identify_mode job): the kill then lands
+# between per-run results.
 ONE_RUN_PER_JOB = "runs_per_job=1"
 
 

@@ -134,20 +134,7 @@ def test_the_joint_analysis_names_the_case(cause, three_sensor_cases):
     assert joint_entry(three_sensor_cases(cause))[0] == verdict_key(cause.split("+"))
 
 
-PER_SENSOR_MISCALIBRATION = {
-    "microslip_power_law+quadratic_damping": pytest.mark.xfail(
-        strict=True,
-        reason="issue 31 item 3, per sensor: the free-end sensor (x5) alone names stiffness nonlinearity "
-        "1.00 sure (held-out error 0.30 of the baseline's) while micro-slip + quadratic damping predicts at "
-        "0.05 but is not named (the quadratic term's share of the gain 0.16, under combined.MIN_GAIN_SHARE); "
-        "the other two sensors and the joint analysis name the combination",
-    )
-}
-
-
-@pytest.mark.parametrize(
-    "cause", [pytest.param(cause, marks=PER_SENSOR_MISCALIBRATION.get(cause, ())) for cause in CASES]
-)
+@pytest.mark.parametrize("cause", list(CASES))
 def test_no_two_sensors_are_sure_of_different_causes(cause, three_sensor_cases):
     """Issue 31's placement property on each cause the lab has: each sensor's own verdict
     (the ``channels`` consistency check) may be less sure where it sees less, but no two

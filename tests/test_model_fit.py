@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from workflow.io.settings import AnalysisSettings, ModelSettings
 from workflow.measured.decay import analyse_decay
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.fitting import (
     RingdownFitContext,
     fit_friction_model,
@@ -16,6 +16,7 @@ from workflow.models.fitting import (
 )
 from workflow.models.paper import MIN_SEGMENTS_TO_FIT, configuration_models_document
 from workflow.models.ringdown import simulate_ringdown
+from workflow.models.settings import ModelSettings
 
 FS, T, BAND = 2560.0, 3.2, (100.0, 150.0)
 
@@ -248,7 +249,7 @@ def test_a_configuration_with_too_few_segments_gets_no_models_and_the_reason():
         pd.DataFrame(),  # not read: nothing is fitted
         {"few": None, "many": None},
         response_quantity="acceleration",
-        analysis=AnalysisSettings().decay(),
+        analysis=AnalysisSettings(),
         settings=ModelSettings(),
         averaged_params=None,
     )

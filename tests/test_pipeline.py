@@ -8,10 +8,10 @@ import pytest
 from workflow.io.campaign import load_campaign
 from workflow.io.interim import ConfigurationMode
 from workflow.io.run_files import list_runs
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.campaigns import generate_campaign
 from workflow.measured.mode_identification import identify_configuration_mode
 from workflow.measured.runs import analyse_run_file
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 
 @pytest.fixture(scope="module")
@@ -29,15 +29,11 @@ def analysed(tmp_path_factory):
             "campaign": campaign,
             "quality_settings": QualitySettings(),
         }
-        found = identify_configuration_mode(
-            folder, paths, mode_search=AnalysisSettings().mode_search(), **options
-        )
+        found = identify_configuration_mode(folder, paths, mode_search=AnalysisSettings(), **options)
         assert found.mode is not None and not found.skipped_runs, found
         frames = []
         for path in paths:
-            result = analyse_run_file(
-                folder, path, mode=found, decay_settings=AnalysisSettings().decay(), **options
-            )
+            result = analyse_run_file(folder, path, mode=found, decay_settings=AnalysisSettings(), **options)
             assert result.status["status"] == "used", result.status
             frame = pd.DataFrame(result.segments)
             frames.append(frame[frame["kept"]])
@@ -111,7 +107,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         configuration="no_washer",
         campaign=campaign,
         quality_settings=QualitySettings(),
-        decay_settings=AnalysisSettings().decay(),
+        decay_settings=AnalysisSettings(),
     )
     good = analyse_run_file(folder, "no_washer/run01.txt", mode=ConfigurationMode(mode), **options)
     assert good.status == {

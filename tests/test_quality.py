@@ -4,7 +4,6 @@ import numpy as np
 from helpers import failed_check_reasons
 
 from workflow.io.records import RunRecord
-from workflow.io.settings import QualitySettings
 from workflow.measured.quality import (
     check_clipping,
     check_double_hit,
@@ -13,6 +12,7 @@ from workflow.measured.quality import (
     check_snr,
     check_trigger,
 )
+from workflow.measured.settings import QualitySettings
 
 FS_HZ = 2560.0
 N = 8192

@@ -28,6 +28,7 @@ from workflow.io.units import SI
 from workflow.lab.campaigns import generate_campaign
 from workflow.measured import curves
 from workflow.outputs import (
+    discovery_figures,
     figures,
     landing_page,
     report_html,
@@ -825,6 +826,7 @@ def test_si_page_speaks_one_unit(document):
             "v_low_in_s": 1.0,
             "v_high_in_s": 3.16,
             "mean": 0.3,
+            "mean_over_scatter": 6.0,
             "t": 9.0,
             "p": 1e-8,
             "p_limit": 1e-3,
@@ -927,3 +929,79 @@ def test_verdict_sentences_agree_with_the_residual_and_damping_figures(built_rep
         mine = segments[segments["configuration"] == name]
         low, high = mine["velocity_amplitude_in_s"].min(), mine["velocity_amplitude_in_s"].max()
         assert f"Measured from {report_html.fmt(low)} to {report_html.fmt(high)} in/s" in page, name
+
+
+@pytest.mark.parametrize("explains", [True, False])
+def test_first_page_says_of_a_none_verdict_what_the_residual_figure_shows(document, explains):
+    # the demo's large washer: "LuGre fits within the run-to-run scatter (held-out error
+    # 1.98)", an error twice the scatter; the figure shows no significant misfit and
+    # whether every half decade's mean lies within the ±2 band
+    entry = document["configurations"]["small_washer"]
+    failing = {"curve": "frequency", "v_low_in_s": 1.37, "v_high_in_s": 4.35, "mean_over_scatter": 2.4}
+    entry["explains_data"] = explains
+    entry["evidence"]["explains_data"] = {"limit": 2.0, "failing_bins": [] if explains else [failing]}
+    page = landing_page.verdict_rst(document).replace("\\", "")  # rst's escapes
+    assert "Dahl leaves no significant misfit (held-out error 1.03)." in page
+    assert "fits within the run-to-run scatter" not in page
+    if explains:
+        assert "Dahl explains the data: every half decade of amplitude is within 2 scatters." in page
+    else:
+        assert "misses by more than 2 scatters in frequency at 1.37–4.35 in/s (2.4 scatters)" in page
+
+
+def test_margin_sentence_and_table_quote_the_dots_of_the_candidates_figure(document):
+    # the demo's no_washer: the table gave the extended model (slip thresholds from the
+    # data) 1.71 and the next candidate "27.8 (×5.48)", a ratio to the power law's 5.08,
+    # which the figure drew as the verdict while it drew no dot at 1.71
+    entry = document["configurations"]["no_washer"]
+    entry["ranking"] = [
+        {"cause": "microslip_power_law", "score": 5.08},
+        {"cause": "stiffness_nonlinearity", "score": 27.8},
+        {"cause": "none", "score": 63.2},
+    ]
+    entry["causes"] = ["microslip_power_law"]
+    entry["extended_model"]["model"] = "iwan_cells_6"
+    entry["gain"] = {"baseline": 63.2, "extended": 1.71, "ratio": 1.71 / 63.2}
+    entry["confidence"] = {"microslip_power_law": 1.0}
+    figure = discovery_figures.candidates_figure(document)
+    ax = figure.axes[0]
+    dots = {
+        label.get_text(): line.get_xdata()[0]
+        for line in ax.get_lines()
+        if line.get_marker() == "o"
+        for label in ax.get_yticklabels()
+        if label.get_position()[1] == line.get_ydata()[0]
+    }
+    verdict = [line for line in ax.get_lines() if line.get_marker() == "o" and line.get_markersize() == 10]
+    assert len(verdict) == 1 and verdict[0].get_xdata()[0] == pytest.approx(1.71)
+    assert dots["microslip_power_law (iwan_cells_6)"] == pytest.approx(1.71)
+    margin = report_wording.candidate_margin(entry)
+    assert margin["chosen_score"] == pytest.approx(dots["microslip_power_law (iwan_cells_6)"])
+    assert margin["next_score"] == pytest.approx(dots["stiffness_nonlinearity (?)"])
+    row = verdict_page._configuration_row("no_washer", entry, 1.36, report_wording.INCH_SECOND)
+    assert row[6] == "1.71" and row[9] == f"27.8 (×{report_html.ratio(27.8 / 1.71)})"
+    assert any(
+        f"is {report_html.ratio(27.8 / 1.71)} times the verdict's" in html.unescape(item)
+        for item in verdict_page._sureness_items("no_washer", entry)
+    )
+
+
+def test_remaining_misfit_is_said_of_the_candidate_it_belongs_to(document):
+    # the demo's no_washer: "Some misfit remains after the extension: the extended model is
+    # better, not perfect" was the power law's, while the extended model the residual
+    # figure draws (slip thresholds from the data) explains the data
+    entry = document["configurations"]["no_washer"]
+    entry["evidence"]["candidates"]["microslip_power_law"].update(
+        residual_significant=True, significant_bins=1
+    )
+    entry["extended_model"]["model"] = "iwan_cells_6"
+    entry["explains_data"] = True
+    items = [html.unescape(item) for item in verdict_page._sureness_items("no_washer", entry)]
+    assert (
+        "Iwan micro-slip leaves some misfit (1 amplitude bin(s) still significant): it is better, not perfect."
+        in items
+    )
+    assert any(
+        item.startswith("Iwan micro-slip with slip thresholds from the data explains the data")
+        for item in items
+    )

@@ -420,8 +420,8 @@ def test_strict_mode_stops_at_a_bad_run_with_its_message(tmp_path):
     assert result.returncode != 0
     reason = f"{campaign.as_posix()}/no_washer/run00.txt:60: non-numeric cell 'x1' in column 2"
     assert f"strict mode: run excluded: {reason}" in result.stderr
-    assert "Error in rule analyse_runs" in result.stderr
-    log = (workdir / "results/logs/analyse_runs/no_washer/runs01.log").read_text()
+    assert "Error in rule identify_mode" in result.stderr  # it analyses the first group of runs
+    log = (workdir / "results/logs/identify_mode/no_washer.log").read_text()
     assert f"WARNING excluded {reason}" in log
     assert not (workdir / "results/tables/runs.parquet").exists()
 
@@ -450,8 +450,8 @@ def _qc_table(campaign: Path, path: str) -> tuple[pd.DataFrame, list[str]]:
 
     from workflow.io.campaign import load_campaign
     from workflow.io.run_files import read_run
-    from workflow.io.settings import QualitySettings
     from workflow.measured.quality import QC_COLUMNS, quality_rows
+    from workflow.measured.settings import QualitySettings
 
     meta = load_campaign(campaign)
     record = read_run(campaign, path, meta)
@@ -512,8 +512,8 @@ def test_quality_table_of_a_good_run_passes_with_margins(study):
 
 def test_quality_rows_mark_checks_that_do_not_apply():
     from workflow.io.records import RunRecord
-    from workflow.io.settings import QualitySettings
     from workflow.measured.quality import analysis_rows, quality_rows
+    from workflow.measured.settings import QualitySettings
 
     t = np.arange(4096) / FS_HZ
     record = RunRecord(

@@ -64,10 +64,10 @@ def test_no_smk_file_rebinds_snakemakes_workflow_object(path):
 @pytest.mark.parametrize(
     "line, binds",
     [
-        ("import workflow.io.settings", True),
+        ("import workflow.config", True),
         ("from lapjoint import workflow", True),
         ("workflow = None", True),
-        ("from workflow.io.settings import validate_config", False),
+        ("from workflow.config import validate_config", False),
         ("configfile: workflow.source_path('config.yaml')", False),
     ],
 )

@@ -32,9 +32,10 @@ ROOT = Path(__file__).resolve().parents[1]
 PROFILE = ROOT / "profiles" / "slurm"
 SNAKEFILE = ROOT / "Snakefile"
 TIMEOUT_S = 600
-# The measured-data chain through SLURM in six job levels (identify_mode, analyse_runs
-# per group of runs, collect_tables, usable_segments, fit_curves, then the figures): every kind of step but the
-# friction-model fits, which take minutes and add nothing SLURM-specific.
+# The measured-data chain through SLURM in six job levels (identify_mode with the first group
+# of runs, analyse_runs per further group, collect_tables, usable_segments, fit_curves, then
+# the figures): every kind of step but the friction-model fits, which take minutes and add
+# nothing SLURM-specific.
 TARGETS = [
     "results/tables/segments.parquet",
     "results/tables/runs.parquet",

@@ -4,7 +4,7 @@ where a bad key came from and which keys are valid."""
 import pandas as pd
 import pytest
 
-from workflow.io.settings import ConfigError, validate_config
+from workflow.config import ConfigError, validate_config
 from workflow.outputs.summary import REASONS_SHOWN, run_summary
 
 DOCUMENT = {

@@ -266,7 +266,7 @@ NO_SPREAD = LabSettings(frequency_spread=0.0, damping_spread=0.0, slip_force_spr
 
 
 def test_demo_settings_default_to_the_lab_spreads():
-    from workflow.io.settings import DemoSettings
+    from workflow.lab.layout import DemoSettings
 
     demo = DemoSettings()
     for name in ("frequency_spread", "damping_spread", "slip_force_spread"):

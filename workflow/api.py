@@ -38,11 +38,11 @@ import pandas as pd
 from numpy.typing import ArrayLike
 
 from workflow.io.records import RunRecord
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.io.tables import read_table, with_si_columns
 from workflow.io.units import normalize_unit
 from workflow.measured.mode_identification import identify_mode
 from workflow.measured.runs import analyse_run_with_quality
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = ["ring_down_table", "CampaignResults", "load_results", "run_campaign"]
 
@@ -144,7 +144,7 @@ def ring_down_table(
         run="",
         mode=mode,
         window=window,
-        decay_settings=analysis.decay(),
+        decay_settings=analysis,
         quality_settings=quality,
     )
     table = pd.DataFrame(columns).drop(columns=["configuration", "run"])

@@ -17,16 +17,16 @@ from workflow.discovery.configuration import (
 )
 from workflow.discovery.decision import CAUSE_MODELS, cause_fractions
 from workflow.discovery.heldout import HELD_OUT_METRIC, HELD_OUT_SCALE, amplitude_weights, weighted_rms
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     fixed_params,
     model_residuals,
     to_physical,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "across_configurations",
@@ -191,7 +191,7 @@ def diagnose_configurations(
     segments: pd.DataFrame,
     *,
     response_quantity: str | Mapping[str, str] = "acceleration",
-    settings: FitSettings | None = None,
+    settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
     runs: pd.DataFrame | None = None,
 ) -> tuple[FitContext, dict[str, ConfigurationDiagnosis], dict[str, str]]:
@@ -207,7 +207,7 @@ def diagnose_configurations(
         Recorded quantity (campaign.yaml ``response.quantity``), for all
         configurations or per configuration: the envelope of an acceleration record
         decays differently from a displacement's when the frequency changes.
-    settings : FitSettings, optional
+    settings : DiscoverySettings, optional
     segment_cycles : float
         Log-decrement segment length in cycles (config ``analysis.segment_cycles``),
         for the envelope-structure check.
@@ -221,7 +221,7 @@ def diagnose_configurations(
         The campaign's :class:`FitContext`, configuration -> :class:`ConfigurationDiagnosis`
         in campaign order, and configuration -> why it was not diagnosed.
     """
-    settings = settings or FitSettings()
+    settings = settings or DiscoverySettings()
     context = campaign_fit_context(segments)
     diagnoses: dict[str, ConfigurationDiagnosis] = {}
     skipped = {}

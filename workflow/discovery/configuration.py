@@ -11,10 +11,14 @@ import numpy as np
 import pandas as pd
 
 from workflow.discovery.combined import (
-    COMBINATION_CAUSES,
+    UNTOUCHED_CURVE,
+    combination_causes,
+    combination_parts,
     combination_starts,
     combination_test,
     combinations_to_try,
+    one_curve_scatter,
+    term_from_residuals,
 )
 from workflow.discovery.confidence import VerdictOption, verdict_causes, verdict_key
 from workflow.discovery.decision import (
@@ -39,12 +43,11 @@ from workflow.discovery.misfit import (
     stiffness_signature,
 )
 from workflow.discovery.wording import discrepancy_sentence
-from workflow.io.settings import AnalysisSettings
-from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
+from workflow.measured.settings import AnalysisSettings
+from workflow.models.averaged import COMBINED_MODELS, MODELS, RESPONSE_ORDER, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     at_bounds,
     fit_model,
     model_residuals,
@@ -57,6 +60,7 @@ from workflow.models.configuration_data import (
     prepare_configuration,
     scatter_of,
 )
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "NESTED_DAHL",
@@ -66,6 +70,13 @@ __all__ = [
     "diagnose_configuration",
     "record_starts",
     "diagnose_configuration_segments",
+    "add_threshold_cells",
+    "fit_combinations",
+    "judge_combinations",
+    "needs_threshold_cells",
+    "conclude",
+    "curve_led_start",
+    "most_probable_verdict",
 ]
 
 log = logging.getLogger(__name__)
@@ -146,6 +157,27 @@ def bound_flags(model: AveragedModel | str, coords: np.ndarray, data: Configurat
     return flags
 
 
+def add_threshold_cells(
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    *,
+    fits: dict[str, FitResult],
+    cv: dict[str, dict],
+    residuals: dict[str, dict[str, np.ndarray]],
+    evidence: dict[str, ModelEvidence],
+    settings: DiscoverySettings,
+) -> str:
+    """Fit and cross-validate the Iwan joint with the slip thresholds from the data
+    (:func:`refine_microslip`, from the power-law fit) and add it to ``fits``, ``cv``,
+    ``residuals`` and ``evidence``; returns its model id."""
+    name = f"iwan_cells_{threshold_cells(data)}"
+    fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
+    residuals[name] = model_residuals(fits[name], data, scatter, context)
+    evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params))
+    return name
+
+
 def fit_combinations(
     data: ConfigurationData,
     scatter: Scatter,
@@ -155,16 +187,29 @@ def fit_combinations(
     cv: dict[str, dict],
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
-    settings: FitSettings,
+    settings: DiscoverySettings,
     tried: list[str],
 ) -> None:
-    """Fit and cross-validate the combined models ``tried`` from both single fits
-    (:func:`workflow.discovery.combined.combination_starts`); the fits, held-out errors,
-    residuals and evidence are added to ``fits``, ``cv``, ``residuals`` and ``evidence``."""
+    """Fit and cross-validate the combined models ``tried`` (:func:`combinations_to_try`)
+    from both single fits and from each mechanism's own curve; the fits, held-out errors,
+    residuals and evidence are added to ``fits``, ``cv``, ``residuals`` and ``evidence``
+    (the micro-slip joint with the slip thresholds from the data first, where missing)."""
+    if tried and combination_parts(tried[0])[0] not in fits:
+        add_threshold_cells(
+            data,
+            scatter,
+            context,
+            fits=fits,
+            cv=cv,
+            residuals=residuals,
+            evidence=evidence,
+            settings=settings,
+        )
     for model in tried:
         started = time.perf_counter()
-        extension = CAUSE_MODELS[COMBINATION_CAUSES[model][1]]
+        extension = combination_parts(model)[1]
         starts = combination_starts(model, fits, NESTED_DAHL[extension](data))
+        starts += curve_led_start(model, data, scatter, context, fits, settings)
         fits[model] = fit_model(model, data, scatter, context, settings=settings, nested_start=starts)
         cv[model] = cross_validate(model, data, scatter, context, fits[model], settings=settings)
         residuals[model] = model_residuals(fits[model], data, scatter, context)
@@ -185,7 +230,7 @@ def judge_combinations(
     data: ConfigurationData, result: dict, evidence: Mapping[str, ModelEvidence]
 ) -> tuple[dict[str, dict], list[VerdictOption]]:
     """The combinations fitted (those of ``evidence``), each judged by
-    :func:`workflow.discovery.combined.combination_test`; one replaces the single verdict.
+    :func:`workflow.discovery.combined.combination_test`; one may replace the single verdict.
 
     A combination becomes the verdict (``result["verdict"]``, its ``confidence`` key) when
     it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
@@ -202,9 +247,12 @@ def judge_combinations(
     verdict = result["verdict"]
     base, errors, bic = result["baseline"], result["errors"], result["bic"]
     combinations, options = {}, []
-    for model in (m for m in COMBINATION_CAUSES if m in evidence):
-        causes = COMBINATION_CAUSES[model]
-        parts = {c: result["unit_squares"][result["extended_models"][c]] for c in causes}
+    for model in (m for m in COMBINED_MODELS.values() if m in evidence):
+        causes = combination_causes(model)
+        # micro-slip alone: the better predictor of the power law and the combination's own joint
+        microslip = min(("iwan", combination_parts(model)[0]), key=lambda m: errors[m]["error"])
+        part_models = {causes[0]: microslip, causes[1]: result["extended_models"][causes[1]]}
+        parts = {c: result["unit_squares"][m] for c, m in part_models.items()}
         test = combination_test(
             result["unit_squares"][model], parts, result["unit_squares"][base], result["unit_weights"]
         )
@@ -216,6 +264,7 @@ def judge_combinations(
         key = verdict_key(causes)
         combinations[key] = {
             "model": model,
+            "parts": part_models,
             **test,
             "heldout_error": errors[model]["error"],
             "ratio_to_baseline": ratio,
@@ -245,32 +294,48 @@ def judge_combinations(
     return combinations, options
 
 
+def needs_threshold_cells(
+    data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
+) -> bool:
+    """Whether micro-slip's extended model may be the Iwan joint with the slip thresholds
+    from the data: the verdict is micro-slip and the power law does not explain the data."""
+    return (
+        result["cause"] == "microslip_power_law"
+        and not explains_data(data, evidence["iwan"].residuals)["explains_data"]
+    )
+
+
 def conclude(
     data: ConfigurationData,
     evidence: Mapping[str, ModelEvidence],
     *,
     envelope_significant: bool,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
 ) -> tuple[dict, dict[str, dict], dict[str, float], list[dict]]:
     """The verdict and its confidence on every model fitted (no fit is made here).
 
-    :func:`evaluate_decision` on ``evidence``; the slip-threshold refinement
-    (``iwan_cells_N`` in ``evidence``) becomes micro-slip's extended model where it lowers
-    both the held-out error and the BIC of ``iwan``; the combinations in ``evidence`` are
-    judged (:func:`judge_combinations`); the confidence (:func:`confidence_draws`); the
-    verdict is the most probable one of the confidence (:func:`most_probable_verdict`).
+    :func:`evaluate_decision` on ``evidence``; where :func:`needs_threshold_cells`, the
+    Iwan joint with the slip thresholds from the data (``iwan_cells_N`` in ``evidence``)
+    becomes micro-slip's extended model when it lowers both the held-out error and the BIC
+    of ``iwan``; the combinations in ``evidence`` are judged (:func:`judge_combinations`);
+    the confidence (:func:`confidence_draws`); the verdict is the most probable one of the
+    confidence (:func:`most_probable_verdict`).
 
     Returns
     -------
     result, combinations, confidence, resamples
-        The decision (``verdict``: its ``confidence`` key), the combinations' evidence,
-        the confidence and its per-draw decisions.
+        The decision (``verdict``: its ``confidence`` key; ``threshold_cells``: the
+        refinement's model id where it was considered, else None), the combinations'
+        evidence, the confidence and its per-draw decisions.
     """
     result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
     errors, bic = result["errors"], result["bic"]
-    refined = next((m for m in evidence if m.startswith("iwan_cells_")), None)
-    if refined and errors[refined]["error"] < errors["iwan"]["error"] and bic[refined] < bic["iwan"]:
-        result["extended_models"]["microslip_power_law"] = refined
+    refined = f"iwan_cells_{threshold_cells(data)}"
+    result["threshold_cells"] = None
+    if refined in evidence and needs_threshold_cells(data, result, evidence):
+        result["threshold_cells"] = refined
+        if errors[refined]["error"] < errors["iwan"]["error"] and bic[refined] < bic["iwan"]:
+            result["extended_models"]["microslip_power_law"] = refined
     result["verdict"] = result["cause"]
     combinations, combination_options = judge_combinations(data, result, evidence)
     confidence, resamples = confidence_draws(
@@ -288,6 +353,41 @@ def conclude(
         )
     result["verdict"] = verdict
     return result, combinations, confidence, resamples
+
+
+def curve_led_start(
+    model: str,
+    data: ConfigurationData,
+    scatter: Scatter,
+    context: FitContext,
+    fits: Mapping[str, FitResult],
+    settings: DiscoverySettings,
+) -> list[dict[str, float]]:
+    """A start of a combined model from each mechanism's own curve.
+
+    The extension's term leaves one curve alone (:data:`UNTOUCHED_CURVE`: a stiffness
+    term dissipates nothing, a velocity-squared loss stores nothing), so the joint is
+    fitted to that curve alone (from its fit to both), and the extension's term read off
+    what the joint leaves on the other (:func:`term_from_residuals`). Where the two
+    mechanisms pull the shared curve opposite ways (micro-slip's softening against a
+    hardening spring) the fit to both curves starts from a joint that explains neither,
+    and the extension's fit from a Dahl joint, which cannot carry micro-slip. Empty where
+    the term would be unphysical (a negative loss).
+    """
+    joint_model, extension_model = combination_parts(model)
+    joint = fit_model(
+        joint_model,
+        data,
+        one_curve_scatter(scatter, UNTOUCHED_CURVE[extension_model]),
+        context,
+        settings=settings,
+        nested_start=fits[joint_model].params,
+    )
+    residuals = model_residuals(joint, data, scatter, context)
+    term = term_from_residuals(
+        extension_model, data.velocity_in_s, residuals, scatter, context.reference_velocity_in_s
+    )
+    return [] if term is None else [{**joint.params, **term}]
 
 
 def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
@@ -313,7 +413,7 @@ def diagnose_configuration(
     data: ConfigurationData,
     context: FitContext,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
     segment_cycles: float = AnalysisSettings.segment_cycles,
 ) -> ConfigurationDiagnosis:
     """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
@@ -344,26 +444,32 @@ def diagnose_configuration(
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
     envelope_significant = bool(envelope and envelope["significant"])
     first = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
-    refined = None
-    if (
-        first["cause"] == "microslip_power_law"
-        and not explains_data(data, residuals["iwan"])["explains_data"]
-    ):
+    if needs_threshold_cells(data, first, evidence):
         started = time.perf_counter()
-        refined = f"iwan_cells_{threshold_cells(data)}"
-        fits[refined], cv[refined] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
-        residuals[refined] = model_residuals(fits[refined], data, scatter, context)
-        evidence[refined] = ModelEvidence(residuals[refined], cv[refined], len(MODELS[refined].params))
+        name = add_threshold_cells(
+            data,
+            scatter,
+            context,
+            fits=fits,
+            cv=cv,
+            residuals=residuals,
+            evidence=evidence,
+            settings=settings,
+        )
         log.info(
             "%s %s (slip thresholds from the data): fitted and cross-validated in %.1f s "
             "(held-out error %.3g, iwan %.3g)",
             data.name,
-            refined,
+            name,
             time.perf_counter() - started,
-            cv[refined]["error"],
+            cv[name]["error"],
             cv["iwan"]["error"],
         )
-    tried = [] if envelope_significant else combinations_to_try(first["cause"])
+    tried = (
+        []
+        if envelope_significant
+        else combinations_to_try(first["cause"], f"iwan_cells_{threshold_cells(data)}")
+    )
     fit_combinations(
         data,
         scatter,
@@ -379,17 +485,17 @@ def diagnose_configuration(
         data, evidence, envelope_significant=envelope_significant, settings=settings
     )
     refinement = None
-    if refined:
-        errors, bic = result["errors"], result["bic"]
+    if result["threshold_cells"]:
+        name, errors, bic = result["threshold_cells"], result["errors"], result["bic"]
         refinement = {
-            "model": refined,
-            "adopted": result["extended_models"]["microslip_power_law"] == refined,
+            "model": name,
+            "adopted": result["extended_models"]["microslip_power_law"] == name,
             "rule": "adopted as the extended model when it lowers both the held-out error and the BIC of iwan",
-            "heldout_error": errors[refined]["error"],
-            "bic": bic[refined],
+            "heldout_error": errors[name]["error"],
+            "bic": bic[name],
             "iwan_heldout_error": errors["iwan"]["error"],
             "iwan_bic": bic["iwan"],
-            "cells": threshold_distribution(fits[refined], data, scatter, context),
+            "cells": threshold_distribution(fits[name], data, scatter, context),
             "standard_error": "Gauss-Newton, scaled by the fit cost and residuals over effective observations",
         }
     for entry in combinations.values():
@@ -513,7 +619,7 @@ def diagnose_configuration_segments(
     context: FitContext,
     *,
     response_quantity: str = "acceleration",
-    settings: FitSettings | None = None,
+    settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
     record_start: Mapping[str, str] | None = None,
 ) -> ConfigurationDiagnosis | str:
@@ -529,7 +635,7 @@ def diagnose_configuration_segments(
         The campaign's (:func:`~workflow.discovery.campaign.campaign_fit_context`).
     response_quantity : str
         The configuration's recorded quantity (campaign.yaml ``response.quantity``).
-    settings : FitSettings, optional
+    settings : DiscoverySettings, optional
     segment_cycles : float
         Log-decrement segment length, cycles.
     record_start : mapping, optional
@@ -539,5 +645,5 @@ def diagnose_configuration_segments(
     if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
         return f"only {data.n} usable segments: too few to fit and validate models"
     return diagnose_configuration(
-        data, context, settings=settings or FitSettings(), segment_cycles=segment_cycles
+        data, context, settings=settings or DiscoverySettings(), segment_cycles=segment_cycles
     )

@@ -14,12 +14,12 @@ from workflow.models.averaged import MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     calibration_segments,
     fit_model,
     model_residuals,
 )
 from workflow.models.configuration_data import ConfigurationData, Scatter
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "HELD_OUT_METRIC",
@@ -132,7 +132,7 @@ def cross_validate(
     context: FitContext,
     full_fit: FitResult,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
 ) -> dict:
     """Held-out error of a model: refit without each fold, predict the fold.
 

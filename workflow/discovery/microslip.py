@@ -16,7 +16,6 @@ from workflow.models.averaged import MAX_THRESHOLD_CELLS, MODELS, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
-    FitSettings,
     at_bounds,
     fit_jacobian,
     fit_model,
@@ -24,6 +23,7 @@ from workflow.models.averaged_fit import (
 )
 from workflow.models.configuration_data import ConfigurationData, Scatter
 from workflow.models.joint_averages import threshold_cell_edges
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
     "threshold_cells",
@@ -87,7 +87,7 @@ def refine_microslip(
     context: FitContext,
     iwan_fit: FitResult,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
 ) -> tuple[FitResult, dict]:
     """Fit and cross-validate the Iwan joint whose slip-threshold density the data set.
 

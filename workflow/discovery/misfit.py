@@ -15,7 +15,7 @@ import numpy as np
 from scipy import optimize, special
 
 from workflow.discovery.heldout import amplitude_bin, amplitude_weights
-from workflow.io.settings import AnalysisSettings
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import model_curves
 from workflow.models.averaged_fit import FitResult
 from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, robust_trend
@@ -24,6 +24,7 @@ __all__ = [
     "failure_draws",
     "ALPHA",
     "misfit_significant",
+    "bin_observations",
     "binned_discrepancy",
     "run_order_trend",
     "ENVELOPE_DEPARTURE_LIMIT",
@@ -32,6 +33,7 @@ __all__ = [
     "EXPLAINS_LIMIT",
     "explains_data",
     "stiffness_signature",
+    "bin_span_in_s",
 ]
 
 
@@ -86,50 +88,82 @@ def _lag1_effective(r: np.ndarray) -> float:
     return max(1.0, n * (1.0 - rho) / (1.0 + rho))
 
 
+def bin_observations(
+    values: np.ndarray, run_index: np.ndarray, in_bin: np.ndarray, n_runs: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The observations of one amplitude bin: each run's mean of ``values`` there.
+
+    With several runs, one observation per run with segments in the bin (its mean);
+    with one run, the bin's segments in order of amplitude (its observations are
+    segments). Their mean is the bin's mean, the number every binned verdict and the
+    residual figure's binned means use.
+
+    Returns
+    -------
+    runs : ndarray of int
+        The runs behind the observations (``[0]`` with one run).
+    observations : ndarray
+
+    Examples
+    --------
+    >>> bin_observations(np.array([1.0, 3.0, 10.0, 0.0]), np.array([0, 0, 1, 1]),
+    ...                  np.array([True, True, True, False]), 2)
+    (array([0, 1]), array([ 2., 10.]))
+    """
+    if n_runs >= 2:
+        counts = np.bincount(run_index[in_bin], minlength=n_runs)
+        runs = np.flatnonzero(counts)
+        sums = np.bincount(run_index[in_bin], weights=values[in_bin], minlength=n_runs)
+        return runs, sums[runs] / counts[runs]
+    return np.zeros(1, dtype=int), values[in_bin]
+
+
 def binned_discrepancy(
     data: ConfigurationData, residuals: Mapping[str, np.ndarray], *, alpha: float = ALPHA
 ) -> list[dict]:
     """Mean residual per half decade of amplitude and per curve, with its significance.
 
     For each bin and curve, each run's mean residual in the bin is one
-    observation; the mean over runs, its standard error over runs and a t test
-    (``n_runs - 1`` degrees of freedom) follow. With one run, the segments are the
-    observations and the standard error uses their AR(1) effective number. A bin
-    counts as a real misfit when ``p < p_limit = alpha / (2 n)``, ``n`` the number of
-    bins x curves tested (Bonferroni with half of ``alpha``; the run-order test has the
-    other half), and ``|mean|`` exceeds the model accuracy (``TOL_LN_ZETA`` or
-    ``TOL_REL_F``).
+    observation (:func:`bin_observations`); the mean over runs, its standard error over
+    runs and a t test (``n_runs - 1`` degrees of freedom) follow. With one run, the
+    segments are the observations and the standard error uses their AR(1) effective
+    number. A bin counts as a real misfit when ``p < p_limit = alpha / (2 n)``, ``n``
+    the number of bins x curves tested (Bonferroni with half of ``alpha``; the
+    run-order test has the other half), and ``|mean|`` exceeds the model accuracy
+    (``TOL_LN_ZETA`` or ``TOL_REL_F``). Bins with fewer than 3 runs (one run: 4
+    segments) are not tested.
 
     Returns
     -------
     list of dict
-        One per (bin, curve): ``curve`` ("damping"/"frequency"), ``v_low_in_s``,
-        ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``standard_error``, ``t``,
-        ``p``, ``p_limit`` (``alpha / n_tests``), ``n_runs``, ``n_segments``,
+        One per tested (bin, curve): ``curve`` ("damping"/"frequency"), ``v_low_in_s``,
+        ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``mean_over_scatter`` (the
+        same mean of the residuals divided by the measured scatter, ``z_noise`` or
+        ``f_noise``: the binned mean the residual figure draws), ``standard_error``,
+        ``t``, ``p``, ``p_limit`` (``alpha / n_tests``), ``n_runs``, ``n_segments``,
         ``tolerance``, ``significant``; with several runs also ``run_ids`` and
         ``run_means`` (the observations, for :func:`failure_draws`).
     """
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     rows = []
-    for curve, key, tol in (("damping", "ln_zeta", TOL_LN_ZETA), ("frequency", "rel_f", TOL_REL_F)):
+    for curve, key, scaled, tol in (
+        ("damping", "ln_zeta", "z_noise", TOL_LN_ZETA),
+        ("frequency", "rel_f", "f_noise", TOL_REL_F),
+    ):
         r = residuals[key]
         for b in np.unique(code):
             in_bin = code == b
+            runs, observations = bin_observations(r, data.run_index, in_bin, data.n_runs)
             if data.n_runs >= 2:
-                counts = np.bincount(data.run_index[in_bin], minlength=data.n_runs)
-                runs = np.flatnonzero(counts)
                 if runs.size < 3:
                     continue
-                sums = np.bincount(data.run_index[in_bin], weights=r[in_bin], minlength=data.n_runs)
-                means = sums[runs] / counts[runs]
-                m = float(means.mean())
-                se = float(means.std(ddof=1) / np.sqrt(means.size))
-                dof = means.size - 1
-                per_run = {"run_ids": runs.tolist(), "run_means": means.tolist()}
+                m = float(observations.mean())
+                se = float(observations.std(ddof=1) / np.sqrt(observations.size))
+                dof = observations.size - 1
+                per_run = {"run_ids": runs.tolist(), "run_means": observations.tolist()}
             else:
                 per_run = {}
-                runs = np.zeros(1, dtype=int)
-                seg = r[in_bin][np.argsort(data.velocity_in_s[in_bin])]
+                seg = observations[np.argsort(data.velocity_in_s[in_bin])]
                 if seg.size < 4:
                     continue
                 m = float(seg.mean())
@@ -142,6 +176,9 @@ def binned_discrepancy(
                     "curve": curve,
                     **bin_span_in_s(data.velocity_in_s, data.anchor_velocity_in_s, b),
                     "mean": m,
+                    "mean_over_scatter": float(
+                        bin_observations(residuals[scaled], data.run_index, in_bin, data.n_runs)[1].mean()
+                    ),
                     "standard_error": se,
                     "t": float(t),
                     "p": float(2.0 * special.stdtr(dof, -abs(t))),
@@ -421,26 +458,30 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
 
     Per half decade of amplitude (counted down from the anchor) and per curve, the mean
     of the residuals over the measured scatter (``z_noise``, ``f_noise``: each run with
-    its own offsets). The model explains the data when every such mean is within
-    :data:`EXPLAINS_LIMIT`.
+    its own offsets), taken as every binned mean is (:func:`bin_observations`: the mean
+    over runs of each run's mean). The model explains the data when every such mean is
+    within :data:`EXPLAINS_LIMIT`.
 
     Returns
     -------
     dict
-        ``explains_data`` (bool), ``limit``, ``worst`` (the largest bin: curve, range,
-        mean) and ``failing_bins`` (every bin outside the limit, in amplitude order).
+        ``explains_data`` (bool), ``limit``, ``bins`` (every bin: curve, range,
+        ``mean_over_scatter``, ``n_runs``, ``n_segments``; the binned means the residual
+        figure draws for this model), ``worst`` (the largest bin) and ``failing_bins``
+        (every bin outside the limit, in amplitude order).
     """
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     bins = []
     for curve, key in (("damping", "z_noise"), ("frequency", "f_noise")):
-        r = residuals[key]
         for b in np.unique(code):
             in_bin = code == b
+            runs, observations = bin_observations(residuals[key], data.run_index, in_bin, data.n_runs)
             bins.append(
                 {
                     "curve": curve,
                     **bin_span_in_s(data.velocity_in_s, data.anchor_velocity_in_s, b),
-                    "mean_over_scatter": float(np.mean(r[in_bin])),
+                    "mean_over_scatter": float(observations.mean()),
+                    "n_runs": int(runs.size),
                     "n_segments": int(in_bin.sum()),
                 }
             )
@@ -449,42 +490,55 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
     return {
         "explains_data": not failing,
         "limit": EXPLAINS_LIMIT,
+        "bins": bins,
         "worst": max(bins, key=lambda b: abs(b["mean_over_scatter"]), default=None),
         "failing_bins": failing,
     }
 
 
-def stiffness_signature(fit: FitResult, data: ConfigurationData) -> dict:
-    """Whether a ``dahl_stiffness`` fit shows the stiffness-nonlinearity signature.
+def stiffness_signature(fit: FitResult, data: ConfigurationData, *, n_grid: int = 48) -> dict:
+    """Whether a fit with a stiffness term (``dahl_stiffness``, ``iwan_stiffness``) shows
+    the stiffness-nonlinearity signature.
 
     The output contract's signature: the frequency shifts with amplitude more than the
     friction that fits the damping explains. Over the measured amplitudes the relative
     change of the fitted model's damped frequency is compared with that of its friction
     alone (the same fit with the stiffness term switched off); the signature is there
-    when the whole change is larger in magnitude.
+    when the whole change is larger in magnitude, or when the model's frequency rises
+    with amplitude anywhere by more than the models' accuracy (``TOL_REL_F``): a
+    friction joint (Dahl, LuGre, Iwan: Jenkins elements) only lowers the frequency as
+    the amplitude grows, and a velocity-squared loss leaves it put, so a rise is a
+    stiffness the friction cannot explain at all.
 
     Why: Dahl's pre-sliding damping grows in proportion to amplitude, its softening
     with its square, so a stiff Dahl joint deep in pre-sliding, with a stiffness term
     that cancels its softening, reproduces a velocity-squared loss (damping in
     proportion to amplitude, frequency put) as closely as ``dahl_quadratic`` does. Such
-    a fit's stiffness term works against the friction's frequency change; that of an
-    amplitude-dependent stiffness the data show adds to it or outgrows it.
+    a fit's stiffness term works against the friction's frequency change at every
+    amplitude; that of an amplitude-dependent stiffness the data show adds to it,
+    outgrows it, or (a hardening spring beside micro-slip, whose softening grows more
+    slowly than the spring's stiffening) turns the frequency back up.
 
     Returns
     -------
     dict
         ``relative_frequency_change`` (model, lowest to highest amplitude),
-        ``friction_relative_frequency_change`` (stiffness term off) and
+        ``friction_relative_frequency_change`` (stiffness term off),
+        ``frequency_rise`` (the model's largest relative rise of frequency from a lower
+        to a higher measured amplitude, 0 where it never rises), ``rise_limit`` and
         ``shows_signature`` (bool).
     """
-    velocity = np.array([float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s))])
-    changes = []
+    velocity = np.geomspace(float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s)), n_grid)
+    curves = []
     for params in (fit.params, {**fit.params, "stiffness_shift": 0.0}):
         _, frequency_hz = model_curves(fit.model, params, velocity, response_order=data.response_order)
-        changes.append(float(frequency_hz[1] / frequency_hz[0] - 1.0))
-    whole, friction = changes
+        curves.append(frequency_hz)
+    whole, friction = (float(f[-1] / f[0] - 1.0) for f in curves)
+    rise = float(np.max(curves[0] / np.minimum.accumulate(curves[0]) - 1.0))
     return {
         "relative_frequency_change": whole,
         "friction_relative_frequency_change": friction,
-        "shows_signature": bool(abs(whole) > abs(friction)),
+        "frequency_rise": rise,
+        "rise_limit": TOL_REL_F,
+        "shows_signature": bool(abs(whole) > abs(friction) or rise > TOL_REL_F),
     }

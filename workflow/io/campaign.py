@@ -464,6 +464,12 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
     CampaignFormatError
         Missing or unreadable file, YAML syntax error, unknown key, duplicate key or bad
         value; the message names campaign.yaml, the line and the key.
+
+    Examples
+    --------
+    >>> campaign = load_campaign(Path(__file__).parents[2] / "tests" / "data" / "example_campaign")
+    >>> sorted(campaign.configurations), campaign.response.quantity
+    (['no_washer', 'small_washer'], 'acceleration')
     """
     import yaml
     from pydantic import ValidationError

@@ -24,6 +24,19 @@ import string
 import unicodedata
 from typing import Any
 
+__all__ = [
+    "visible_controls",
+    "shortened",
+    "display_text",
+    "html_text",
+    "rst_text",
+    "rst_strong",
+    "plot_text",
+    "terminal_text",
+    "terminal_lines",
+    "spreadsheet_text",
+]
+
 DISPLAY_LIMIT = 2000
 """Longest text shown in a page, a report or a terminal line, characters (a name is
 bounded when read; a sentence holding one stays far below this)."""
@@ -82,7 +95,13 @@ def display_text(text: Any, limit: int | None = DISPLAY_LIMIT) -> str:
 
 
 def html_text(text: Any, limit: int | None = DISPLAY_LIMIT) -> str:
-    """``text`` as HTML element content or a double-quoted attribute value."""
+    """``text`` as HTML element content or a double-quoted attribute value.
+
+    Examples
+    --------
+    >>> html_text('<script>alert("x")</script>')
+    '&lt;script&gt;alert(&quot;x&quot;)&lt;/script&gt;'
+    """
     return html.escape(display_text(text, limit), quote=True)
 
 

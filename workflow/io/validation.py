@@ -11,10 +11,13 @@ campaign.yaml are read.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
+
+from annotated_types import Ge, Lt
 
 __all__ = [
     "T",
+    "Seed",
     "FORBID_UNKNOWN_KEYS",
     "UNKNOWN_KEY_ERRORS",
     "MISSING_KEY_ERRORS",
@@ -24,6 +27,15 @@ __all__ = [
 
 
 T = TypeVar("T")
+
+Seed = Annotated[int, Ge(0), Lt(2**63)]
+"""A random generator's seed: NumPy takes only non-negative integers, and the outputs that
+record it hold a signed 64-bit integer."""
+
+# Upper bounds: every count, iteration and sample number has one, so that a setting cannot
+# take the machine (2 cores, 24 GiB, shared) for hours or allocate what it does not have;
+# each bound sits where more no longer changes a result the physics or the statistics can
+# resolve, with the cost at the bound stated beside it.
 
 FORBID_UNKNOWN_KEYS = {"extra": "forbid"}
 """``__pydantic_config__`` of a settings dataclass: an unknown key is an error."""

@@ -27,7 +27,7 @@ from workflow.lab.configurations import (
     setup_configuration,
     truth_curves,
 )
-from workflow.lab.layout import PAPER_CONFIGURATIONS, run_name
+from workflow.lab.layout import PAPER_CONFIGURATIONS, DemoSettings, run_name
 from workflow.lab.sensors import Sensor, sensor_at_gain, sensor_view
 from workflow.lab.settings import (
     DEFAULT_EFFECT_SIZES,
@@ -69,8 +69,8 @@ def _check_sensors(sensors) -> tuple[Sensor, ...]:
 def generate_campaign(
     out_dir,
     *,
-    seed=2004,
-    runs_per_configuration=10,
+    seed=DemoSettings.seed,
+    runs_per_configuration=DemoSettings.runs_per_configuration,
     joint="patches",
     effect=None,
     effect_size=None,
@@ -137,6 +137,19 @@ def generate_campaign(
     modes_auto : bool
         campaign.yaml asks for every mode the analysis finds (``modes_hz: auto``) instead
         of listing the simulated ones.
+
+    Examples
+    --------
+    One run of one configuration (a few seconds); the truth is written beside the folder:
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     truth = generate_campaign(Path(folder) / "demo", runs_per_configuration=1, configurations={"no_washer": 1.36})
+    ...     files = sorted(path.relative_to(folder).as_posix() for path in Path(folder).rglob("*.*"))
+    >>> files
+    ['demo.truth.json', 'demo/campaign.yaml', 'demo/no_washer/run01.txt']
+    >>> truth["expected_cause"]
+    'microslip_power_law'
     """
     if joint not in ("patches", "dahl"):
         raise ValueError(f"joint must be 'patches' or 'dahl', got {joint!r}")

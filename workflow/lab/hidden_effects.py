@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from workflow.io.settings import AnalysisSettings, QualitySettings
 from workflow.lab.campaigns import generate_campaign
 from workflow.lab.configurations import setup_configuration
 from workflow.lab.sensors import Sensor, positions_with_mode1_gain
 from workflow.lab.settings import TIME_DOMAIN_EFFECTS, LabSettings
 from workflow.measured.campaign_tables import analyse_campaign
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "CASES",
@@ -39,6 +39,11 @@ __all__ = [
     "campaign_segments",
     "draw_case",
     "generate_case",
+    "case_causes",
+    "case_integrator",
+    "time_domain_can_hide",
+    "placed_sensor",
+    "draw_mode1_gain",
 ]
 
 

@@ -21,6 +21,21 @@ def half_sine_response(t_s, omega_rad_s, zeta, peak, duration_s):
     Returns
     -------
     q, q_dot, q_ddot : ndarray
+
+    Examples
+    --------
+    After the pulse the mode rings as if struck by the impulse ``2 peak duration / pi``,
+    times :func:`half_sine_spectral_factor`, at the pulse centre (exactly without
+    damping; a damping ratio of 0.005 leaves 1.5e-4 of the amplitude):
+
+    >>> omega_rad_s, zeta, peak, duration_s = 2 * np.pi * 125.0, 0.005, 10.0, 1e-3
+    >>> t_s = np.linspace(0.002, 0.05, 200)
+    >>> q, _, _ = half_sine_response(t_s, omega_rad_s, zeta, peak, duration_s)
+    >>> impulse = 2 * peak * duration_s / np.pi * half_sine_spectral_factor(omega_rad_s, duration_s)
+    >>> wd, tc = omega_rad_s * np.sqrt(1 - zeta**2), t_s - duration_s / 2
+    >>> ringing = impulse / wd * np.exp(-zeta * omega_rad_s * tc) * np.sin(wd * tc)
+    >>> bool(np.max(np.abs(q - ringing)) < 1e-3 * np.max(np.abs(ringing)))
+    True
     """
     t = np.asarray(t_s, dtype=float)
     wd = omega_rad_s * np.sqrt(1.0 - zeta**2)

@@ -16,9 +16,9 @@ import numpy as np
 
 from workflow.io.interim import ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
-from workflow.io.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
-from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_file, empty_segments
+from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_file, empty_segments, read_runs
+from workflow.measured.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -46,7 +46,7 @@ def analyse_campaign(
     """Kept segments of every usable run of a campaign, in one process.
 
     The workflow's rules ``identify_mode``, ``analyse_runs`` and ``collect_tables`` make
-    the same calls, split over jobs; this is the whole chain for studies over many
+    the same calls, split over jobs (each run read once here); this is the whole chain for studies over many
     campaigns (``bench/hit_rate.py``).
 
     Returns the rows ``results/tables/segments.parquet`` would hold.
@@ -62,10 +62,16 @@ def analyse_campaign(
     for name, spec in campaign.configurations.items():
         paths = [run_file.path for run_file in run_files if run_file.configuration == name]
         options = {"configuration": name, "campaign": campaign, "quality_settings": quality_settings}
-        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis.mode_search(), **options)
+        reads = read_runs(campaign_dir, paths, campaign, quality_settings)
+        mode = identify_configuration_mode(campaign_dir, paths, mode_search=analysis, reads=reads, **options)
         for path in paths:
             result = analyse_run_file(
-                campaign_dir, path, mode=mode, decay_settings=analysis.decay(), **options
+                campaign_dir,
+                path,
+                mode=mode,
+                decay_settings=analysis,
+                read=reads.pop(path),
+                **options,
             )
             if result.status["status"] != "used":
                 continue

@@ -53,13 +53,14 @@ come out in that unit.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from workflow.io.settings import AnalysisSettings
-from workflow.measured.filters import analytic_bandpass, filter_time_constant_s
+from workflow.measured.filters import analytic_bandpass, filter_time_constant_s, unwrapped_phase_rad
+from workflow.measured.settings import AnalysisSettings
 
 __all__ = [
     "DecayResult",
@@ -476,18 +477,27 @@ def _noise_standard_errors(
 def _segment_estimates(
     z: np.ndarray, fs_hz: float, starts: np.ndarray, stops: np.ndarray
 ) -> dict[str, np.ndarray]:
-    return log_decrement_segments(np.abs(z), np.unwrap(np.angle(z)), fs_hz, starts, stops)
+    return log_decrement_segments(np.abs(z), unwrapped_phase_rad(z), fs_hz, starts, stops)
 
 
 def _synthetic_decay(
     n_samples: int, fs_hz: float, mode_hz: float, zeta: float, onset_index: int
 ) -> np.ndarray:
     """Unit ``exp(-zeta omega_n t) sin(omega_d t)`` from rest at ``onset_index``."""
-    omega_n = 2.0 * np.pi * mode_hz
-    t = (np.arange(n_samples) - onset_index) / fs_hz
-    after = t >= 0
     x = np.zeros(n_samples)
-    x[after] = np.exp(-zeta * omega_n * t[after]) * np.sin(omega_n * np.sqrt(1.0 - zeta**2) * t[after])
+    x[onset_index:] = _decay_from_rest(n_samples, fs_hz, mode_hz, zeta)[: n_samples - onset_index]
+    return x
+
+
+@functools.lru_cache(maxsize=1)
+def _decay_from_rest(n_samples: int, fs_hz: float, mode_hz: float, zeta: float) -> np.ndarray:
+    """Unit ``exp(-zeta omega_n t) sin(omega_d t)`` at ``t = k / fs_hz``, ``k`` from 0 to
+    ``n_samples - 1`` (read-only). Kept for the next call: a record's probe and its
+    start-up bias are the same decay started at two samples."""
+    omega_n = 2.0 * np.pi * mode_hz
+    t = np.arange(n_samples) / fs_hz
+    x = np.exp(-zeta * omega_n * t) * np.sin(omega_n * np.sqrt(1.0 - zeta**2) * t)
+    x.flags.writeable = False
     return x
 
 
@@ -616,7 +626,7 @@ def analyse_decay(
 
     z = analytic_bandpass(response, fs_hz, band_hz, filter_order)
     env = np.abs(z)
-    phase = np.unwrap(np.angle(z))
+    phase = unwrapped_phase_rad(z)
     filtered = z.real.copy()
     del z  # a long record's largest array: only its parts above are used
 

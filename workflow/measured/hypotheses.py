@@ -18,14 +18,13 @@ import pandas as pd
 from scipy import special
 
 from workflow.measured.curves import (
-    _IDENTITY,
-    _LOG10,
-    _can_fit,
-    _polyfit,
-    _run_indices,
-    _transform,
-    _validated,
+    IDENTITY,
+    LOG10,
+    can_fit,
     fit_damping_polynomial,
+    fit_variable,
+    run_indices,
+    validated_damping_data,
 )
 
 __all__ = [
@@ -175,7 +174,7 @@ def amplitude_hypothesis(
     The window is fixed from all the data (not re-derived per resample), so
     every resample estimates the same quantity.
     """
-    amplitude, damping, labels = _validated(velocity_amplitude_in_s, zeta, run)
+    amplitude, damping, labels = validated_damping_data(velocity_amplitude_in_s, zeta, run)
     x = np.log10(amplitude)
     x_low, x_high = x.min(), x.min() + lower_fraction * (x.max() - x.min())
     window = x <= x_high
@@ -187,7 +186,7 @@ def amplitude_hypothesis(
     )
     xw, yw, lw = x[window], damping[window], labels[window]
     estimate = _line_slope(xw, yw)
-    runs = _run_indices(lw)
+    runs = run_indices(lw)
     n_runs = len(runs)
     ci_low = ci_high = np.nan
     n_valid = 0
@@ -244,7 +243,7 @@ def common_amplitude_range(
     for amplitude, _, labels in data_by_configuration.values():
         amplitude = np.asarray(amplitude, dtype=float)
         labels = np.asarray(labels)
-        runs = _run_indices(labels)
+        runs = run_indices(labels)
         low = max(low, float(np.median([amplitude[r].min() for r in runs])))
         high = min(high, float(np.median([amplitude[r].max() for r in runs])))
     if not low < high:
@@ -334,7 +333,7 @@ def area_hypothesis(
         )
         return pd.DataFrame([row], columns=HYPOTHESIS_COLUMNS)
 
-    data = {name: _validated(*data_by_configuration[name]) for name in names}
+    data = {name: validated_damping_data(*data_by_configuration[name]) for name in names}
     common = common_amplitude_range(data)
     n_runs_total = int(sum(np.unique(d[2]).size for d in data.values()))
     if common is None:
@@ -349,24 +348,24 @@ def area_hypothesis(
         )
         return pd.DataFrame([row], columns=HYPOTHESIS_COLUMNS)
 
-    x_transform = _LOG10 if log_amplitude else _IDENTITY
+    x_transform = LOG10 if log_amplitude else IDENTITY
     grid = np.logspace(np.log10(common[0]), np.log10(common[1]), n_amplitudes + 2)[1:-1]
-    x_grid = _transform(grid, x_transform)
+    x_grid = fit_variable(grid, x_transform)
 
     def curve(name: str, index: np.ndarray | None) -> np.ndarray:
         amplitude, damping, _ = data[name]
         if index is not None:
             amplitude, damping = amplitude[index], damping[index]
-        x = _transform(amplitude, x_transform)
+        x = fit_variable(amplitude, x_transform)
         out = np.full(grid.size, np.nan)
-        if not _can_fit(x, degrees[name]):
+        if not can_fit(x, degrees[name]):
             return out
         inside = (grid >= amplitude.min()) & (grid <= amplitude.max())
-        out[inside] = np.polyval(_polyfit(x, damping, degrees[name]), x_grid[inside])
+        out[inside] = np.polyval(np.polyfit(x, damping, degrees[name]), x_grid[inside])
         return out
 
     estimate = _area_slopes(areas, np.vstack([curve(name, None) for name in names]))
-    runs = {name: _run_indices(data[name][2]) for name in names}
+    runs = {name: run_indices(data[name][2]) for name in names}
     single = [name for name in names if len(runs[name]) < 2]
     slopes = np.full((n_boot, grid.size), np.nan)
     note = ""

@@ -364,12 +364,31 @@ def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_h
         edge = int(np.ceil(edge_s * fs_hz))
         if run.size <= 4 * edge:
             continue
-        frequency_hz = np.fft.fftfreq(run.size, 1.0 / fs_hz)
-        gain = np.exp(-0.5 * ((frequency_hz - line_hz) / sigma_hz) ** 2)
-        track = np.abs(np.fft.ifft(np.fft.fft(run - run.mean()) * gain))[edge:-edge]
+        track = _line_track(run - run.mean(), fs_hz, line_hz, sigma_hz)[edge:-edge]
         peak = track.max()
         fractions.append(float(np.mean(track >= peak / np.sqrt(2.0))) if peak > 0 else 0.0)
     return float(np.median(fractions)) if fractions else 0.0
+
+
+def _line_track(run: np.ndarray, fs_hz: float, line_hz: float, sigma_hz: float) -> np.ndarray:
+    """Amplitude over time of the part of ``run`` in a Gaussian band of standard deviation
+    ``sigma_hz`` around ``line_hz`` (positive frequencies only: the analytic signal of
+    the band, halved), in the unit of ``run``.
+
+    The band's gain underflows to exactly 0 beyond 40 standard deviations, so it is
+    computed inside them only; at 0 Hz and at negative frequencies it is 0 (``line_hz``
+    is 100 standard deviations from them), so the complex inverse transform of the
+    one-sided product is that of two real inverse transforms: the product's (real part)
+    and the product's times -i (imaginary part), each halved.
+    """
+    spectrum = np.fft.rfft(run)
+    frequency_hz = np.fft.rfftfreq(run.size, 1.0 / fs_hz)
+    inside = np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz
+    banded = np.zeros_like(spectrum)
+    banded[inside] = spectrum[inside] * np.exp(-0.5 * ((frequency_hz[inside] - line_hz) / sigma_hz) ** 2)
+    real = np.fft.irfft(banded, run.size)
+    banded *= -1j
+    return 0.5 * np.hypot(real, np.fft.irfft(banded, run.size))
 
 
 def forced_line_problem(

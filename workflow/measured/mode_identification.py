@@ -9,6 +9,7 @@ bad data.
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -16,10 +17,10 @@ from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, QUOTED_CHARACTERS, shortened
 from workflow.io.record_rules import rates_agree
 from workflow.io.records import RunRecord
-from workflow.io.settings import ModeSearchSettings, QualitySettings
 from workflow.measured import mode as modal_id
 from workflow.measured import quality
-from workflow.measured.runs import analysis_window, read_and_check, window_problems
+from workflow.measured.runs import analysis_window, failed_checks, read_with_quality, window_problems
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "mode_search_range",
@@ -155,8 +156,9 @@ def identify_configuration_mode(
     *,
     configuration: str,
     campaign,
-    mode_search: ModeSearchSettings,
+    mode_search: AnalysisSettings,
     quality_settings: QualitySettings,
+    reads: Mapping[str, tuple[RunRecord | None, list[dict]]] | None = None,
 ) -> ConfigurationMode:
     """First mode of one configuration from its run files; never raises for bad data.
 
@@ -175,17 +177,24 @@ def identify_configuration_mode(
         The configuration.
     campaign : Campaign
         The validated campaign.yaml.
-    mode_search : ModeSearchSettings
+    mode_search : AnalysisSettings
         Mode search range and band width.
     quality_settings : QualitySettings
         Record-level checks and the least prominence of a mode.
+    reads : mapping, optional
+        Run path -> the run as :func:`~workflow.measured.runs.read_with_quality` gave it,
+        for the runs already read; the others are read here.
     """
     from pathlib import PurePosixPath
 
     window_s = campaign.configurations[configuration].window_s
     records, windows, run_paths_used, skipped = [], [], [], {}
+    reads = reads or {}
     for run_path in run_paths:
-        record, problems = read_and_check(campaign_dir, run_path, campaign, quality_settings)
+        record, rows = reads.get(run_path) or read_with_quality(
+            campaign_dir, run_path, campaign, quality_settings
+        )
+        problems = failed_checks(run_path, rows)
         if not problems:
             problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
         if problems:
@@ -235,7 +244,7 @@ def identify_configuration_modes(
     windows: list[tuple[int, int]],
     configuration: str,
     campaign,
-    mode_search: ModeSearchSettings,
+    mode_search: AnalysisSettings,
     quality_settings: QualitySettings,
     skipped: dict[str, list[str]],
 ) -> ConfigurationMode:

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from workflow.io.records import RunRecord
-from workflow.io.settings import QualitySettings
+from workflow.measured.settings import QualitySettings
 
 __all__ = [
     "CheckResult",

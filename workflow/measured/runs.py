@@ -13,7 +13,7 @@ run-analysis job then starts without pandas.
 from __future__ import annotations
 
 import logging
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -23,8 +23,8 @@ from workflow.io.campaign import SINGLE_CHANNEL_NAME
 from workflow.io.interim import ConfigurationMode, ModeInfo
 from workflow.io.limits import QUOTED_CHARACTERS, quoted, shortened
 from workflow.io.records import RunRecord
-from workflow.io.settings import DecaySettings, QualitySettings
 from workflow.measured import decay, quality
+from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
     "analysis_window",
@@ -37,9 +37,13 @@ __all__ = [
     "labelled",
     "analyse_every_mode_and_channel",
     "failed_checks",
-    "read_and_check",
     "RunAnalysis",
     "analyse_run_file",
+    "window_problems",
+    "read_runs",
+    "analyse_run_group",
+    "first_exclusion",
+    "write_run_group",
 ]
 
 
@@ -122,7 +126,7 @@ def analyse_run_with_quality(
     run: str,
     mode: ModeInfo,
     window: tuple[int, int],
-    decay_settings: DecaySettings,
+    decay_settings: AnalysisSettings,
     quality_settings: QualitySettings,
 ) -> tuple[dict[str, np.ndarray], list[dict]]:
     """Band-pass, envelope and segmented log decrement of one run, with its checks.
@@ -137,7 +141,7 @@ def analyse_run_with_quality(
         The configuration's mode and band.
     window : (int, int)
         Sample indices [start, stop) to analyse (:func:`analysis_window`).
-    decay_settings : DecaySettings
+    decay_settings : AnalysisSettings
         The decay analysis settings (filter order, segment length and overlap, noise
         floor factor, edge time constants).
     quality_settings : QualitySettings
@@ -159,7 +163,7 @@ def analyse_run_with_quality(
         record.sample_rate_hz,
         mode.band_hz,
         mode_hz=mode.mode_hz,
-        **asdict(decay_settings),
+        **decay_settings.decay_options(),
         start_index=start if window != (0, record.n_samples) else None,
         stop_index=stop,
     )
@@ -270,7 +274,7 @@ def analyse_every_mode_and_channel(
     run: str,
     mode: ConfigurationMode,
     window: tuple[int, int],
-    decay_settings: DecaySettings,
+    decay_settings: AnalysisSettings,
     quality_settings: QualitySettings,
 ) -> tuple[dict[str, np.ndarray], list[dict]]:
     """:func:`analyse_run_with_quality` for every mode of the configuration on every
@@ -306,16 +310,6 @@ def failed_checks(path: str, rows: list[dict]) -> list[str]:
     ]
 
 
-def read_and_check(campaign_dir, path: str, campaign, quality_settings) -> tuple[RunRecord | None, list[str]]:
-    """Read one run file and apply the record-level quality checks.
-
-    Returns the record (None when it cannot be read) and the list of problems,
-    each a message that names the file and what is wrong.
-    """
-    record, rows = read_with_quality(campaign_dir, path, campaign, quality_settings)
-    return record, failed_checks(path, rows)
-
-
 @dataclass(frozen=True)
 class RunAnalysis:
     """What the workflow keeps of one run file: its segments (columns of
@@ -336,7 +330,8 @@ def analyse_run_file(
     campaign,
     mode: ConfigurationMode,
     quality_settings: QualitySettings,
-    decay_settings: DecaySettings,
+    decay_settings: AnalysisSettings,
+    read: tuple[RunRecord | None, list[dict]] | None = None,
 ) -> RunAnalysis:
     """Read, check and analyse one run file; a run that cannot be used is excluded
     with its reason, never raised.
@@ -356,14 +351,19 @@ def analyse_run_file(
         without a mode, the run is excluded with the reason none was found.
     quality_settings : QualitySettings
         Quality thresholds.
-    decay_settings : DecaySettings
+    decay_settings : AnalysisSettings
         The decay analysis settings.
+    read : (RunRecord or None, list of dict), optional
+        The run as :func:`read_with_quality` gave it, when the job has read it already
+        (for the mode search): the file is then not read again.
     """
     from pathlib import PurePosixPath
 
     run = PurePosixPath(run_path).stem
     segments = empty_segments()
-    record, rows = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
+    if read is None:
+        read = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
+    record, rows = read[0], list(read[1])
     problems = failed_checks(run_path, rows)
     if record is not None and not problems:
         problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
@@ -397,3 +397,50 @@ def analyse_run_file(
         "response_units": {} if record is None else {c.name: c.unit for c in record.responses},
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
+
+
+def read_runs(campaign_dir, run_paths: list[str], campaign, quality_settings) -> dict[str, tuple]:
+    """Run path -> the run as :func:`read_with_quality` gives it, for every path: a job
+    that searches a configuration's modes and analyses some of its runs reads each once."""
+    return {path: read_with_quality(campaign_dir, path, campaign, quality_settings) for path in run_paths}
+
+
+def analyse_run_group(
+    campaign_dir,
+    run_paths: list[str],
+    *,
+    reads: dict[str, tuple] | None = None,
+    **options,
+) -> list[RunAnalysis]:
+    """:func:`analyse_run_file` for each of a job's runs (``options`` are its keywords),
+    with the runs in ``reads`` (:func:`read_runs`) not read again; each excluded run is
+    logged as a warning (strict mode stops on :func:`first_exclusion`)."""
+    log = logging.getLogger(__name__)
+    reads = reads or {}
+    results = []
+    for run_path in run_paths:
+        result = analyse_run_file(campaign_dir, run_path, read=reads.get(run_path), **options)
+        if result.status["status"] == "excluded":
+            log.warning("excluded %s", result.status["reason"])
+        else:
+            kept = result.segments["kept"]
+            log.info("%s: %d segments kept of %d", run_path, int(kept.sum()), len(kept))
+        results.append(result)
+    return results
+
+
+def first_exclusion(results: list[RunAnalysis]) -> str | None:
+    """The reason the first excluded run of ``results`` was excluded, or None if every
+    run was analysed (strict mode stops the job on it)."""
+    return next((r.status["reason"] for r in results if r.status["status"] == "excluded"), None)
+
+
+def write_run_group(segments_path, quality_path, status_path, results: list[RunAnalysis]) -> None:
+    """A job's interim files of its runs: their segments and quality rows (column
+    files) and their statuses (JSON)."""
+    from workflow.io.interim import write_run_statuses
+    from workflow.io.tables import concatenate_columns, write_columns
+
+    write_columns(segments_path, concatenate_columns([result.segments for result in results]))
+    write_columns(quality_path, concatenate_columns([result.quality for result in results]))
+    write_run_statuses(status_path, [result.status for result in results])

@@ -379,8 +379,14 @@ def combined_model(joint_model: str, extension_model: str) -> AveragedModel:
     )
 
 
-COMBINED_MODELS = {("iwan", "dahl_quadratic"): "iwan_quadratic", ("iwan", "dahl_stiffness"): "iwan_stiffness"}
-"""(joint model, extension model) -> the combined model's id (:func:`combined_model`)."""
+COMBINED_MODELS = {
+    (f"iwan_cells_{n}", extension): f"iwan_cells_{n}_{extension.removeprefix('dahl_')}"
+    for n in range(1, MAX_THRESHOLD_CELLS + 1)
+    for extension in ("dahl_quadratic", "dahl_stiffness")
+}
+"""(joint model, extension model) -> the combined model's id (:func:`combined_model`): the
+Iwan joint with the slip thresholds from the data and a velocity-squared loss or a
+stiffness term (``iwan_cells_<n>_quadratic``, ``iwan_cells_<n>_stiffness``)."""
 
 MODELS.update({name: combined_model(*parts) for parts, name in COMBINED_MODELS.items()})
 

@@ -16,13 +16,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workflow.io.settings import DiscoverySettings
 from workflow.models.averaged import MODELS, AveragedModel, CurveGrid
 from workflow.models.configuration_data import ConfigurationData, Scatter
 from workflow.models.sampling import scrambled_sobol_points
+from workflow.models.settings import DiscoverySettings
 
 __all__ = [
-    "FitSettings",
+    "LOCAL_NFEV",
+    "TWO_STAGE_MODELS",
+    "SCREEN_NFEV",
+    "FOLD_NFEV",
     "FitContext",
     "JOINT_SHARE_MAX",
     "SLIP_SCALE_ABOVE_RANGE",
@@ -46,24 +49,18 @@ __all__ = [
 ]
 
 
-@dataclass(frozen=True)
-class FitSettings:
-    """Optimiser settings: the ``discovery`` section of config.yaml (its defaults are
-    :class:`workflow.io.settings.DiscoverySettings`'), then the refinement budgets."""
+LOCAL_NFEV = 60
+"""Most residual evaluations of one local refinement from a global start."""
 
-    global_samples: int = DiscoverySettings.global_samples
-    local_starts: int = DiscoverySettings.local_starts
-    seed: int = DiscoverySettings.seed
-    folds: int = DiscoverySettings.folds
-    max_nfev: int = 60
-    """Most residual evaluations of one local refinement from a global start."""
-    two_stage_models: tuple[str, ...] = ("lugre",)
-    """Models refined in two stages (expensive ones): every start briefly, the best fully."""
-    screen_nfev: int = 8
-    """Evaluations of the short refinement from each start (the best is continued)."""
-    fold_nfev: int = 12
-    """Most evaluations when refitting a cross-validation fold from the all-data fit."""
-    resamples: int = DiscoverySettings.resamples
+TWO_STAGE_MODELS = ("lugre",)
+"""Models refined in two stages (expensive ones): every start briefly, the best fully."""
+
+SCREEN_NFEV = 8
+"""Evaluations of the short refinement from each start of a two-stage model (the best is
+continued)."""
+
+FOLD_NFEV = 12
+"""Most evaluations when refitting a cross-validation fold from the all-data fit."""
 
 
 @dataclass
@@ -448,7 +445,8 @@ def fit_model(
     scatter: Scatter,
     context: FitContext,
     *,
-    settings: FitSettings = FitSettings(),
+    settings: DiscoverySettings = DiscoverySettings(),
+    max_nfev: int = LOCAL_NFEV,
     mask: np.ndarray | None = None,
     warm_start: np.ndarray | None = None,
     nested_start: Mapping[str, float] | Sequence[Mapping[str, float]] | None = None,
@@ -462,8 +460,10 @@ def fit_model(
     scatter : Scatter
         Per-segment uncertainties (weights).
     context : FitContext
-    settings : FitSettings
-        Global samples, local starts, seed.
+    settings : DiscoverySettings
+        Global samples, local starts, seed (config.yaml's ``discovery``).
+    max_nfev : int
+        Most residual evaluations of one local refinement from a global start.
     mask : ndarray of bool, optional
         Segments used (default all).
     warm_start : ndarray, optional
@@ -489,7 +489,7 @@ def fit_model(
     >>> v = np.geomspace(0.05, 5.0, 40)
     >>> zeta, frequency_hz = model_curves("dahl", truth, v)
     >>> data = ConfigurationData("c", v, zeta, frequency_hz, np.zeros(v.size, int), ["run01"], None)
-    >>> settings = FitSettings(global_samples=64, local_starts=2)
+    >>> settings = DiscoverySettings(global_samples=64, local_starts=2)
     >>> fit = fit_model("dahl", data, scatter_of(data), FitContext(1.0), settings=settings)
     >>> {name: float(f"{value:.3g}") for name, value in fit.params.items()}
     {'f_lin_hz': 100.0, 'zeta0': 0.002, 'joint_stiffness_fraction': 0.01, 'slip_velocity_in_s': 1.0}
@@ -517,17 +517,17 @@ def fit_model(
                 break
     best_u, best_cost = None, np.inf
     if warm_start is not None:
-        best_u, best_cost = _local_fit(problem, starts[0], settings.fold_nfev)
-    elif model.name not in settings.two_stage_models:
+        best_u, best_cost = _local_fit(problem, starts[0], FOLD_NFEV)
+    elif model.name not in TWO_STAGE_MODELS:
         for start in starts:
-            u, c = _local_fit(problem, start, settings.max_nfev)
+            u, c = _local_fit(problem, start, max_nfev)
             if c < best_cost:
                 best_u, best_cost = u, c
     else:
         # two stages: a short refinement from every start, then the best one continued
-        screened = [_local_fit(problem, start, settings.screen_nfev) for start in starts]
+        screened = [_local_fit(problem, start, SCREEN_NFEV) for start in starts]
         u0 = min(screened, key=lambda r: r[1])[0]
-        best_u, best_cost = _local_fit(problem, u0, settings.max_nfev)
+        best_u, best_cost = _local_fit(problem, u0, max_nfev)
     coords = problem.lo + best_u * span
     params = {p.name: float(v[0, 0]) for p, v in zip(model.params, to_physical(model, coords).values())}
     params.update(problem.fixed)

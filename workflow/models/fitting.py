@@ -54,10 +54,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from workflow.io.settings import AnalysisSettings, DecaySettings, ModelSettings
 from workflow.measured import decay, filters
+from workflow.measured.settings import AnalysisSettings
 from workflow.models.ringdown import simulate_ringdown
 from workflow.models.sampling import scrambled_sobol_points
+from workflow.models.settings import ModelSettings
 
 __all__ = [
     "RingdownFitContext",
@@ -91,7 +92,7 @@ class RingdownFitContext:
         Sensor displacement per unit modal coordinate, in (1: same absorption).
     response : {"acceleration", "velocity", "displacement"}
         Measured quantity, so the simulated one is analysed in the same form.
-    analysis : DecaySettings
+    analysis : AnalysisSettings
         The decay analysis the measurements went through (filter order, segment length
         and overlap, edge time constants); the simulations go through the same.
     steps_per_period : int
@@ -104,7 +105,7 @@ class RingdownFitContext:
     slip_per_modal: float = 1.0
     response_per_modal: float = 1.0
     response: str = "acceleration"
-    analysis: DecaySettings = field(default_factory=lambda: AnalysisSettings().decay())
+    analysis: AnalysisSettings = field(default_factory=AnalysisSettings)
     steps_per_period: int = ModelSettings.steps_per_period
 
 
@@ -281,7 +282,7 @@ def analyse_batch(responses: np.ndarray, ctx: RingdownFitContext) -> list[dict[s
             continue
         z = filters.analytic_bandpass(x, ctx.fs_hz, ctx.band_hz, ctx.analysis.filter_order)
         env = np.abs(z)
-        phase = np.unwrap(np.angle(z))
+        phase = filters.unwrapped_phase_rad(z)
         start = int(np.argmax(env))
         n = x.size
         mode_hz = float(np.mean(np.diff(phase[start:])) * ctx.fs_hz / (2 * np.pi))

@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from workflow.io.settings import DecaySettings, ModelSettings
+from workflow.measured.settings import AnalysisSettings
+from workflow.models.settings import DiscoverySettings, ModelSettings
 
 if TYPE_CHECKING:  # pandas is imported where tables are built: figures 7-8 draw without it
     import pandas as pd
@@ -104,7 +105,7 @@ def averaged_fit_params(
     """The averaged model's fit to one configuration's segments, for a configuration the
     diagnosis did not fit (too few distinct amplitudes to validate models)."""
     from workflow.models.averaged import RESPONSE_ORDER
-    from workflow.models.averaged_fit import FitContext, FitSettings, fit_model
+    from workflow.models.averaged_fit import FitContext, fit_model
     from workflow.models.configuration_data import prepare_configuration, scatter_of
 
     data = prepare_configuration(
@@ -112,7 +113,7 @@ def averaged_fit_params(
     )
     velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
     context = FitContext(float(np.quantile(velocity, 0.9)))
-    fit = fit_model(model, data, scatter_of(data), context, settings=FitSettings(seed=seed))
+    fit = fit_model(model, data, scatter_of(data), context, settings=DiscoverySettings(seed=seed))
     return fit.params
 
 
@@ -155,7 +156,7 @@ def fit_configuration(
     band_hz: tuple[float, float],
     response_quantity: str,
     coordinate: ModalCoordinate,
-    analysis: DecaySettings,
+    analysis: AnalysisSettings,
     settings: ModelSettings,
     averaged_params: dict[str, dict[str, float]],
 ) -> dict:
@@ -230,7 +231,7 @@ def configuration_models_document(
     bearing_areas_in2: dict[str, float | None],
     *,
     response_quantity: str,
-    analysis: DecaySettings,
+    analysis: AnalysisSettings,
     settings: ModelSettings,
     averaged_params: dict[str, dict[str, float]] | None,
 ) -> dict:

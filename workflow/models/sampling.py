@@ -127,6 +127,14 @@ def scrambled_sobol_points(count: int, dimensions: int, seed: int) -> np.ndarray
     Returns
     -------
     ndarray, shape (count, dimensions)
+
+    Examples
+    --------
+    Eight points in two dimensions: one in each eighth of either axis (a (0, 3, 2)-net):
+
+    >>> points = scrambled_sobol_points(8, 2, seed=1976)
+    >>> [sorted(np.floor(8 * points[:, axis]).astype(int).tolist()) for axis in range(2)]
+    [[0, 1, 2, 3, 4, 5, 6, 7], [0, 1, 2, 3, 4, 5, 6, 7]]
     """
     if not 1 <= count <= 2**BITS:
         raise ValueError(f"Sobol points: count must be 1 to 2^{BITS}, got {count}")

@@ -22,18 +22,32 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
+from workflow.discovery.confidence import verdict_key  # noqa: E402
 from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
 from workflow.outputs.plain_words import left_out_caveat  # noqa: E402
 
-__all__ = ["residuals_figure", "candidates_figure", "heldout_figure"]
+__all__ = [
+    "binned_means",
+    "plain_number",
+    "residual_ticks",
+    "residuals_figure",
+    "candidate_rows",
+    "candidates_figure",
+    "heldout_figure",
+]
 
 ROLE_COLOURS = {"baseline": "tab:red", "extended": "tab:blue"}
 CURVE_LABELS = {
     "zeta": "damping residual\n(ln ζ_measured/ζ_model) / scatter (1)",
     "frequency_hz": "frequency residual\n(f_measured/f_model − 1) / scatter (1)",
 }
+CURVE_NAMES = {"zeta": "damping", "frequency_hz": "frequency"}
+"""The residual table's curves as the diagnosis evidence names them."""
+LINEAR_LIMIT = 4.0
+"""The residual axis is linear within this many scatters (the ±2 band stays readable),
+logarithmic beyond (misfits span decades)."""
 ERROR_LABEL = "held-out error (RMS residual / scatter, 1)"
 
 
@@ -51,18 +65,56 @@ def _message_panel(ax: plt.Axes, message: str, title: str) -> None:
     ax.set_title(title)
 
 
-def _binned_means(v: np.ndarray, r: np.ndarray, per_decade: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    """Mean residual in bins of ``1 / per_decade`` decade of amplitude (>= 3 segments)."""
-    if v.size == 0:
-        return np.array([]), np.array([])
-    code = np.floor(per_decade * np.log10(v)).astype(int)
-    centres, means = [], []
-    for c in np.unique(code):
-        m = code == c
-        if m.sum() >= 3:
-            centres.append(10 ** ((c + 0.5) / per_decade))
-            means.append(float(np.mean(r[m])))
-    return np.array(centres), np.array(means)
+BINNED_MEAN_NOTE = (
+    "Lines with markers: each model's mean residual per half decade of amplitude (the mean "
+    "over runs of each run's mean), the numbers the verdict quotes. Baseline: filled where "
+    "the misfit is significant (statistically clear after correction and larger than the "
+    "models' accuracy), open where not; half decades with fewer than 3 runs (one run: 4 "
+    "segments) are not tested and have no baseline mean."
+)
+
+
+def binned_means(entry: Mapping, role: str) -> list[dict]:
+    """The binned means a role's residual panel draws, from the diagnosis evidence.
+
+    The baseline's are the discrepancy test's bins (``evidence.binned_residuals``, each
+    with its significance), the extended model's those of ``explains_data``
+    (``evidence.explains_data.bins``): both ``mean_over_scatter`` per half decade, the
+    numbers the verdict's sentences quote.
+    """
+    evidence = entry.get("evidence") or {}
+    if role == "baseline":
+        return list(evidence.get("binned_residuals") or [])
+    return list((evidence.get("explains_data") or {}).get("bins") or [])
+
+
+def _draw_binned_means(
+    ax: plt.Axes, bins: list[dict], curve: str, role: str, model: str, units: UnitSystem
+) -> None:
+    """Each bin's mean as a bar across its amplitudes with a marker at its centre: filled
+    for a significant misfit (or a bin with no test, the extended model's), open for a
+    tested bin that is not one. The marker lines' gid is ``"<role> binned mean"``."""
+    rows = sorted((b for b in bins if b["curve"] == curve), key=lambda b: b["v_low_in_s"])
+    if not rows:
+        return
+    colour = ROLE_COLOURS[role]
+    low = units.per_in_s * np.array([b["v_low_in_s"] for b in rows])
+    high = units.per_in_s * np.array([b["v_high_in_s"] for b in rows])
+    means = np.array([b["mean_over_scatter"] for b in rows])
+    ax.hlines(means, low, high, color=colour, lw=2.0)
+    centres = np.sqrt(low * high)
+    tested = any("significant" in b for b in rows)
+    filled = np.array([b.get("significant", True) for b in rows], dtype=bool)
+    name = f"{role}: {model}, mean per half decade"
+    for mask, face, label in (
+        (filled, colour, f"{name},\nsignificant misfit" if tested else name),
+        (~filled, "white", f"{name},\nnot significant"),
+    ):
+        if mask.any():
+            (line,) = ax.plot(
+                centres[mask], means[mask], "o", color=colour, mfc=face, mew=1.5, ms=6, label=label
+            )
+            line.set_gid(f"{role} binned mean")
 
 
 def plain_number(value: float) -> str:
@@ -73,9 +125,16 @@ def plain_number(value: float) -> str:
 
 
 def residual_ticks(limit: float) -> list[float]:
-    """Residual-axis ticks: 0, +-2 (the scatter band) and +-10, 100 ... up to ``limit``;
-    spaced so that their labels cannot meet on the linear-then-logarithmic axis."""
-    ticks = [2.0]
+    """Residual-axis ticks: 0, +-2 (the scatter band), +-4 (where the axis turns
+    logarithmic: without it a mean of 4.4 reads as 7) and +-10, 100 ... up to ``limit``;
+    spaced so that their labels cannot meet on the linear-then-logarithmic axis.
+
+    Examples
+    --------
+    >>> residual_ticks(12.0)
+    [-10.0, -4.0, -2.0, 0.0, 2.0, 4.0, 10.0]
+    """
+    ticks = [2.0, LINEAR_LIMIT]
     power = 10.0
     while power <= limit:
         ticks.append(power)
@@ -126,47 +185,104 @@ def residuals_figure(
     models = {"baseline": entry["baseline"]["model"], "extended": entry["extended_model"]["model"]}
     gain = entry.get("gain", {}).get("ratio")
     with plt.rc_context(STYLE):
-        fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9.0, 6.4))
+        fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9.6, 7.6))
         roles = ["baseline"] if models["extended"] == models["baseline"] else ["baseline", "extended"]
         for ax, curve in zip(axes, ("zeta", "frequency_hz")):
             ax.axhspan(-2, 2, color="0.85", alpha=0.6, lw=0, label="±2 scatter")
             ax.axhline(0.0, color="0.4", lw=0.8)
             for role in roles:
                 sub = rows[(rows["role"] == role) & (rows["curve"] == curve)]
-                v = velocity(sub, units)
-                r = sub["residual"].to_numpy(float)
-                colour = ROLE_COLOURS[role]
-                ax.scatter(v, r, s=5, alpha=0.25, color=colour, lw=0)
-                centres, means = _binned_means(v, r)
-                ax.plot(
-                    centres,
-                    means,
-                    "o-",
-                    color=colour,
-                    ms=4,
-                    lw=1.5,
-                    label=f"{role}: {models[role]} (binned mean)",
+                ax.scatter(
+                    velocity(sub, units),
+                    sub["residual"].to_numpy(float),
+                    s=5,
+                    alpha=0.25,
+                    color=ROLE_COLOURS[role],
+                    lw=0,
+                )
+                _draw_binned_means(
+                    ax, binned_means(entry, role), CURVE_NAMES[curve], role, models[role], units
                 )
             ax.set_xscale("log")
             plain_log_axis(ax.xaxis)
             ax.set_ylabel(CURVE_LABELS[curve])
             finite = rows.loc[rows["curve"] == curve, "residual"].to_numpy(float)
             finite = finite[np.isfinite(finite)]
-            lim = max(4.0, float(np.max(np.abs(finite))) * 1.2) if finite.size else 4.0
+            lim = max(LINEAR_LIMIT, float(np.max(np.abs(finite))) * 1.2) if finite.size else LINEAR_LIMIT
             # linear within +-4 (the scatter band stays readable), logarithmic beyond
-            ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
+            ax.set_yscale("symlog", linthresh=LINEAR_LIMIT, linscale=1.5)
             ax.set_ylim(-lim, lim)
             ax.yaxis.set_major_locator(ticker.FixedLocator(residual_ticks(lim)))
             ax.yaxis.set_major_formatter(ticker.FormatStrFormatter("%g"))
             ax.yaxis.set_minor_locator(ticker.NullLocator())
             if not len(rows[rows["curve"] == curve]):
                 ax.text(0.5, 0.5, "no residuals", ha="center", va="center", transform=ax.transAxes)
-        axes[0].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+        # one legend for both panels: a kind of marker may appear in one panel only
+        handles = {}
+        for ax in axes:
+            for handle, label in zip(*ax.get_legend_handles_labels()):
+                handles.setdefault(label, handle)
+        # the band, then each role's significant then other means
+        handles = dict(
+            sorted(
+                handles.items(),
+                key=lambda item: (
+                    not item[0].startswith("±"),
+                    item[0].startswith("extended"),
+                    "not significant" in item[0],
+                ),
+            )
+        )
+        axes[0].legend(
+            handles.values(), handles.keys(), loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0
+        )
         axes[-1].set_xlabel(velocity_label(units))
         ratio = f", gain ratio {gain:.2f}" if gain is not None else ""
         fig.suptitle(f"{plot_text(configuration)}: cause {cause}{ratio}")
-        lay_out(fig)
+        lay_out(fig, [BINNED_MEAN_NOTE], width=120)
+        fig.align_ylabels(axes)
     return fig
+
+
+def candidate_rows(entry: Mapping) -> list[dict]:
+    """The candidates a configuration's panel of :func:`candidates_figure` shows, best first.
+
+    Each ranked cause (``ranking``) with its model and held-out error; where the verdict's
+    extended model is not its cause's candidate (the slip thresholds recovered from the
+    data, ``evidence.threshold_distribution``), that model too, with its own held-out error
+    (``gain.extended``, the error the verdict page quotes for it). ``verdict`` marks the
+    row of the verdict's extended model.
+
+    Examples
+    --------
+    >>> entry = {"cause": "microslip_power_law", "causes": ["microslip_power_law"],
+    ...     "baseline": {"model": "lugre"}, "extended_model": {"model": "iwan_cells_6"},
+    ...     "gain": {"extended": 1.7},
+    ...     "ranking": [{"cause": "microslip_power_law", "score": 5.1}, {"cause": "none", "score": 63.0}],
+    ...     "evidence": {"candidates": {"microslip_power_law": {"model": "iwan"}}}}
+    >>> [(r["model"], r["score"], r["verdict"]) for r in candidate_rows(entry)]
+    [('iwan_cells_6', 1.7, True), ('iwan', 5.1, False), ('lugre', 63.0, False)]
+    """
+    evidence = entry.get("evidence") or {}
+    candidates = evidence.get("candidates") or {}
+    combinations = evidence.get("combinations") or {}
+    extended = (entry.get("extended_model") or {}).get("model")
+    verdict = verdict_key(entry.get("causes") or [entry.get("cause") or "?"])
+    rows = []
+    for ranked in entry.get("ranking", []):
+        cause = ranked["cause"]
+        if cause == "none":
+            model = (entry.get("baseline") or {}).get("model", "?")
+        else:
+            model = (candidates.get(cause) or combinations.get(cause) or {}).get("model", "?")
+        rows.append({"cause": cause, "model": model, "score": ranked["score"], "verdict": False})
+    own = [r for r in rows if r["cause"] == verdict]
+    if own and extended and own[0]["model"] != extended and verdict not in ("none", "unknown"):
+        score = (entry.get("gain") or {}).get("extended")
+        rows.append({"cause": verdict, "model": extended, "score": score, "verdict": True})
+    elif own:
+        own[0]["verdict"] = True
+    return sorted(rows, key=lambda r: np.inf if r["score"] is None else r["score"])
 
 
 def candidates_figure(document: Mapping) -> plt.Figure:
@@ -188,7 +304,7 @@ def candidates_figure(document: Mapping) -> plt.Figure:
     entries = document.get("configurations", {})
     names = list(entries)
     with plt.rc_context(STYLE):
-        rows = [len(entries[name].get("ranking", [])) for name in names] or [1]
+        rows = [len(candidate_rows(entries[name])) for name in names] or [1]
         heights = [max(count, 1) * 0.32 + 0.9 for count in rows]
         fig, axes = plt.subplots(
             len(rows),
@@ -204,32 +320,25 @@ def candidates_figure(document: Mapping) -> plt.Figure:
             )
             axes[0].set_axis_off()
         for ax, name in zip(axes, names):
-            entry = entries[name]
-            ranking = entry.get("ranking", [])
-            causes = [r["cause"] for r in ranking][::-1]
-            scores = np.array(
-                [r["score"] if r["score"] is not None else np.nan for r in ranking][::-1], dtype=float
-            )
-            candidates = entry.get("evidence", {}).get("candidates", {})
-            base_model = entry["baseline"]["model"]
+            rows = candidate_rows(entries[name])[::-1]
+            causes = [r["cause"] for r in rows]
+            scores = np.array([r["score"] if r["score"] is not None else np.nan for r in rows], dtype=float)
             labels = [
-                f"none ({base_model}, baseline)"
-                if c == "none"
-                else f"{c} ({candidates.get(c, {}).get('model', '?')})"
-                for c in causes
+                f"none ({r['model']}, baseline)" if r["cause"] == "none" else f"{r['cause']} ({r['model']})"
+                for r in rows
             ]
-            positions = np.arange(len(causes))
+            positions = np.arange(len(rows))
             finite = np.isfinite(scores)
-            for position, cause, score in zip(positions, causes, scores):
+            for position, row, score in zip(positions, rows, scores):
                 if not np.isfinite(score):
                     continue
-                verdict = cause == entry.get("cause")
+                verdict = row["verdict"]
                 ax.plot(
                     score,
                     position,
                     "o",
                     ms=10 if verdict else 6,
-                    color="0.55" if cause == "none" else "tab:blue",
+                    color="0.55" if row["cause"] == "none" else "tab:blue",
                     mec="black" if verdict else "none",
                     mew=2.0 if verdict else 0.0,
                 )
@@ -245,7 +354,9 @@ def candidates_figure(document: Mapping) -> plt.Figure:
             ax.set_yticks(positions, labels)
             ax.set_ylim(-0.6, len(causes) - 0.4)
             ax.set_title(
-                f"{plot_text(name)}: verdict {entry.get('cause', '?')} (large outlined dot)", loc="left"
+                f"{plot_text(name)}: verdict {next((r['cause'] for r in rows if r['verdict']), '?')} "
+                "(large outlined dot)",
+                loc="left",
             )
         axes[-1].set_xlabel(ERROR_LABEL + "; dashed: baseline")
         lay_out(fig)

@@ -319,7 +319,18 @@ def time_history(
     band_hz: tuple[float, float],
     decay_start_s: float | None = None,
 ) -> plt.Figure:
-    """Paper figure 9: unfiltered and band-passed response with its Hilbert envelope."""
+    """Paper figure 9: unfiltered and band-passed response with its Hilbert envelope.
+
+    Examples
+    --------
+    >>> time_s = np.arange(2000) / 2000.0
+    >>> ringing = np.exp(-4.0 * time_s) * np.sin(2 * np.pi * 125.0 * time_s)
+    >>> figure = time_history(time_s, ringing, ringing, np.exp(-4.0 * time_s), response_label="acceleration (g)",
+    ...                       title="no_washer / run01", band_hz=(100.0, 150.0))
+    >>> [axis.get_ylabel() for axis in figure.axes], figure.axes[0].get_title()
+    (['acceleration (g)', 'acceleration (g)'], 'no_washer / run01')
+    >>> plt.close(figure)
+    """
     with plt.rc_context(STYLE):
         figure, (top, bottom) = plt.subplots(2, 1, figsize=(7.0, 5.6), sharex=True)
         top.plot(time_s, raw, color="0.35", linewidth=0.6, label="unfiltered")

@@ -13,18 +13,19 @@ from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import unidentified_sentence
 from workflow.outputs.report_html import fmt, ratio
 from workflow.outputs.report_wording import (
-    _n_runs,
-    _unidentified,
     campaign_headline,
     candidate_margin,
     candidate_name,
     cause_name,
     discrepancy_text,
     excluded_runs,
+    explains_sentences,
     margin_words,
     measured_trends,
     model_name,
+    n_runs_of,
     trend_sentence,
+    unidentified_parameters_of,
 )
 
 __all__ = [
@@ -42,11 +43,21 @@ def verdict_rst(
     segments: pd.DataFrame | None = None,
     units: UnitSystem = INCH_SECOND,
 ) -> str:
-    """The verdict in a few short paragraphs of reStructuredText (the report's first page).
+    r"""The verdict in a few short paragraphs of reStructuredText (the report's first page).
 
     Narrow enough for the column Snakemake's report gives its workflow description:
     no tables, one bullet per configuration. The full page with the evidence is
     :func:`workflow.outputs.verdict_page.verdict_html`.
+
+    Examples
+    --------
+    reStructuredText's markup in the campaign's name is escaped:
+
+    >>> print("\n".join(verdict_rst({"campaign": "washers_*2*", "cause": "none", "configurations": {}}).splitlines()[:4]))
+    Verdict\: none \(paper\'s model suffices\)
+    ==========================================
+    <BLANKLINE>
+    Campaign **washers\_\*2\***.
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
@@ -61,13 +72,20 @@ def verdict_rst(
         gain = entry.get("gain") or {}
         base = model_name(entry.get("baseline", {}).get("model"))
         if entry.get("cause") == "none":
-            text = f"{base} fits within the run-to-run scatter (held-out error {fmt(gain.get('baseline'))})."
+            # what the residual figure shows: no significant misfit, and whether every
+            # half decade's mean lies within the ±2 band
+            text = " ".join(
+                [
+                    f"{base} leaves no significant misfit (held-out error {fmt(gain.get('baseline'))}).",
+                    *explains_sentences(entry, units),
+                ]
+            )
         else:
             text = discrepancy_text(entry, units)
             if entry.get("cause") != "unknown":
                 text += (
                     f" {model_name(entry.get('extended_model', {}).get('model'))} predicts "
-                    f"{'held-out runs' if _n_runs(entry) > 1 else 'held-out amplitude ranges of the one run'} "
+                    f"{'held-out runs' if n_runs_of(entry) > 1 else 'held-out amplitude ranges of the one run'} "
                     f"with {ratio(gain.get('ratio'))} of {base}'s error "
                     f"({fmt(gain.get('extended'))} against {fmt(gain.get('baseline'))})."
                 )
@@ -81,7 +99,7 @@ def verdict_rst(
                     )
         if name in trends:
             text += " " + trend_sentence(trends[name], units)
-        unidentified = unidentified_sentence(_unidentified(entry, units))
+        unidentified = unidentified_sentence(unidentified_parameters_of(entry, units))
         if unidentified:
             text += " " + unidentified
         lines += [
@@ -131,6 +149,19 @@ def landing_rst(verdict: str, description: str) -> str:
     :func:`~workflow.io.escape.rst_text`, in which no Jinja tag can form, so it goes
     through Snakemake's Jinja rendering of the page as it is; ``description``
     (report/workflow.rst) keeps its Jinja expressions.
+
+    Examples
+    --------
+    >>> print(landing_rst("Verdict\\n=======\\n\\nNone.", "The workflow of {{ snakemake.config['campaign'] }}."))
+    Verdict
+    =======
+    <BLANKLINE>
+    None.
+    <BLANKLINE>
+    About this study
+    ================
+    <BLANKLINE>
+    The workflow of {{ snakemake.config['campaign'] }}.
     """
     heading = "About this study"
     return verdict + "\n\n" + heading + "\n" + "=" * len(heading) + "\n\n" + description

@@ -132,6 +132,17 @@ def readability_problems(figure: plt.Figure, renderer: RendererBase | None = Non
         One sentence per problem: overlapping texts (quoted), offset or power tick
         notation, and panels that draw no data and carry no note. Empty for a readable
         figure.
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> figure, axis = plt.subplots(figsize=(3, 2))
+    >>> _ = axis.plot([0.1, 1.0], [0.002, 0.003])
+    >>> _ = axis.text(0.5, 0.5, "damping ratio"), axis.text(0.52, 0.5, "frequency")
+    >>> readability_problems(figure)
+    ["texts overlap: 'damping ratio' and 'frequency'"]
+    >>> plt.close(figure)
     """
     problems = [f"texts overlap: '{a}' and '{b}'" for a, b in overlapping_texts(figure, renderer)]
     for index, axes in enumerate(figure.axes):

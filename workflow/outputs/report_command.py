@@ -13,6 +13,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+__all__ = [
+    "config_arguments",
+    "report_command",
+]
+
 REPORT_COMMAND_FILE = "results/report_command.txt"
 """Where the end of `all` writes :func:`report_command` (and prints it)."""
 
@@ -55,6 +60,12 @@ def report_command(
     -------
     str
         One shell command, each argument quoted as the shell needs it.
+
+    Examples
+    --------
+    >>> print(report_command("/opt/lapjoint/Snakefile", "/data/run 1", "/opt/lapjoint/report/style.css",
+    ...                      config={"units": "si"}))
+    snakemake -s /opt/lapjoint/Snakefile -d '/data/run 1' --report '/data/run 1/results/report.html' --report-html-stylesheet-path /opt/lapjoint/report/style.css --config units=si
     """
     workdir = Path(workdir).absolute()
     arguments = ["snakemake", "-s", str(Path(snakefile).absolute()), "-d", str(workdir)]

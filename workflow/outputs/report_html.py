@@ -20,6 +20,7 @@ __all__ = [
     "page",
     "html_table",
     "amplitude_range",
+    "scaled_number",
 ]
 
 
@@ -137,11 +138,9 @@ def html_table(
 
 def amplitude_range(low_in_s: Any, high_in_s: Any, units: UnitSystem = INCH_SECOND) -> str:
     """``0.1–3 in/s``: a range of velocity amplitudes given in in/s, shown in ``units``."""
-    return (
-        f"{fmt(_scaled(low_in_s, units.per_in_s))}–{fmt(_scaled(high_in_s, units.per_in_s))} {units.velocity}"
-    )
+    return f"{fmt(scaled_number(low_in_s, units.per_in_s))}–{fmt(scaled_number(high_in_s, units.per_in_s))} {units.velocity}"
 
 
-def _scaled(value: Any, factor: float) -> Any:
+def scaled_number(value: Any, factor: float) -> Any:
     """``value`` times ``factor`` when it is a number; as it is otherwise (None, text)."""
     return value * factor if isinstance(value, (int, float)) and not isinstance(value, bool) else value

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from workflow.discovery.confidence import verdict_key
 from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import unidentified_parameters
@@ -41,6 +42,8 @@ __all__ = [
     "trend_sentence",
     "campaign_headline",
     "discrepancy_text",
+    "unidentified_parameters_of",
+    "n_runs_of",
     "excluded_runs",
 ]
 
@@ -128,6 +131,12 @@ def candidate_name(cause: str | None) -> str:
 def candidate_margin(entry: Mapping) -> dict | None:
     """How far the chosen cause is from the next candidate, by held-out error.
 
+    The verdict's error is that of its extended model (``gain.extended``, the error the
+    table and the candidates figure give it: the slip thresholds recovered from the data
+    where they replaced the power law); the next candidate is the best of the other
+    causes of the ranking (a combination counts as its own cause, keyed as in
+    :func:`~workflow.discovery.confidence.verdict_key`).
+
     Returns
     -------
     dict or None
@@ -137,19 +146,20 @@ def candidate_margin(entry: Mapping) -> dict | None:
         the other candidate scored lower but was not accepted, see ``decision_rule``).
     """
     ranking = [r for r in entry.get("ranking", []) if r.get("score") is not None]
-    chosen = entry.get("cause")
-    if chosen == "unknown":
-        chosen = "none"  # unknown keeps the baseline: compare it with the best candidate
+    cause = entry.get("cause")
+    # unknown keeps the baseline: compare it with the best candidate
+    chosen = "none" if cause in ("none", "unknown") else verdict_key(entry.get("causes") or [cause])
     mine = [r for r in ranking if r["cause"] == chosen]
     others = [r for r in ranking if r["cause"] != chosen]
     if not mine or not others:
         return None
     best_other = min(others, key=lambda r: r["score"])
-    chosen_score = float(mine[0]["score"])
+    extended = (entry.get("gain") or {}).get("extended")
+    chosen_score = float(extended if chosen != "none" and extended is not None else mine[0]["score"])
     next_score = float(best_other["score"])
     ratio = next_score / chosen_score if chosen_score > 0 else None
     return {
-        "chosen": entry.get("cause"),
+        "chosen": cause,
         "chosen_score": chosen_score,
         "next": best_other["cause"],
         "next_score": next_score,
@@ -169,8 +179,9 @@ def signature_sentences(entry: Mapping) -> list[str]:
     return [
         f"{cause_name('stiffness_nonlinearity')} is not eligible: over the measured amplitudes its fit "
         f"changes the frequency by {fmt(100 * whole, 2)} %, less than its friction alone "
-        f"({fmt(100 * friction, 2)} %); its stiffness term cancels the friction's frequency change "
-        "instead of showing one the friction cannot explain (the contract's signature)."
+        f"({fmt(100 * friction, 2)} %), and never raises it with amplitude; its stiffness term cancels "
+        "the friction's frequency change instead of showing one the friction cannot explain (the "
+        "contract's signature)."
     ]
 
 
@@ -441,7 +452,7 @@ def discrepancy_text(entry: Mapping, units: UnitSystem = INCH_SECOND) -> str:
     return text[: len(text) - len(as_written)] + discrepancy_sentence(model, bins, trend, runs, units)
 
 
-def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
+def unidentified_parameters_of(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]:
     """The parameters of the baseline and the extended model that the data do not
     determine (their ``flags``), each once (:func:`~workflow.outputs.plain_words.unidentified_parameters`)."""
     return unidentified_parameters(
@@ -450,7 +461,7 @@ def _unidentified(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[dict]
     )
 
 
-def _n_runs(entry: Mapping) -> int:
+def n_runs_of(entry: Mapping) -> int:
     """Runs behind a configuration's diagnosis (2 when the document does not say)."""
     runs = (entry.get("evidence") or {}).get("n_runs")
     return int(runs) if runs is not None else 2
@@ -488,7 +499,7 @@ def campaign_headline(document: Mapping) -> str:
         f"The paper's friction model (the better of Dahl and LuGre) falls short in "
         f"{len(failing)} of {len(names)} configuration{'s' if len(names) != 1 else ''} "
         f"({which}): a model with the missing physics predicts "
-        f"{'runs' if all(_n_runs(entries[n]) > 1 for n in failing) else 'data'} held out of the fit "
+        f"{'runs' if all(n_runs_of(entries[n]) > 1 for n in failing) else 'data'} held out of the fit "
         f"{word}. "
     )
     ratios = [
@@ -503,7 +514,7 @@ def campaign_headline(document: Mapping) -> str:
         best = min(ratios)
         held_out = (
             "predicts runs it was not fitted to"
-            if all(_n_runs(entries[n]) > 1 for n in failing)
+            if all(n_runs_of(entries[n]) > 1 for n in failing)
             else "predicts amplitude ranges held out of the fit (with one run, no run could be held out)"
         )
         text += (

@@ -44,6 +44,20 @@ def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> s
     -------
     str
         Lines ending in a newline.
+
+    Examples
+    --------
+    The campaign's name reaches the terminal with its control characters shown, not run:
+
+    >>> runs = pd.DataFrame({"configuration": ["no_washer", "no_washer"], "run": ["run01", "run02"],
+    ...     "path": ["no_washer/run01.txt", "no_washer/run02.txt"], "status": ["used", "excluded"],
+    ...     "reason": ["", "no_washer/run02.txt: line 40: '1.2.3' is not a number"]})
+    >>> document = {"campaign": "washers\\x1b[2J", "cause": "none", "configurations": {}}
+    >>> print("\\n".join(run_summary(document, runs).splitlines()[:4]))
+    lapjoint: campaign washers\\x1b[2J
+    Verdict: none (paper's model suffices) (none)
+    Runs: 1 used, 1 excluded (of 2 files)
+      excluded no_washer/run02.txt: no_washer/run02.txt: line 40: '1.2.3' is not a number
     """
     # the campaign's text reaches the console only through terminal_text; a reason's
     # whitespace runs are folded to one space first (its line breaks are layout, not content)

@@ -22,7 +22,16 @@ from workflow.outputs.plain_words import (
     percent_of,
     unidentified_sentence,
 )
-from workflow.outputs.report_html import _scaled, amplitude_range, esc, fmt, html_table, page, ratio, tag
+from workflow.outputs.report_html import (
+    amplitude_range,
+    esc,
+    fmt,
+    html_table,
+    page,
+    ratio,
+    scaled_number,
+    tag,
+)
 from workflow.outputs.report_tables import hypotheses_in_units
 from workflow.outputs.report_wording import (
     CAUSE_WORDS,
@@ -30,8 +39,6 @@ from workflow.outputs.report_wording import (
     CLEAR_MARGIN,
     ERROR_UNIT,
     ONE_RUN_ERROR_UNIT,
-    _n_runs,
-    _unidentified,
     campaign_headline,
     candidate_margin,
     candidate_name,
@@ -42,9 +49,11 @@ from workflow.outputs.report_wording import (
     margin_words,
     measured_trends,
     model_name,
+    n_runs_of,
     signature_sentences,
     threshold_sentences,
     trend_sentence,
+    unidentified_parameters_of,
 )
 
 __all__ = [
@@ -56,7 +65,7 @@ __all__ = [
 
 def _unidentified_tag(entry: Mapping) -> str:
     """A short tag pointing to the sentence on the parameters the data do not determine."""
-    count = len(_unidentified(entry))
+    count = len(unidentified_parameters_of(entry))
     if not count:
         return ""
     return " " + tag(
@@ -77,7 +86,7 @@ def _configuration_row(name: str, entry: Mapping, area_in2: float | None, units:
         next_text, margin_text = "–", "–"
     return [
         esc(name),
-        fmt(_scaled(area_in2, units.per_in2)),
+        fmt(scaled_number(area_in2, units.per_in2)),
         esc(model_name(entry.get("baseline", {}).get("model"))),
         tag(cause_name(entry.get("cause")), "none" if entry.get("cause") == "none" else "cause"),
         esc(model_name(entry.get("extended_model", {}).get("model"))),
@@ -133,10 +142,11 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
             )
         items.append(text + ".")
         if candidate.get("residual_significant"):
+            # the candidate's, which may not be the extended model the residual figure draws
             items.append(
-                f"Some misfit remains after the extension ({candidate.get('significant_bins', '?')} "
-                "amplitude bin(s) still significant): the extended model is better, "
-                "not perfect."
+                f"{model_name(candidate.get('model'))} leaves some misfit "
+                f"({candidate.get('significant_bins', '?')} amplitude bin(s) still significant): "
+                "it is better, not perfect."
             )
     items.extend(signature_sentences(entry))
     margin = candidate_margin(entry)
@@ -164,7 +174,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"{evidence.get('decision_rule', 'see the decision rule')}."
             )
     items.extend(threshold_sentences(entry, units))
-    unidentified = unidentified_sentence(_unidentified(entry, units))
+    unidentified = unidentified_sentence(unidentified_parameters_of(entry, units))
     if unidentified:
         items.append(unidentified)
     items.extend(explains_sentences(entry, units))
@@ -330,6 +340,14 @@ def verdict_html(
     -------
     str
         A complete HTML page.
+
+    Examples
+    --------
+    The campaign's text reaches the page only escaped:
+
+    >>> page = verdict_html({"campaign": "<b>washers</b>", "cause": "none", "configurations": {}})
+    >>> page.startswith("<!DOCTYPE html>"), "<title>Verdict: &lt;b&gt;washers&lt;/b&gt;</title>" in page
+    (True, True)
     """
     entries = document.get("configurations", {})
     cause = document.get("cause", "unknown")
@@ -338,7 +356,7 @@ def verdict_html(
     across = document.get("across_configurations") or {}
     if not areas:
         areas = {n: c.get("bearing_area_in2") for n, c in (across.get("configurations") or {}).items()}
-    one_run = any(_n_runs(entry) == 1 for entry in entries.values())
+    one_run = any(n_runs_of(entry) == 1 for entry in entries.values())
     parts = [f"<h1>Verdict: campaign {esc(document.get('campaign', '?'))}</h1>"]
     kind = "none" if cause == "none" else ("unknown" if cause == "unknown" else "")
     parts.append(

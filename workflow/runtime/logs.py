@@ -19,6 +19,7 @@ __all__ = [
     "peak_resident_mb",
     "setup_script_logging",
     "exit_without_teardown",
+    "TerminalSafeFormatter",
 ]
 
 

@@ -86,8 +86,14 @@ def analyse_runs_mem_mb(run_files: Iterable[str | os.PathLike]) -> int:
     return _mb(ANALYSE_BYTES_PER_SAMPLE * max((samples_at_most(path) for path in run_files), default=0))
 
 
-def identify_mode_mem_mb(run_files: Iterable[str | os.PathLike]) -> int:
+def identify_mode_mem_mb(
+    run_files: Iterable[str | os.PathLike], analysed_files: Iterable[str | os.PathLike] = ()
+) -> int:
     """``mem_mb`` of an ``identify_mode`` job: every run of the configuration is held at
-    once for the averaged spectrum, and the longest one's reading peaks above it."""
+    once for the averaged spectrum, and the longest one's reading peaks above it; the
+    runs of ``analysed_files`` (its first group, still held) are then analysed one after
+    the other, the longest setting the analysis's peak above them."""
     samples = [samples_at_most(path) for path in run_files]
-    return _mb(KEPT_BYTES_PER_SAMPLE * sum(samples) + READ_BYTES_PER_SAMPLE * max(samples, default=0))
+    analysed = max((samples_at_most(path) for path in analysed_files), default=0)
+    peak = max(READ_BYTES_PER_SAMPLE * max(samples, default=0), ANALYSE_BYTES_PER_SAMPLE * analysed)
+    return _mb(KEPT_BYTES_PER_SAMPLE * sum(samples) + peak)

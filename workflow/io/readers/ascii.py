@@ -14,27 +14,27 @@ import numpy as np
 
 from workflow.io.campaign import Campaign, frequency_problem
 from workflow.io.readers.ascii_columns import (
-    _check_magnitude,
-    _check_time,
-    _column_unit_factors,
-    _find_columns,
-    _header_values,
-    _response_column_units,
+    check_magnitude,
+    check_time,
+    column_unit_factors,
+    find_columns,
+    read_header_values,
+    response_column_units,
 )
 from workflow.io.readers.ascii_rows import (
-    _SPACES,
     DECIMAL_COMMA_HINT,
-    _decimal_commas_to_points,
-    _is_decimal_comma_row,
-    _line_delimiter,
-    _locate_numbers,
-    _majority,
-    _parse_block_careful,
-    _parse_text_fast,
-    _print_resolution,
-    _read_text,
-    _split_row,
-    _wide_encoding,
+    SPACES,
+    decimal_commas_to_points,
+    is_decimal_comma_row,
+    line_delimiter,
+    locate_numbers,
+    most_common,
+    parse_block_careful,
+    parse_text_fast,
+    print_resolution,
+    read_run_text,
+    split_row,
+    wide_encoding,
 )
 from workflow.io.record_rules import rates_agree
 from workflow.io.records import (
@@ -79,23 +79,23 @@ def declared_sample_rate_hz(campaign_dir: str | Path, run_file: RunFile, campaig
     try:
         with open(path, "rb") as handle:
             raw = handle.read(HEAD_BYTES)
-        if _wide_encoding(raw) is not None or b"\x00" in raw:
+        if wide_encoding(raw) is not None or b"\x00" in raw:
             return None
         text = raw.decode("utf-8-sig", errors="replace").replace("\r\n", "\n").replace("\r", "\n")
-        header, offset, first_line = _locate_numbers(text)
+        header, offset, first_line = locate_numbers(text)
         if offset < 0:
             return None
-        header_values = _header_values(header, shown)
+        header_values = read_header_values(header, shown)
         if header_values.sample_rate_hz is not None:
             return header_values.sample_rate_hz
         rows = [row for row in text[offset:].split("\n")[:HEAD_ROWS] if row.strip()]
-        delimiter = _majority([_line_delimiter(row) for row in rows], _SPACES)
-        n_columns = _majority([len(_split_row(row, delimiter)) for row in rows], 1)
-        columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
+        delimiter = most_common([line_delimiter(row) for row in rows], SPACES)
+        n_columns = most_common([len(split_row(row, delimiter)) for row in rows], 1)
+        columns = find_columns(header, first_line, delimiter, n_columns, campaign, shown)
         if "time" not in columns.roles:
             return None
-        time_factor_s = _column_unit_factors(columns, campaign, shown)[0]
-        time_s = np.array([float(_split_row(row, delimiter)[columns.roles["time"]]) for row in rows[:-1]])
+        time_factor_s = column_unit_factors(columns, campaign, shown)[0]
+        time_s = np.array([float(split_row(row, delimiter)[columns.roles["time"]]) for row in rows[:-1]])
     except (OSError, ValueError, IndexError):  # CampaignFormatError is a ValueError
         return None
     steps_s = np.diff(time_s) * time_factor_s
@@ -111,15 +111,15 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
     ``relative`` and ``shown`` are as :func:`workflow.io.readers.read_system_run` takes
     them, and the record and errors as ``read_run`` gives them.
     """
-    text = _read_text(full_path, shown)
+    text = read_run_text(full_path, shown)
     if campaign.decimal == ",":
-        text = _decimal_commas_to_points(text, shown)
+        text = decimal_commas_to_points(text, shown)
     if not text.strip():
         raise CampaignFormatError(shown, 1, "the file is empty")
-    header, offset, first_line = _locate_numbers(text)
+    header, offset, first_line = locate_numbers(text)
     if offset < 0:
         comma_line = next(
-            (number for number, line in header if line.strip() and _is_decimal_comma_row(line)), None
+            (number for number, line in header if line.strip() and is_decimal_comma_row(line)), None
         )
         if comma_line is not None:
             raise CampaignFormatError(
@@ -145,18 +145,18 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
             head_end = end
             break
     rows_head = [row for row in text[offset:head_end].split("\n") if row.strip()]
-    delimiter = _majority([_line_delimiter(row) for row in rows_head], _SPACES)
-    n_columns = _majority([len(_split_row(row, delimiter)) for row in rows_head], 1)
+    delimiter = most_common([line_delimiter(row) for row in rows_head], SPACES)
+    n_columns = most_common([len(split_row(row, delimiter)) for row in rows_head], 1)
     n_rows = text.count("\n", offset, end) + 1
 
-    header_values = _header_values(header, shown)
-    columns = _find_columns(header, first_line, delimiter, n_columns, campaign, shown)
-    time_factor_s, force_factor_lbf = _column_unit_factors(columns, campaign, shown)
-    response_units = _response_column_units(columns, campaign, shown)
+    header_values = read_header_values(header, shown)
+    columns = find_columns(header, first_line, delimiter, n_columns, campaign, shown)
+    time_factor_s, force_factor_lbf = column_unit_factors(columns, campaign, shown)
+    response_units = response_column_units(columns, campaign, shown)
 
-    values = _parse_text_fast(text, offset, end, delimiter, n_rows, n_columns)
+    values = parse_text_fast(text, offset, end, delimiter, n_rows, n_columns)
     if values is None:
-        values = _parse_block_careful(text[offset:end].split("\n"), first_line, delimiter, n_columns, shown)
+        values = parse_block_careful(text[offset:end].split("\n"), first_line, delimiter, n_columns, shown)
     last_data_line = first_line + n_rows - 1
     if n_rows < MIN_SAMPLES:
         raise CampaignFormatError(
@@ -176,10 +176,10 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
     if "time" in columns.roles:
         time_s = values[:, columns.roles["time"]] * time_factor_s
         first_row, last_row = rows_head[0], text[max(text.rfind("\n", offset, end), offset - 1) + 1 : end]
-        resolution_s = time_factor_s * _print_resolution(
-            [_split_row(row, delimiter)[columns.roles["time"]] for row in (first_row, last_row)]
+        resolution_s = time_factor_s * print_resolution(
+            [split_row(row, delimiter)[columns.roles["time"]] for row in (first_row, last_row)]
         )
-        rate_hz = _check_time(time_s, resolution_s, first_line, shown)
+        rate_hz = check_time(time_s, resolution_s, first_line, shown)
         duration_s = time_s[-1] - time_s[0]
         sources.append(("time column", rate_hz, first_line, 2.0 * resolution_s / duration_s))
     if not sources:
@@ -246,7 +246,7 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
 
     checked = [("force", columns.roles["force"])] if "force" in columns.roles else []
     for role, index in checked + [("response", index) for index in columns.responses]:
-        _check_magnitude(values[:, index], role, index, columns, first_line, shown)
+        check_magnitude(values[:, index], role, index, columns, first_line, shown)
     force_lbf = None
     if "force" in columns.roles:
         force_lbf = values[:, columns.roles["force"]] * force_factor_lbf

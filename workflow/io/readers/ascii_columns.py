@@ -29,12 +29,12 @@ from workflow.io import units
 from workflow.io.campaign import force_unit, response_unit
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.readers.ascii_rows import (
-    _KEY_VALUE,
-    _SPACES,
-    _VALUE_WITH_UNIT,
-    _is_data_like,
-    _row_problem,
-    _split_row,
+    KEY_VALUE,
+    SPACES,
+    VALUE_WITH_UNIT,
+    is_data_like,
+    row_problem,
+    split_row,
 )
 from workflow.io.record_rules import (
     TIME_STEP_REL_TOLERANCE,
@@ -47,7 +47,15 @@ from workflow.io.records import CampaignFormatError
 if TYPE_CHECKING:
     from workflow.io.campaign import Campaign
 
-__all__ = []
+__all__ = [
+    "HeaderValues",
+    "read_header_values",
+    "find_columns",
+    "response_column_units",
+    "column_unit_factors",
+    "check_magnitude",
+    "check_time",
+]
 
 
 # --------------------------------------------------------------------------------------
@@ -70,8 +78,8 @@ def _split_names(line: str, delimiter: str, n_columns: int) -> list[str] | None:
     """The line's cells when some reading of it gives exactly ``n_columns`` names."""
     stripped = line.strip()
     candidates = []
-    if delimiter != _SPACES:
-        candidates.append(_split_row(stripped, delimiter))
+    if delimiter != SPACES:
+        candidates.append(split_row(stripped, delimiter))
     candidates += [[cell.strip() for cell in stripped.split(d)] for d in ("\t", ",", ";")]
     candidates.append(re.split(r"\s{2,}", stripped))
     candidates.append(_merge_unit_tokens(stripped.split()))
@@ -106,17 +114,17 @@ def _names_of(line: str, delimiter: str, n_columns: int) -> list[str] | None:
 
 def _splits_as_data(line: str, delimiter: str, n_columns: int) -> bool:
     """Whether ``line`` splits at the numbers' own delimiter into ``n_columns`` cells."""
-    return delimiter != _SPACES and len(_split_row(line, delimiter)) == n_columns
+    return delimiter != SPACES and len(split_row(line, delimiter)) == n_columns
 
 
 def _is_key_value(line: str, delimiter: str, n_columns: int) -> bool:
     """A ``key: value`` header line, not a line of names that holds a colon
     (``Time (s)<TAB>Ch1: Acceleration (g)<TAB>Ch2: Force (lbf)``)."""
-    if not _KEY_VALUE.fullmatch(line):
+    if not KEY_VALUE.fullmatch(line):
         return False
     if n_columns < 2 or not _splits_as_data(line, delimiter, n_columns):
         return True
-    cells = [_unquoted(cell) for cell in _split_row(line, delimiter)]
+    cells = [_unquoted(cell) for cell in split_row(line, delimiter)]
     return len({column_role(cell) for cell in cells} - {None}) < 2
 
 
@@ -171,7 +179,10 @@ _PRETRIGGER_TIME_UNITS_S = {"s": 1.0, "sec": 1.0, "ms": 1e-3}
 
 
 @dataclass(frozen=True)
-class _HeaderValues:
+class HeaderValues:
+    """What a run file's header says: its sample rate (Hz) and pre-trigger length (samples
+    or seconds), each with the line it is on, and every ``key: value`` entry."""
+
     sample_rate_hz: float | None = None
     sample_rate_line: int | None = None
     pretrigger_samples: int | None = None
@@ -180,12 +191,12 @@ class _HeaderValues:
     entries: dict[str, str] = field(default_factory=dict)
 
 
-def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
+def read_header_values(lines: list[tuple[int, str]], path: str) -> HeaderValues:
     """``key: value`` lines of the header, with sample rate and pre-trigger understood."""
     entries: dict[str, str] = {}
     rate = rate_line = pre_samples = pre_s = pre_line = None
     for number, line in lines:
-        match = _KEY_VALUE.fullmatch(line)
+        match = KEY_VALUE.fullmatch(line)
         if not match:
             continue
         # a spreadsheet pads the line with empty cells: "Sample rate: 2560 Hz,,"
@@ -193,7 +204,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
         entries.setdefault(key, value)
         name, key_unit = _canonical_header_key(key)
         if name in _SAMPLE_RATE_KEYS and rate is None:
-            parsed = _VALUE_WITH_UNIT.fullmatch(value)
+            parsed = VALUE_WITH_UNIT.fullmatch(value)
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
             if not parsed or unit not in _RATE_FACTORS_HZ or not 0 < float(parsed.group(1)) < math.inf:
                 raise CampaignFormatError(
@@ -201,7 +212,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
                 )
             rate, rate_line = float(parsed.group(1)) * _RATE_FACTORS_HZ[unit], number
         elif name in _PRETRIGGER_KEYS and pre_line is None:
-            parsed = _VALUE_WITH_UNIT.fullmatch(value)
+            parsed = VALUE_WITH_UNIT.fullmatch(value)
             unit = (parsed.group(2) if parsed and parsed.group(2) else key_unit or "").lower()
             amount = float(parsed.group(1)) if parsed else -1.0
             amount = amount if math.isfinite(amount) else -1.0
@@ -216,7 +227,7 @@ def _header_values(lines: list[tuple[int, str]], path: str) -> _HeaderValues:
                     f"cannot read the pre-trigger from {quoted(line.strip())} "
                     "(expected a whole number of samples, e.g. 'Pre-trigger: 25 samples')",
                 )
-    return _HeaderValues(rate, rate_line, pre_samples, pre_s, pre_line, entries)
+    return HeaderValues(rate, rate_line, pre_samples, pre_s, pre_line, entries)
 
 
 @dataclass(frozen=True)
@@ -231,7 +242,7 @@ class _Columns:
     """Each response column's unit as written (None: none given)."""
 
 
-def _find_columns(
+def find_columns(
     header: list[tuple[int, str]],
     first_line: int,
     delimiter: str,
@@ -253,8 +264,8 @@ def _find_columns(
         # With several columns a bad row may also have lost or gained a cell; with one
         # column only an exact match is taken, so that a title line stays a title.
         counts = (n_columns,) if n_columns == 1 else (n_columns - 1, n_columns, n_columns + 1)
-        if len(tokens) in counts and any(_is_data_like(t) for t in tokens):
-            problem = _row_problem(line, delimiter, n_columns, first_line) or "not a numeric row"
+        if len(tokens) in counts and any(is_data_like(t) for t in tokens):
+            problem = row_problem(line, delimiter, n_columns, first_line) or "not a numeric row"
             raise CampaignFormatError(path, number, problem)
 
     names, names_line, units_cells = None, None, None
@@ -459,7 +470,7 @@ def _named_response_columns(
     return _Columns(roles, column_units, tuple(names or ()), names_line, tuple(responses), response_units)
 
 
-def _response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:
+def response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:
     """Each response column's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
     found = []
     for index, unit in zip(columns.responses, columns.response_units):
@@ -482,7 +493,7 @@ _TIME_UNIT_FACTORS_S = {
 """Spellings of a time column's unit, and the factor to seconds."""
 
 
-def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tuple[float, float]:
+def column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tuple[float, float]:
     """Factors taking the time column to s and the force column to lbf; checks units."""
     line = columns.line
     time_factor_s = 1.0
@@ -501,7 +512,7 @@ def _column_unit_factors(columns: _Columns, campaign: Campaign, path: str) -> tu
     return time_factor_s, force_factor_lbf
 
 
-def _check_magnitude(
+def check_magnitude(
     column: NDArray[np.float64], role: str, index: int, columns: _Columns, first_line: int, path: str
 ) -> None:
     """Refuse a force or response column (0-based ``index``) the analysis cannot square
@@ -512,7 +523,7 @@ def _check_magnitude(
         raise CampaignFormatError(path, first_line + problem[0], problem[1])
 
 
-def _check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str) -> float:
+def check_time(time_s: NDArray[np.float64], resolution_s: float, first_line: int, path: str) -> float:
     """Sample rate (Hz) from a time column that must increase in uniform steps."""
     steps = np.diff(time_s)
     bad = first_bad_time_step(steps, resolution_s)

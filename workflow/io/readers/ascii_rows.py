@@ -29,6 +29,22 @@ __all__ = [
     "DECIMAL_COMMA_HINT",
     "CAREFUL_CHUNK_ROWS",
     "FAST_CHUNK_CHARS",
+    "KEY_VALUE",
+    "VALUE_WITH_UNIT",
+    "SPACES",
+    "line_delimiter",
+    "split_row",
+    "is_data_like",
+    "is_decimal_comma_row",
+    "row_problem",
+    "parse_block_careful",
+    "parse_text_fast",
+    "print_resolution",
+    "wide_encoding",
+    "read_run_text",
+    "decimal_commas_to_points",
+    "locate_numbers",
+    "most_common",
 ]
 
 
@@ -41,16 +57,19 @@ _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
 
 
-_KEY_VALUE = re.compile(r"\s*([^:]*[^:\s])\s*:\s*(.*?)\s*")
+KEY_VALUE = re.compile(r"\s*([^:]*[^:\s])\s*:\s*(.*?)\s*")
+"""A header line ``key: value`` (the key, the value)."""
 
 
-_VALUE_WITH_UNIT = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*")
+VALUE_WITH_UNIT = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*?)\s*")
+"""A header value: a number and what follows it (its unit)."""
 
 
-_SPACES = " "  # marker: columns separated by runs of spaces
+SPACES = " "
+"""Delimiter marker: columns separated by runs of spaces."""
 
 
-_DELIMITER_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", _SPACES: "spaces"}
+_DELIMITER_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", SPACES: "spaces"}
 
 
 # Characters a numeric block may hold; anything else sends it to the careful pass.
@@ -58,21 +77,21 @@ _FOREIGN = {
     "\t": re.compile(r"[^0-9eE+\-. \t\n]"),
     ",": re.compile(r"[^0-9eE+\-. ,\n]"),
     ";": re.compile(r"[^0-9eE+\-. ;\n]"),
-    _SPACES: re.compile(r"[^0-9eE+\-. \n]"),
+    SPACES: re.compile(r"[^0-9eE+\-. \n]"),
 }
 
 
-def _line_delimiter(line: str) -> str:
+def line_delimiter(line: str) -> str:
     """The delimiter a single row appears to use (tab, comma, semicolon, else spaces)."""
     for delimiter in ("\t", ",", ";"):
         if delimiter in line:
             return delimiter
-    return _SPACES
+    return SPACES
 
 
-def _split_row(line: str, delimiter: str) -> list[str]:
+def split_row(line: str, delimiter: str) -> list[str]:
     """Cells of one row; a single trailing comma/semicolon is tolerated."""
-    if delimiter == _SPACES:
+    if delimiter == SPACES:
         return line.split()
     cells = [cell.strip() for cell in line.strip().split(delimiter)]
     if len(cells) > 1 and cells[-1] == "":
@@ -81,11 +100,11 @@ def _split_row(line: str, delimiter: str) -> list[str]:
 
 
 def _is_numeric_row(line: str) -> bool:
-    cells = _split_row(line, _line_delimiter(line))
+    cells = split_row(line, line_delimiter(line))
     return bool(cells) and all(_NUMBER.fullmatch(cell) for cell in cells)
 
 
-def _is_data_like(cell: str) -> bool:
+def is_data_like(cell: str) -> bool:
     """A token that looks like a measured value (decimal, exponent, NaN or inf)."""
     if _NON_FINITE.fullmatch(cell):
         return True
@@ -101,7 +120,7 @@ DECIMAL_COMMA_HINT = (
 )
 
 
-def _is_decimal_comma_row(line: str) -> bool:
+def is_decimal_comma_row(line: str) -> bool:
     """A row of numbers written with decimal commas (``0,0021<TAB>-0,00037``)."""
     cells = [cell for cell in re.split(r"[\t; ]+", line.strip()) if cell]
     return (
@@ -111,12 +130,12 @@ def _is_decimal_comma_row(line: str) -> bool:
     )
 
 
-def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) -> str | None:
+def row_problem(line: str, delimiter: str, n_columns: int, format_line: int) -> str | None:
     """What is wrong with one row of the numeric block, or None if it is fine."""
     stripped = line.strip()
     if not stripped:
         return "blank line among the numbers"
-    if delimiter != "," and _is_decimal_comma_row(stripped):
+    if delimiter != "," and is_decimal_comma_row(stripped):
         return f"{DECIMAL_COMMA_HINT}: {stripped[:60]!r}"
     for other in ("\t", ",", ";"):
         if other != delimiter and other in stripped:
@@ -125,8 +144,8 @@ def _row_problem(line: str, delimiter: str, n_columns: int, format_line: int) ->
                 f"{_DELIMITER_NAMES[delimiter]} (as set by the numbers from line {format_line})"
                 + ("; note that '.' is the decimal point" if other == "," else "")
             )
-    cells = _split_row(stripped, delimiter)
-    if delimiter != _SPACES and any(re.search(r"\s", cell) for cell in cells):
+    cells = split_row(stripped, delimiter)
+    if delimiter != SPACES and any(re.search(r"\s", cell) for cell in cells):
         return f"mixed delimiters: spaces inside a cell of a row separated by {_DELIMITER_NAMES[delimiter]}"
     if len(cells) != n_columns:
         return (
@@ -150,7 +169,7 @@ CAREFUL_CHUNK_ROWS: int = 2048
 parser, so only the chunk holding the bad line is read line by line."""
 
 
-def _parse_block_careful(
+def parse_block_careful(
     rows: list[str], first_line: int, delimiter: str, n_columns: int, path: str
 ) -> NDArray[np.float64]:
     """Parse that names the first bad line (chunked; line by line where needed)."""
@@ -162,10 +181,10 @@ def _parse_block_careful(
             values[start : start + len(chunk)] = fast
             continue
         for index, row in enumerate(chunk, start=start):
-            problem = _row_problem(row, delimiter, n_columns, first_line)
+            problem = row_problem(row, delimiter, n_columns, first_line)
             if problem is not None:
                 raise CampaignFormatError(path, first_line + index, problem)
-            values[index] = [float(cell) for cell in _split_row(row, delimiter)]
+            values[index] = [float(cell) for cell in split_row(row, delimiter)]
     return values
 
 
@@ -174,7 +193,7 @@ FAST_CHUNK_CHARS: int = 1 << 20
 copy of the text (4 bytes a character) then stays small however long the record."""
 
 
-def _parse_text_fast(
+def parse_text_fast(
     text: str, start: int, end: int, delimiter: str, n_rows: int, n_columns: int
 ) -> NDArray[np.float64] | None:
     """:func:`_parse_block_fast` of ``text[start:end]``, in chunks of whole rows (no copy
@@ -207,7 +226,7 @@ def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -
     if _FOREIGN[delimiter].search(block):
         return None
     if (
-        delimiter != _SPACES
+        delimiter != SPACES
         and block.count(delimiter + "\n") == n_rows - 1
         and block.rstrip().endswith(delimiter)
     ):
@@ -216,7 +235,7 @@ def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -
         # NumPy's C reader (not pandas): the run-analysis jobs then start without pandas.
         values = np.loadtxt(
             io.StringIO(block),
-            delimiter=None if delimiter == _SPACES else delimiter,
+            delimiter=None if delimiter == SPACES else delimiter,
             comments=None,
             ndmin=2,
             dtype=np.float64,
@@ -228,7 +247,7 @@ def _parse_block_fast(block: str, delimiter: str, n_rows: int, n_columns: int) -
     return np.ascontiguousarray(values)
 
 
-def _print_resolution(tokens: list[str]) -> float:
+def print_resolution(tokens: list[str]) -> float:
     """Spacing of the last printed digit of the coarsest of some numbers.
 
     ``'0.0000195'`` -> 1e-7, ``'1.28e+01'`` -> 0.1. Bare integers (such as a first
@@ -252,7 +271,7 @@ _WIDE_ENCODINGS = (
 )
 
 
-def _wide_encoding(raw: bytes) -> str | None:
+def wide_encoding(raw: bytes) -> str | None:
     """The name of a UTF-16/UTF-32 encoding the bytes are written in, from the byte-order
     mark or, without one, from NUL bytes alternating with ASCII text; else None."""
     for mark, name in _WIDE_ENCODINGS:
@@ -269,14 +288,14 @@ def _wide_encoding(raw: bytes) -> str | None:
     return None
 
 
-def _read_text(path: Path, shown: str) -> str:
+def read_run_text(path: Path, shown: str) -> str:
     """File text with LF line ends (UTF-8, else Windows-1252 for old exports)."""
     try:
         with open(path, "rb") as handle:  # read-only: raw files are never modified
             raw = handle.read()
     except OSError as error:
         raise CampaignFormatError(shown, None, f"cannot be read: {error.strerror or error}") from None
-    encoding = _wide_encoding(raw)
+    encoding = wide_encoding(raw)
     if encoding is not None:
         raise CampaignFormatError(
             shown,
@@ -305,7 +324,7 @@ _COMMA_SEPARATED_CELL = re.compile(r"[^\t; \n]*,[^\t; \n]*[,.]|[^\t; \n]*\.[^\t;
 _NUMERIC_CHARACTERS = re.compile(r"[0-9eE+\-.,;\t ]+")
 
 
-def _decimal_commas_to_points(text: str, shown: str) -> str:
+def decimal_commas_to_points(text: str, shown: str) -> str:
     """Text of a file written with decimal commas, with decimal points instead.
 
     In a row of numbers, a cell holding two commas, or a comma and a point, means commas
@@ -328,7 +347,7 @@ def _decimal_commas_to_points(text: str, shown: str) -> str:
     return "\n".join(lines)
 
 
-def _locate_numbers(text: str) -> tuple[list[tuple[int, str]], int, int]:
+def locate_numbers(text: str) -> tuple[list[tuple[int, str]], int, int]:
     """Header lines, character offset and 1-based line of the first numeric row."""
     header: list[tuple[int, str]] = []
     position, number = 0, 0
@@ -344,7 +363,9 @@ def _locate_numbers(text: str) -> tuple[list[tuple[int, str]], int, int]:
     return header, -1, number
 
 
-def _majority(items: list[Any], fallback: Any) -> Any:
+def most_common(items: list[Any], fallback: Any) -> Any:
+    """The item that occurs most often (the first of them on a tie); ``fallback`` when
+    there is none."""
     if not items:
         return fallback
     counts = Counter(items)
