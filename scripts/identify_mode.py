@@ -6,9 +6,9 @@ from pathlib import Path
 
 from workflow.io.interim import read_campaign, write_mode
 from workflow.measured.mode_identification import identify_configuration_mode
-from workflow.measured.runs import analyse_run_group, read_runs, write_run_group
+from workflow.measured.runs import analyse_run_group, first_exclusion, read_runs, write_run_group
 from workflow.measured.settings import AnalysisSettings, QualitySettings
-from workflow.runtime.logs import setup_script_logging
+from workflow.runtime.logs import ScriptStop, setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "identify_mode")
 configuration = snakemake.wildcards.configuration
@@ -47,7 +47,6 @@ first_group = [Path(path).relative_to(campaign_dir).as_posix() for path in snake
 results = analyse_run_group(
     campaign_dir,
     first_group,
-    strict=snakemake.params.strict,
     reads={path: reads[path] for path in first_group},
     configuration=configuration,
     campaign=campaign,
@@ -55,4 +54,6 @@ results = analyse_run_group(
     quality_settings=quality_settings,
     decay_settings=analysis,
 )
+if snakemake.params.strict and (reason := first_exclusion(results)):
+    raise ScriptStop(f"strict mode: run excluded: {reason}")
 write_run_group(snakemake.output.segments, snakemake.output.quality, snakemake.output.status, results)

@@ -42,6 +42,7 @@ __all__ = [
     "window_problems",
     "read_runs",
     "analyse_run_group",
+    "first_exclusion",
     "write_run_group",
 ]
 
@@ -408,16 +409,12 @@ def analyse_run_group(
     campaign_dir,
     run_paths: list[str],
     *,
-    strict: bool,
     reads: dict[str, tuple] | None = None,
     **options,
 ) -> list[RunAnalysis]:
     """:func:`analyse_run_file` for each of a job's runs (``options`` are its keywords),
     with the runs in ``reads`` (:func:`read_runs`) not read again; each excluded run is
-    logged as a warning, and in ``strict`` mode the first one stops the job
-    (:class:`~workflow.runtime.logs.ScriptStop`, naming the run and why)."""
-    from workflow.runtime.logs import ScriptStop
-
+    logged as a warning (strict mode stops on :func:`first_exclusion`)."""
     log = logging.getLogger(__name__)
     reads = reads or {}
     results = []
@@ -425,13 +422,17 @@ def analyse_run_group(
         result = analyse_run_file(campaign_dir, run_path, read=reads.get(run_path), **options)
         if result.status["status"] == "excluded":
             log.warning("excluded %s", result.status["reason"])
-            if strict:
-                raise ScriptStop(f"strict mode: run excluded: {result.status['reason']}")
         else:
             kept = result.segments["kept"]
             log.info("%s: %d segments kept of %d", run_path, int(kept.sum()), len(kept))
         results.append(result)
     return results
+
+
+def first_exclusion(results: list[RunAnalysis]) -> str | None:
+    """The reason the first excluded run of ``results`` was excluded, or None if every
+    run was analysed (strict mode stops the job on it)."""
+    return next((r.status["reason"] for r in results if r.status["status"] == "excluded"), None)
 
 
 def write_run_group(segments_path, quality_path, status_path, results: list[RunAnalysis]) -> None:
