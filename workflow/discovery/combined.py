@@ -5,7 +5,7 @@ velocity-squared loss). The combined models (:data:`workflow.models.averaged.COM
 are fitted from both single fits (the micro-slip fit with the extension switched off, and
 the micro-slip joint with the single extension fit's term), and a combination is named
 only when it passes :func:`combination_test`: it predicts held-out data better than each
-of its parts by more than :data:`PAIRED_STANDARD_ERRORS` paired standard errors, and each
+of its parts by more than :func:`paired_critical_value` paired standard errors, and each
 mechanism removes at least :data:`MIN_REMOVED_SHARE` of what the other leaves.
 """
 
@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
+from scipy import stats
 
 from workflow.discovery.heldout import heldout_standard_error
 from workflow.models.averaged import COMBINED_MODELS, MODELS
@@ -25,7 +26,8 @@ __all__ = [
     "EXTENSION_CAUSES",
     "combination_parts",
     "combination_causes",
-    "PAIRED_STANDARD_ERRORS",
+    "PAIRED_FALSE_ALARM",
+    "paired_critical_value",
     "MIN_REMOVED_SHARE",
     "combinations_to_try",
     "combination_starts",
@@ -41,11 +43,24 @@ EXTENSION_CAUSES: dict[str, str] = {
 }
 """Extension model -> the cause its term stands for, beside micro-slip in a combination."""
 
-PAIRED_STANDARD_ERRORS = 2.0
-"""A combination must predict held-out data better than each of its parts by more than
-this many standard errors of the paired difference of their squared held-out errors
-over the units of evidence (runs): about a 2.5 % one-sided false-alarm rate per part
-when the added mechanism does nothing and the units are independent."""
+PAIRED_FALSE_ALARM = 0.025
+"""One-sided false-alarm rate of each part's paired test (:func:`paired_critical_value`)
+when the added mechanism does nothing and the units of evidence are independent."""
+
+
+def paired_critical_value(n_units: int, false_alarm: float = PAIRED_FALSE_ALARM) -> float:
+    """How many paired standard errors a combination must gain over a part: Student's t
+    quantile ``1 - false_alarm`` with ``n_units - 1`` degrees of freedom.
+
+    The standard error is estimated from the same few units (8 runs, or 5 half decades of
+    one run), so a fixed 2 standard errors would let a mechanism that does nothing through
+    4.3 % of the time with 8 units, 6 % with 5, instead of 2.5 %.
+
+    >>> round(paired_critical_value(8), 2), round(paired_critical_value(5), 2)
+    (2.36, 2.78)
+    """
+    return float(stats.t.ppf(1.0 - false_alarm, max(n_units - 1, 1)))
+
 
 MIN_REMOVED_SHARE = 0.2
 """Each mechanism of a named combination removes at least this share of the squared
@@ -177,7 +192,7 @@ def combination_test(
     baseline_squares: np.ndarray,
     unit_weights: np.ndarray,
     *,
-    paired_standard_errors: float = PAIRED_STANDARD_ERRORS,
+    paired_standard_errors: float | None = None,
     min_removed: float = MIN_REMOVED_SHARE,
 ) -> dict:
     """Whether two mechanisms together predict held-out data better than either alone.
@@ -193,6 +208,9 @@ def combination_test(
         The same sums of the baseline.
     unit_weights : ndarray, shape (U,)
         The units' summed weights (``E^2 = sum S / sum W``).
+    paired_standard_errors : float, optional
+        The paired standard errors each part must be beaten by; default
+        :func:`paired_critical_value` of the units that carry weight.
 
     Returns
     -------
@@ -218,6 +236,8 @@ def combination_test(
     (True, ['b', 'a'])
     """
     causes = list(part_squares)
+    if paired_standard_errors is None:
+        paired_standard_errors = paired_critical_value(int(np.count_nonzero(unit_weights > 0)))
     total = float(np.sum(unit_weights))
     combined = float(np.sum(combined_squares)) / total
     contributions, errors, removed = {}, {}, {}
@@ -241,7 +261,8 @@ def combination_test(
         "named": bool(named),
         "rule": (
             f"named when it predicts held-out data better than each part alone by more than "
-            f"{paired_standard_errors:g} paired standard errors over the units of evidence and each "
+            f"{paired_standard_errors:.3g} paired standard errors over the units of evidence (one-sided "
+            f"{PAIRED_FALSE_ALARM:g} false alarms per part) and each "
             f"mechanism removes at least {min_removed:g} of the squared held-out error the other alone leaves"
         ),
     }

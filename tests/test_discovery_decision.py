@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy import stats
-from test_discovery import DAHL, FAST, synthetic_segments
-from test_hidden_effects import run_case
+from test_discovery_synthetic import DAHL, FAST, synthetic_segments
+from test_lab_hidden_effects import run_case
 
 from workflow.discovery import decision
 from workflow.discovery.campaign import diagnose_campaign
