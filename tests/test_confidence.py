@@ -143,7 +143,7 @@ def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
     assert not combination_test(combined, parts, baseline, w)["named"]
     # both add, but one only a twentieth of the gain: not a second cause
     parts = {"a": combined + 2.85, "b": combined + 0.15}
-    assert not combination_test(combined, parts, baseline, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, parts, baseline, w, critical_t=0.0)["named"]
 
 
 def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leaves():
@@ -162,7 +162,7 @@ def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leave
     assert result["removed"]["loss"] > 0.99
     assert result["named"] and result["causes"] == ["microslip", "loss"]
     polish = {"microslip": combined + 1290.0 * spread, "loss": combined + 0.1 * 1.7 * spread}
-    assert not combination_test(combined, polish, combined + 6700.0, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, polish, combined + 6700.0, w, critical_t=0.0)["named"]
 
 
 def test_a_mechanism_that_does_nothing_is_named_at_the_stated_false_alarm_rate():
