@@ -349,6 +349,11 @@ def candidates_figure(document: Mapping) -> plt.Figure:
                 plain_log_axis(ax.xaxis)
                 low, high = np.nanmin(scores), np.nanmax(scores)
                 ax.set_xlim(low / 1.3, high * 1.3)
+                if high * 1.3 / (low / 1.3) < 10**0.5:
+                    # within half a decade the log ticks (1, 2, 5 ...) may leave every dot
+                    # between two labels (small washer: 1.07-1.12 between 1 and 2): plain steps
+                    ax.xaxis.set_major_locator(ticker.MaxNLocator(8, steps=[1, 2, 5, 10]))
+                    ax.xaxis.set_minor_locator(ticker.NullLocator())
             else:
                 ax.text(0.5, 0.5, "no candidate scored", ha="center", va="center", transform=ax.transAxes)
             ax.set_yticks(positions, labels)

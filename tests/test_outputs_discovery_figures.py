@@ -14,7 +14,7 @@ import pytest
 from matplotlib.colors import same_color
 
 from tests.support.discovery import diagnose_with_details
-from tests.test_discovery import synthetic_segments
+from tests.test_discovery_synthetic import synthetic_segments
 from workflow.discovery.campaign import RESIDUAL_COLUMNS, residual_table
 from workflow.discovery.heldout import amplitude_bin
 from workflow.discovery.wording import two_digits
@@ -235,3 +235,28 @@ def test_residual_figure_draws_the_binned_means_the_verdict_quotes(diagnosis):
             assert any(mean == pytest.approx(failing["mean_over_scatter"]) for mean in extended)
             assert abs(failing["mean_over_scatter"]) > 2.0
         assert (max(abs(m) for m in extended) <= 2.0) == entry["explains_data"]
+
+
+def test_candidates_close_together_are_read_off_labelled_ticks():
+    # the demo's small washer: held-out errors 1.07-1.12 on an axis labelled 0.9 and 1 only
+    scores = {"none": 1.07, "quadratic_damping": 1.08, "microslip_power_law": 1.09, "run_drift": 1.12}
+    entry = {
+        "cause": "none",
+        "baseline": {"model": "dahl"},
+        "extended_model": {"model": "dahl"},
+        "ranking": [{"cause": c, "score": v} for c, v in scores.items()],
+        "evidence": {"candidates": {}},
+    }
+    fig = dfig.candidates_figure({"configurations": {"small_washer": entry}})
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    low, high = ax.get_xlim()
+    labelled = sorted(
+        tick.get_loc()
+        for tick in ax.xaxis.get_major_ticks()
+        if tick.label1.get_text() and low <= tick.get_loc() <= high
+    )
+    # a labelled tick on each side of the dots and none farther than 0.1 from the next
+    assert labelled[0] <= min(scores.values()) and labelled[-1] >= max(scores.values())
+    assert np.max(np.diff(labelled)) <= 0.1 + 1e-9
+    assert readability_problems(fig) == []
