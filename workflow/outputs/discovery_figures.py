@@ -27,10 +27,10 @@ from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
 from workflow.outputs.plain_words import left_out_caveat  # noqa: E402
+from workflow.outputs.report_html import fmt  # noqa: E402
 
 __all__ = [
     "binned_means",
-    "plain_number",
     "residual_ticks",
     "residuals_figure",
     "candidate_rows",
@@ -115,13 +115,6 @@ def _draw_binned_means(
                 centres[mask], means[mask], "o", color=colour, mfc=face, mew=1.5, ms=6, label=label
             )
             line.set_gid(f"{role} binned mean")
-
-
-def plain_number(value: float) -> str:
-    """3 significant digits without exponent notation: 0.0123, 1.41, 1,410."""
-    if abs(value) >= 1000:
-        return f"{value:,.0f}"
-    return f"{value:.3g}"
 
 
 def residual_ticks(limit: float) -> list[float]:
@@ -349,6 +342,11 @@ def candidates_figure(document: Mapping) -> plt.Figure:
                 plain_log_axis(ax.xaxis)
                 low, high = np.nanmin(scores), np.nanmax(scores)
                 ax.set_xlim(low / 1.3, high * 1.3)
+                if high * 1.3 / (low / 1.3) < 10**0.5:
+                    # within half a decade the log ticks (1, 2, 5 ...) may leave every dot
+                    # between two labels (small washer: 1.07-1.12 between 1 and 2): plain steps
+                    ax.xaxis.set_major_locator(ticker.MaxNLocator(8, steps=[1, 2, 5, 10]))
+                    ax.xaxis.set_minor_locator(ticker.NullLocator())
             else:
                 ax.text(0.5, 0.5, "no candidate scored", ha="center", va="center", transform=ax.transAxes)
             ax.set_yticks(positions, labels)
@@ -403,7 +401,7 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
             errors = np.array([e if e is not None else np.nan for e in errors], dtype=float)
             worst.append(errors)
             mean = across.get(f"{role}_mean_error")
-            label = f"{role}: {models[role]}" + (f" (mean {plain_number(mean)})" if mean is not None else "")
+            label = f"{role}: {models[role]}" + (f" (mean {fmt(mean)})" if mean is not None else "")
             ax.plot(x, errors, markers[role], ms=8, color=ROLE_COLOURS[role], label=label)
         for position in x:
             values = [errors[position] for errors in worst if np.isfinite(errors[position])]

@@ -186,6 +186,30 @@ def lay_out(figure: plt.Figure, notes: Sequence[str] = (), width: int = 110) -> 
     figure.text(0.01, 0.01, text, fontsize=8, ha="left", va="bottom", color="0.15")
 
 
+def _filled_bins(code: np.ndarray, min_points: int) -> np.ndarray:
+    """Group label of each point, counted from the top of the amplitudes down:
+    consecutive amplitude bins (``code``) joined downward until a group holds
+    ``min_points``; a short group left at the bottom (where a ring-down lingers and bins
+    are full) joins the one above. Labels rise with amplitude.
+
+    Examples
+    --------
+    >>> _filled_bins(np.array([0, 0, 0, 1, 1, 2, 3, 3, 3, 4]), 3).tolist()
+    [0, 0, 0, 1, 1, 1, 2, 2, 2, 2]
+    """
+    codes, counts = np.unique(code, return_counts=True)
+    group_of_code, group, filled = {}, 0, 0
+    for value, count in zip(codes[::-1], counts[::-1]):
+        group_of_code[value] = group
+        filled += count
+        if filled >= min_points:
+            group, filled = group + 1, 0
+    if 0 < filled and group > 0:  # the bottom's few points join the group above
+        group_of_code = {value: min(label, group - 1) for value, label in group_of_code.items()}
+    top = max(group_of_code.values())
+    return np.array([top - group_of_code[value] for value in code], dtype=int)
+
+
 def misfit_ranges(
     amplitude: np.ndarray,
     measured: np.ndarray,
@@ -206,13 +230,17 @@ def misfit_ranges(
     per_decade : int
         Bins per decade of amplitude.
     min_points : int
-        Fewest segments for a bin to count (a scatter needs a few).
+        Fewest segments for a bin to count (a scatter needs a few): from the top down, a
+        bin with fewer is joined with the next ones below, so that the sparse top of a
+        ring-down, where a decay passes quickest and friction models differ most, is
+        judged too.
 
     Returns
     -------
     list of (low_in_s, high_in_s, offset_in_scatter)
         Contiguous bins merged; ``offset_in_scatter`` is the largest |mean residual| /
-        (standard deviation of the residuals in that bin) over the merged bins. A bin
+        (the residuals' scatter in that bin, from their differences between neighbours in
+        amplitude, ``sqrt(mean(diff^2) / 2)``) over the merged bins. A bin
         counts when that ratio exceeds 2: the curve passes outside most of the points
         there, a misfit no scatter explains.
     """
@@ -221,26 +249,27 @@ def misfit_ranges(
     keep = (amplitude > 0) & np.isfinite(residual)
     amplitude, residual = amplitude[keep], residual[keep]
     ranges: list[tuple[float, float, float]] = []
-    if amplitude.size == 0:
+    if amplitude.size < min_points:
         return ranges
-    code = np.floor(per_decade * np.log10(amplitude)).astype(int)
+    group = _filled_bins(np.floor(per_decade * np.log10(amplitude)).astype(int), min_points)
     previous = None
-    for bin_code in np.unique(code):
-        inside = residual[code == bin_code]
-        if inside.size < min_points:
-            continue
-        scatter = np.std(inside, ddof=1)
+    order = np.argsort(amplitude)
+    amplitude, residual, group = amplitude[order], residual[order], group[order]
+    for label in np.unique(group):
+        inside = residual[group == label]
+        # the segments' scatter from neighbour to neighbour: a misfit that changes across
+        # the bin (the top of a ring-down) is not counted as scatter
+        scatter = np.sqrt(np.mean(np.diff(inside) ** 2) / 2.0)
         offset = abs(np.mean(inside)) / scatter if scatter > 0 else np.inf
         if offset <= 2.0:
             continue
-        low, high = 10 ** (bin_code / per_decade), 10 ** ((bin_code + 1) / per_decade)
-        low, high = max(low, amplitude[code == bin_code].min()), min(high, amplitude[code == bin_code].max())
-        if previous is not None and previous == bin_code - 1:
+        low, high = amplitude[group == label].min(), amplitude[group == label].max()
+        if previous is not None and previous == label - 1:
             start, _, worst = ranges.pop()
             ranges.append((start, high, max(worst, offset)))
         else:
             ranges.append((low, high, offset))
-        previous = bin_code
+        previous = label
     return ranges
 
 

@@ -99,6 +99,24 @@ def test_misfit_ranges_find_a_curve_that_misses_and_pass_one_that_fits():
     assert all(offset > 2.0 for _, _, offset in ranges)
 
 
+def test_misfit_ranges_judge_the_sparse_top_of_a_ring_down():
+    # PFF, figure 15: LuGre 12 % above the measured damping at 1.4-4 in/s, where the decay is
+    # quickest and an eighth decade holds two or three segments; the note named only the
+    # frequency. Segments 0.065 decade apart at the top, 0.01 at the bottom.
+    rng = np.random.default_rng(4)
+    spacing = np.linspace(0.01, 0.065, 60)
+    amplitude = 0.1 * 10 ** np.cumsum(spacing)
+    truth = np.log(0.0015) + 0.3 * np.log10(amplitude / 0.1)
+    measured = truth + rng.normal(0.0, 0.03, amplitude.size)
+    model = truth + np.where((amplitude > 1.4) & (amplitude < 4.0), 0.12, 0.0)
+    top = amplitude > 1.4
+    assert np.sum(top & (amplitude < 4.0)) < 2 * 5  # fewer than 5 per eighth decade there
+    ranges = figures.misfit_ranges(amplitude, measured, model)
+    assert any(low < 2.0 and high > 3.0 for low, high, _ in ranges), ranges
+    # nowhere else: the model is the truth below 1.4 in/s
+    assert all(low >= 1.0 for low, _, _ in ranges)
+
+
 def test_damping_figure_says_where_its_fit_misses():
     amplitude = np.logspace(-1, 0.5, 300)
     zeta = 0.001 * (1.0 + amplitude**2)
