@@ -189,7 +189,7 @@ def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
     assert not combination_test(combined, parts, baseline, w)["named"]
     # both add, but one only a twentieth of the gain: not a second cause
     parts = {"a": combined + 2.85, "b": combined + 0.15}
-    assert not combination_test(combined, parts, baseline, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, parts, baseline, w, critical_t=0.0)["named"]
 
 
 def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leaves():
@@ -208,7 +208,7 @@ def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leave
     assert result["removed"]["loss"] > 0.99
     assert result["named"] and result["causes"] == ["microslip", "loss"]
     polish = {"microslip": combined + 1290.0 * spread, "loss": combined + 0.1 * 1.7 * spread}
-    assert not combination_test(combined, polish, combined + 6700.0, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, polish, combined + 6700.0, w, critical_t=0.0)["named"]
 
 
 def test_a_mechanism_that_does_nothing_is_named_at_the_stated_false_alarm_rate():
@@ -225,6 +225,28 @@ def test_a_mechanism_that_does_nothing_is_named_at_the_stated_false_alarm_rate()
         parts = {"a": combined + 0.1 * rng.standard_normal(N_UNITS), "b": np.full(N_UNITS, 100.0)}
         fired += combination_test(combined, parts, np.full(N_UNITS, 200.0), w, min_removed=0.0)["named"]
     assert abs(fired / draws - PAIRED_FALSE_ALARM) < 0.01
+
+
+def test_a_mechanism_that_divides_every_runs_error_is_named_whatever_the_runs_levels():
+    """Micro-slip + hardening spring (lab, seed 620): the combination divides every run's
+    squared held-out error of the stiffness term alone by a large factor (16.9^2 to 1.0^2
+    in scatter units overall). A run hit harder has larger errors, both models' alike: the
+    verdict must not change when one run's level is 30 times the others'. The paired
+    differences then scatter as widely as that run (1.4 standard errors: refused);
+    the runs' log ratios do not move."""
+    rng = np.random.default_rng(8)
+    w = np.ones(N_UNITS)
+    combined = 0.3 * np.exp(0.3 * rng.standard_normal(N_UNITS))
+    stiffness_alone = 285.0 * 0.3 * np.exp(0.7 * rng.standard_normal(N_UNITS))
+    level = np.ones(N_UNITS)
+    level[0] = 30.0
+    for scale in (np.ones(N_UNITS), level):
+        parts = {"microslip": stiffness_alone * scale, "stiffness": 30.0 * combined * scale}
+        result = combination_test(combined * scale, parts, 2.0 * stiffness_alone * scale, w)
+        assert result["named"], result
+        assert result["log_ratio_t"]["microslip"] > 10.0
+    difference_t = result["contributions"]["microslip"] / result["standard_errors"]["microslip"]
+    assert difference_t < 2.0  # what a paired test of the differences reads
 
 
 def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():
