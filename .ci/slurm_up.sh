@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Bring up a one-node SLURM cluster on localhost for the SLURM smoke test
-# (tests/test_slurm.py). Needs root and Debian's slurm-wlm + munge:
+# (tests/test_workflow_slurm.py). Needs root and Debian's slurm-wlm + munge:
 #
 #   .ci/slurm_up.sh             # fails with a message if something is missing
 #   .ci/slurm_up.sh --install   # apt-get installs slurmctld/slurmd/slurm-client/munge first

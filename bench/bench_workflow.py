@@ -55,8 +55,9 @@ REPO = Path(__file__).resolve().parents[1]
 def snakemake(workdir: Path, *args: str, repo: Path = REPO, snakefile: Path | None = None) -> float:
     """Wall time of one ``snakemake -c2`` call of ``repo``'s workflow (or of ``snakefile``)
     in ``workdir``, seconds (the workflow imports ``repo``'s library)."""
+    Path(workdir).mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    subprocess.run(
+    finished = subprocess.run(
         [
             sys.executable,
             "-m",
@@ -70,10 +71,16 @@ def snakemake(workdir: Path, *args: str, repo: Path = REPO, snakefile: Path | No
             "--quiet",
             "all",
         ],
-        check=True,
         capture_output=True,
+        text=True,
+        # run from the work directory: ``python -m`` puts the current directory first on
+        # sys.path, where this checkout's library would shadow ``repo``'s
+        cwd=workdir,
         env={**os.environ, "PYTHONPATH": str(repo)},
     )
+    if finished.returncode:
+        output = (finished.stdout + finished.stderr)[-3000:]
+        sys.exit(f"snakemake {' '.join(args)} in {workdir} failed:\n{output}")
     return time.perf_counter() - start
 
 

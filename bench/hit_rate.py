@@ -20,9 +20,9 @@ their own shape values there).
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
 
 ``--keep DIR`` stores what each campaign's decision was taken on (the data, every model's
-residuals and held-out residuals); ``--redecide DIR`` takes those decisions again with
-today's decision rule in seconds, without refitting: the fits do not depend on the rule
-(the confidence, from resampled decisions, is not re-decided).
+residuals and held-out residuals); ``--redecide DIR`` takes those decisions and their
+confidence again with today's decision rule in seconds, without refitting: the fits do not
+depend on the rule.
 """
 
 from __future__ import annotations
@@ -41,9 +41,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
+from workflow.discovery.confidence import verdict_causes as verdict_causes_of  # noqa: E402
 from workflow.discovery.confidence import verdict_key  # noqa: E402
-from workflow.discovery.decision import evaluate_decision  # noqa: E402
-from workflow.discovery.misfit import EXPLAINS_LIMIT  # noqa: E402
+from workflow.discovery.configuration import conclude  # noqa: E402
+from workflow.discovery.decision import extended_model_of  # noqa: E402
+from workflow.discovery.misfit import EXPLAINS_LIMIT, envelope_structure  # noqa: E402
 from workflow.lab.hidden_effects import (  # noqa: E402
     CASES,
     campaign_segments,
@@ -148,36 +150,34 @@ def _one(args):
 
 def keep_evidence(path: Path, case: dict, diagnosis) -> None:
     """Store what a campaign's decision was taken on, to re-decide it without refitting."""
-    envelope = diagnosis.document["evidence"]["envelope_structure"]
-    stored = {
-        "case": case,
-        "data": diagnosis.data,
-        "evidence": diagnosis.evidence,
-        "envelope_significant": bool(envelope and envelope["significant"]),
-    }
+    stored = {"case": case, "data": diagnosis.data, "evidence": diagnosis.evidence}
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "wb") as f:
         pickle.dump(stored, f)
 
 
 def redecide(path: Path) -> dict:
-    """A stored campaign's verdict and gain ratio under today's decision rule (same fits)."""
+    """A stored campaign's verdict, confidence and gain ratio under today's decision rule
+    and confidence (the same fits: no model is refitted)."""
     with open(path, "rb") as f:
         stored = pickle.load(f)
     cause, seed = path.stem.rsplit("_", 1)
     start = time.perf_counter()
-    result = evaluate_decision(
-        stored["data"], stored["evidence"], envelope_significant=stored["envelope_significant"]
+    envelope = envelope_structure(stored["data"])
+    result, combinations, confidence, _ = conclude(
+        stored["data"], stored["evidence"], envelope_significant=bool(envelope and envelope["significant"])
     )
-    # the candidate's own ratio: a micro-slip verdict's threshold refinement is not re-fitted
-    ratio = result["candidates"].get(result["cause"], {}).get("ratio_to_baseline")
+    verdict = result["verdict"]
+    causes = combinations[verdict]["causes"] if verdict in combinations else verdict_causes_of(verdict)
+    model = combinations[verdict]["model"] if verdict in combinations else extended_model_of(result)
+    base = result["baseline"]
     return {
         "cause": cause,
         "seed": int(seed),
-        "verdict": result["cause"],
-        "causes": list(result.get("causes") or [result["cause"]]),
-        "confidence": None,
-        "ratio": ratio,
+        "verdict": causes[0],
+        "causes": list(causes),
+        "confidence": float(confidence.get(verdict, 0.0)),
+        "ratio": result["errors"][model]["error"] / result["errors"][base]["error"],
         "case": stored["case"],
         "seconds": time.perf_counter() - start,
     }
@@ -362,7 +362,7 @@ def main() -> None:
         seeds = sorted({r["seed"] for r in results})
         print(
             f"re-decided {len(results)} stored campaigns (seeds {seeds[0]}-{seeds[-1]}) from {args.redecide} "
-            f"in {time.perf_counter() - start:.1f} s; gain ratios are the candidates' own\n"
+            f"in {time.perf_counter() - start:.1f} s\n"
         )
         report(results, args.causes)
         return

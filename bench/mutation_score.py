@@ -27,24 +27,36 @@ REPO = Path(__file__).resolve().parents[1]
 TARGETS = {
     "units": (
         "workflow/io/units.py",
-        ["tests/test_units.py", "tests/test_unit_spellings.py", "tests/test_column_grammar.py"],
+        ["tests/test_io_units.py", "tests/test_io_units_spellings.py", "tests/test_io_column_grammar.py"],
         "",
     ),
     "record_rules": (
         "workflow/io/record_rules.py",
-        ["tests/test_column_grammar.py", "tests/test_campaign.py", "tests/test_system_formats.py"],
+        [
+            "tests/test_io_column_grammar.py",
+            "tests/test_io_campaign.py",
+            "tests/test_io_readers_system_formats.py",
+        ],
         "",
     ),
-    "decay": ("workflow/measured/decay.py", ["tests/test_decay.py", "tests/test_analysis_truth.py"], ""),
+    "decay": (
+        "workflow/measured/decay.py",
+        ["tests/test_measured_decay.py", "tests/test_measured_decay_truth.py"],
+        "",
+    ),
     # Segment layout only (the decay's other functions take hours of mutants on one core).
     "segment_bounds": (
         "workflow/measured/decay.py:segment_bounds",
-        ["tests/test_decay.py", "tests/test_analysis_truth.py"],
+        ["tests/test_measured_decay.py", "tests/test_measured_decay_truth.py"],
         "segment or overlap",
     ),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
-    "decide": ("workflow/discovery/decision.py:decide", ["tests/test_decision_rules.py"], "not named_none"),
+    "decide": (
+        "workflow/discovery/decision.py:decide",
+        ["tests/test_discovery_decision.py"],
+        "not named_none",
+    ),
 }
 """Target -> (the module mutated, ``:function`` to mutate one function of it only; the tests
 run against each mutant; a pytest ``-k`` expression selecting among them, or "")."""

@@ -23,7 +23,7 @@ from workflow.lab.hidden_effects import generate_case
 snakemake = functools.partial(run_snakemake, timeout=900)
 
 HIDDEN_SEED = 20240
-"""Seed of the hidden-effect case (tests/test_hidden_effects.py's base seed: run drift named)."""
+"""Seed of the hidden-effect case (tests/test_lab_hidden_effects.py's base seed: run drift named)."""
 
 
 def test_mixed_format_campaign_gives_the_tables_of_its_ascii_copy(tmp_path):

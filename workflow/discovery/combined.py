@@ -5,7 +5,7 @@ velocity-squared loss). The combined models (:data:`workflow.models.averaged.COM
 are fitted from both single fits (the micro-slip fit with the extension switched off, and
 the micro-slip joint with the single extension fit's term), and a combination is named
 only when it passes :func:`combination_test`: it predicts held-out data better than each
-of its parts by more than :data:`PAIRED_STANDARD_ERRORS` paired standard errors, and each
+of its parts, run by run, by more than their scatter (:func:`combination_test`), and each
 mechanism removes at least :data:`MIN_REMOVED_SHARE` of what the other leaves.
 """
 
@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
+from scipy import stats
 
 from workflow.discovery.heldout import heldout_standard_error
 from workflow.models.averaged import COMBINED_MODELS, MODELS
@@ -25,7 +26,9 @@ __all__ = [
     "EXTENSION_CAUSES",
     "combination_parts",
     "combination_causes",
-    "PAIRED_STANDARD_ERRORS",
+    "PAIRED_FALSE_ALARM",
+    "paired_critical_value",
+    "paired_t",
     "MIN_REMOVED_SHARE",
     "combinations_to_try",
     "combination_starts",
@@ -41,11 +44,24 @@ EXTENSION_CAUSES: dict[str, str] = {
 }
 """Extension model -> the cause its term stands for, beside micro-slip in a combination."""
 
-PAIRED_STANDARD_ERRORS = 2.0
-"""A combination must predict held-out data better than each of its parts by more than
-this many standard errors of the paired difference of their squared held-out errors
-over the units of evidence (runs): about a 2.5 % one-sided false-alarm rate per part
-when the added mechanism does nothing and the units are independent."""
+PAIRED_FALSE_ALARM = 0.025
+"""One-sided false-alarm rate of each part's paired test (:func:`paired_critical_value`)
+when the added mechanism does nothing and the units of evidence are independent."""
+
+
+def paired_critical_value(n_units: int, false_alarm: float = PAIRED_FALSE_ALARM) -> float:
+    """The t a combination's paired test over the units must exceed for each part: Student's
+    t quantile ``1 - false_alarm`` with ``n_units - 1`` degrees of freedom.
+
+    The standard error is estimated from the same few units (8 runs, or 5 half decades of
+    one run), so a fixed 2 would let a mechanism that does nothing through 4.3 % of the
+    time with 8 units, 6 % with 5, instead of 2.5 %.
+
+    >>> round(paired_critical_value(8), 2), round(paired_critical_value(5), 2)
+    (2.36, 2.78)
+    """
+    return float(stats.t.ppf(1.0 - false_alarm, max(n_units - 1, 1)))
+
 
 MIN_REMOVED_SHARE = 0.2
 """Each mechanism of a named combination removes at least this share of the squared
@@ -171,16 +187,42 @@ def term_from_residuals(
     return best[1]
 
 
+def paired_t(values: np.ndarray) -> float:
+    """Student's t of the mean of paired values against 0 (``inf`` or ``-inf`` when they do
+    not scatter, 0 with fewer than two).
+
+    >>> round(paired_t(np.array([1.0, 2.0, 3.0])), 3)
+    3.464
+    """
+    if values.size < 2:
+        return 0.0
+    mean, spread = float(np.mean(values)), float(np.std(values, ddof=1))
+    if spread == 0.0:
+        return float(np.copysign(np.inf, mean)) if mean != 0.0 else 0.0
+    return float(mean / (spread / np.sqrt(values.size)))
+
+
 def combination_test(
     combined_squares: np.ndarray,
     part_squares: Mapping[str, np.ndarray],
     baseline_squares: np.ndarray,
     unit_weights: np.ndarray,
     *,
-    paired_standard_errors: float = PAIRED_STANDARD_ERRORS,
+    critical_t: float | None = None,
     min_removed: float = MIN_REMOVED_SHARE,
 ) -> dict:
     """Whether two mechanisms together predict held-out data better than either alone.
+
+    Each part is compared with the combination unit by unit (run; with one run, half
+    decade of amplitude): the log of the ratio of the part's squared held-out error in
+    the unit to the combination's, a paired t test over the units that it is above 0.
+    A unit's squared error scales with its own level (a run hit harder, a noisier
+    record), and so does a difference of two of them: a paired test of the differences
+    is dominated by the runs with the largest errors, and a mechanism that divides every
+    run's error by 16 reads as 2 standard errors when one run's share of it is large. The
+    log ratio is the scale-free comparison (variance-stabilising for quantities on a
+    ratio scale): how consistently, against its scatter over the units, the combination
+    predicts better.
 
     Parameters
     ----------
@@ -193,55 +235,66 @@ def combination_test(
         The same sums of the baseline.
     unit_weights : ndarray, shape (U,)
         The units' summed weights (``E^2 = sum S / sum W``).
+    critical_t : float, optional
+        The t each part's paired test must exceed; default :func:`paired_critical_value`
+        of the units that carry weight.
 
     Returns
     -------
     dict
         ``contributions`` (cause -> what the cause adds to the other alone: the other's
         squared held-out error minus the combination's), ``standard_errors`` (of those
-        paired differences over the units), ``shares`` (each contribution over the
-        combination's gain, the baseline's squared held-out error minus its own; the
-        largest first is the order of ``causes``), ``removed`` (each contribution over the
-        other part alone's squared held-out error: the share of what the other leaves that
-        this mechanism removes), ``named`` (both contributions above
-        ``paired_standard_errors`` standard errors and each ``removed`` at least
-        ``min_removed``) and ``rule``. A share may exceed 1 where the other part alone
-        predicts worse than the baseline.
+        paired differences over the units), ``log_ratio_t`` (the paired t of the units'
+        log ratios of the other's squared error to the combination's), ``shares`` (each
+        contribution over the combination's gain, the baseline's squared held-out error
+        minus its own; the largest first is the order of ``causes``), ``removed`` (each
+        contribution over the other part alone's squared held-out error: the share of what
+        the other leaves that this mechanism removes), ``named`` (each ``log_ratio_t``
+        above ``critical_t`` and each ``removed`` at least ``min_removed``) and ``rule``.
+        A share may exceed 1 where the other part alone predicts worse than the baseline.
 
     Examples
     --------
     >>> w = np.ones(6)
-    >>> combined = np.full(6, 1.0)
+    >>> combined = np.full(6, 1.0) + 0.05 * np.sin(np.arange(6))
     >>> parts = {"a": np.full(6, 3.0) + 0.1 * np.arange(6), "b": np.full(6, 2.0)}
     >>> result = combination_test(combined, parts, np.full(6, 4.0), w)
     >>> result["named"], result["causes"]
     (True, ['b', 'a'])
     """
     causes = list(part_squares)
+    present = unit_weights > 0
+    if critical_t is None:
+        critical_t = paired_critical_value(int(np.count_nonzero(present)))
     total = float(np.sum(unit_weights))
     combined = float(np.sum(combined_squares)) / total
-    contributions, errors, removed = {}, {}, {}
+    floor = np.finfo(float).tiny
+    contributions, errors, removed, log_t = {}, {}, {}, {}
     for cause, other in ((causes[0], causes[1]), (causes[1], causes[0])):
         difference = part_squares[other] - combined_squares
         other_alone = float(np.sum(part_squares[other])) / total
         contributions[cause] = other_alone - combined
         errors[cause] = heldout_standard_error(difference, unit_weights)
         removed[cause] = max(contributions[cause], 0.0) / other_alone if other_alone > 0 else 0.0
+        log_ratio = np.log(
+            np.maximum(part_squares[other][present], floor) / np.maximum(combined_squares[present], floor)
+        )
+        log_t[cause] = paired_t(log_ratio)
     gain = float(np.sum(baseline_squares)) / total - combined
     shares = {c: (max(v, 0.0) / gain if gain > 0 else 0.0) for c, v in contributions.items()}
-    named = all(
-        contributions[c] > paired_standard_errors * errors[c] and removed[c] >= min_removed for c in causes
-    )
+    named = all(log_t[c] > critical_t and removed[c] >= min_removed for c in causes)
     return {
         "contributions": contributions,
         "standard_errors": errors,
         "shares": shares,
         "removed": removed,
+        "log_ratio_t": log_t,
         "causes": sorted(causes, key=lambda c: -contributions[c]),
         "named": bool(named),
         "rule": (
-            f"named when it predicts held-out data better than each part alone by more than "
-            f"{paired_standard_errors:g} paired standard errors over the units of evidence and each "
+            f"named when it predicts held-out data better than each part alone, unit by unit of "
+            f"evidence, by more than their scatter (paired t of the log ratio of squared held-out "
+            f"errors above {critical_t:.3g}: one-sided {PAIRED_FALSE_ALARM:g} false alarms per part) and each "
             f"mechanism removes at least {min_removed:g} of the squared held-out error the other alone leaves"
         ),
     }

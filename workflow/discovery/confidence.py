@@ -5,11 +5,14 @@ Its confidence carries the two uncertainties behind it:
 
 * **Is there a departure from the baseline at all?** The decision's gate (a significant
   baseline misfit, or a candidate predicting held-out data better than ``CLEAR_GAIN`` of
-  the baseline's error) is re-taken on Bayesian-bootstrap reweightings of the
+  the baseline's error or removing more held-out misfit than the models' accuracy,
+  :func:`beyond_accuracy`) is re-taken on Bayesian-bootstrap reweightings of the
   independent units of held-out evidence (runs; with one run, half decades of
   amplitude): every unit keeps a Dirichlet(1, ..., 1) weight, so no unit is ever left out
   (a multinomial resample of five amplitude blocks leaves the top one out in a third of
-  the draws, which is what the confidence then measured).
+  the draws). The accuracy margin carries the data's power: where the scatter is many
+  times the models' accuracy, a small gain passes it in the reweightings that show it, so
+  a scatter too large to show an effect does not make ``none`` sure.
 * **Which mechanism?** Within each reweighting the candidates share the departure by
   pseudo-BMA+ weights (Yao et al. 2018): the held-out log predictive density of each
   candidate, a Gaussian with the candidate's own discrepancy variance (its squared
@@ -22,7 +25,7 @@ Its confidence carries the two uncertainties behind it:
 Several channels (sensors) of one hit are pooled before this point into one
 configuration's data (:mod:`workflow.discovery.joint`: each channel in its own scatter
 units, the runs shared), so their evidence reaches the confidence as one
-:class:`ChannelEvidence` whose units and ``n_eff`` are the runs and cells of the hit, not
+:class:`HeldoutEvidence` whose units and ``n_eff`` are the runs and cells of the hit, not
 one per sensor: nothing is voted or multiplied across sensors, and a duplicated sensor
 adds no evidence.
 """
@@ -35,12 +38,13 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = [
-    "ChannelEvidence",
+    "HeldoutEvidence",
     "VerdictOption",
     "verdict_key",
     "verdict_causes",
     "dirichlet_unit_weights",
-    "pooled_log_density",
+    "log_density",
+    "beyond_accuracy",
     "soft_decisions",
     "mean_probabilities",
 ]
@@ -70,21 +74,28 @@ def verdict_causes(key: str) -> list[str]:
 
 
 @dataclass(frozen=True)
-class ChannelEvidence:
-    """One channel's held-out evidence, summed over the independent units.
+class HeldoutEvidence:
+    """A configuration's held-out evidence, summed over its independent units (runs; with
+    one run, half decades of amplitude). Pooled channels of one hit are one evidence: the
+    units are the hit's runs, every channel's residuals in its own scatter.
 
     Attributes
     ----------
-    unit_squares : mapping
-        Model id -> array (U,): the unit's amplitude-weighted squared held-out residuals
-        over the measured scatter (both curves), summed over its scored segments.
+    unit_curve_squares : mapping
+        Model id -> array (2, U): per curve (damping, frequency), the unit's
+        amplitude-weighted squared held-out residuals over the measured scatter, summed
+        over its scored segments.
+    unit_tolerance : ndarray, shape (2, U)
+        The same sums of the models' accuracy over the measured scatter, squared
+        (``(TOL_LN_ZETA / scatter)^2``, ``(TOL_REL_F / scatter)^2``).
     unit_weights : ndarray, shape (U,)
         The units' summed amplitude weights (``E^2 = sum S / sum W``).
     effective_observations : int
-        Independent observations of the channel (2 x occupied run x half-decade cells).
+        Independent observations (2 x occupied run x half-decade cells).
     """
 
-    unit_squares: Mapping[str, np.ndarray]
+    unit_curve_squares: Mapping[str, np.ndarray]
+    unit_tolerance: np.ndarray
     unit_weights: np.ndarray
     effective_observations: int
 
@@ -118,15 +129,14 @@ def dirichlet_unit_weights(n_draws: int, n_units: int, rng: np.random.Generator)
     return rng.dirichlet(np.ones(max(n_units, 1)), size=n_draws) * max(n_units, 1)
 
 
-def pooled_log_density(
-    channels: Sequence[ChannelEvidence], models: Sequence[str], draws: np.ndarray
+def log_density(
+    evidence: HeldoutEvidence, models: Sequence[str], draws: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Held-out log predictive density of each model under each reweighting of the units.
 
     Parameters
     ----------
-    channels : sequence of ChannelEvidence
-        One per channel; the units (axis of ``unit_squares``) are the same on every channel.
+    evidence : HeldoutEvidence
     models : sequence of str
     draws : ndarray, shape (B, U)
         Unit weights (:func:`dirichlet_unit_weights`).
@@ -134,26 +144,65 @@ def pooled_log_density(
     Returns
     -------
     elpd : ndarray, shape (M, B)
-        ``sum_channels -n_eff / 2 (ln E^2 + 1)`` with ``E^2`` the reweighted squared
-        held-out error (the Gaussian's discrepancy variance fitted per model and channel).
+        ``-n_eff / 2 (ln E^2 + 1)`` with ``E^2`` the reweighted squared held-out error,
+        both curves (the Gaussian's discrepancy variance fitted per model).
     error : ndarray, shape (M, B)
-        The pooled held-out error, ``exp(-elpd / n_eff_total - 1/2)``: the geometric mean of
-        the channels' errors weighted by their observations (one channel: its error).
+        The held-out error ``E``.
     """
-    elpd = np.zeros((len(models), draws.shape[0]))
-    n_total = 0
-    for channel in channels:
-        weight = draws @ channel.unit_weights
-        n = channel.effective_observations
-        n_total += n
-        for i, m in enumerate(models):
-            squared = (draws @ channel.unit_squares[m]) / np.maximum(weight, 1e-300)
-            elpd[i] -= 0.5 * n * (np.log(np.maximum(squared, 1e-300)) + 1.0)
-    return elpd, np.exp(-elpd / max(n_total, 1) - 0.5)
+    weight = np.maximum(draws @ evidence.unit_weights, 1e-300)
+    squared = np.array([(draws @ evidence.unit_curve_squares[m].mean(axis=0)) / weight for m in models])
+    n = evidence.effective_observations
+    elpd = -0.5 * n * (np.log(np.maximum(squared, 1e-300)) + 1.0)
+    return elpd, np.sqrt(squared)
+
+
+def beyond_accuracy(
+    base_curve_squares: np.ndarray,
+    option_curve_squares: np.ndarray,
+    unit_tolerance: np.ndarray,
+    draws: np.ndarray,
+) -> np.ndarray:
+    """Whether an option removes more held-out misfit than the models' accuracy, per
+    reweighting of the units.
+
+    On either curve, the baseline's squared held-out error minus the option's (both over
+    the measured scatter) exceeds the squared accuracy of the averaged models over the same
+    scatter (``TOL_LN_ZETA``, ``TOL_REL_F``), amplitude weighted alike: what the option
+    explains is more than a misfit of the models' own accuracy at every amplitude could be.
+    This margin scales with the data: where the scatter is large (a sensor near a node)
+    an effect several times the accuracy moves the held-out error by a few percent, far
+    less than ``CLEAR_GAIN`` asks, and this is what shows it; where the scatter is small
+    the accuracy is many scatters and the relative margin decides.
+
+    Parameters
+    ----------
+    base_curve_squares, option_curve_squares : ndarray, shape (2, U)
+        :attr:`HeldoutEvidence.unit_curve_squares` of the baseline and of the option.
+    unit_tolerance : ndarray, shape (2, U)
+        :attr:`HeldoutEvidence.unit_tolerance`.
+    draws : ndarray, shape (B, U)
+
+    Returns
+    -------
+    ndarray of bool, shape (B,)
+
+    Examples
+    --------
+    A damping misfit of twice the accuracy removed, on two units:
+
+    >>> tolerance = np.ones((2, 2))
+    >>> base, option = np.array([[5.0, 5.0], [1.0, 1.0]]), np.array([[1.0, 1.0], [1.0, 1.0]])
+    >>> beyond_accuracy(base, option, tolerance, np.ones((1, 2))).tolist()
+    [True]
+    >>> beyond_accuracy(base, base - 0.5, tolerance, np.ones((1, 2))).tolist()
+    [False]
+    """
+    removed = draws @ (base_curve_squares - option_curve_squares).T
+    return np.any(removed > draws @ unit_tolerance.T, axis=1)
 
 
 def soft_decisions(
-    channels: Sequence[ChannelEvidence],
+    evidence: HeldoutEvidence,
     baselines: Sequence[str],
     options: Sequence[VerdictOption],
     *,
@@ -169,11 +218,13 @@ def soft_decisions(
     are eligible and predict better than it share the departure by their pseudo-BMA+
     weights (softmax of ``elpd``); the departure is certain when the baseline fails its
     misfit tests (``baseline_fails``: one verdict, or one per reweighting,
-    :func:`workflow.discovery.misfit.failure_draws`), else it happens when the best
-    option's error is below ``clear_gain`` of the baseline's. An option that leaves a significant misfit and does not reach
-    ``residual_gain`` passes its share to ``unknown``. Not single-mode decays:
-    ``unknown``. The same rule as :func:`workflow.discovery.decision.decide`, with the
-    tie-break by BIC replaced by the weights.
+    :func:`workflow.discovery.misfit.failure_draws`), else it happens when an option
+    predicts clearly better: its error below ``clear_gain`` of the baseline's, or what it
+    removes beyond the models' accuracy (:func:`beyond_accuracy`). An option that leaves a
+    significant misfit and does not reach ``residual_gain`` passes its share to
+    ``unknown``. Not single-mode decays: ``unknown``. The same rule as
+    :func:`workflow.discovery.decision.decide`, with the tie-break by BIC replaced by the
+    weights.
 
     Returns
     -------
@@ -188,9 +239,11 @@ def soft_decisions(
     keys = ["none", "unknown"] + [o.key for o in options]
     p = {k: np.zeros(n_draws) for k in keys}
     models = list(dict.fromkeys([*baselines, *(o.model for o in options)]))
-    elpd, error = pooled_log_density(channels, models, draws)
+    elpd, error = log_density(evidence, models, draws)
     row = {m: i for i, m in enumerate(models)}
-    base = error[[row[m] for m in baselines]].min(axis=0)
+    base_errors = error[[row[m] for m in baselines]]
+    base = base_errors.min(axis=0)
+    base_choice = base_errors.argmin(axis=0)
     usable = [o for o in options if o.eligible]
     fails = np.broadcast_to(np.asarray(baseline_fails, dtype=bool), (n_draws,))
     all_errors = np.array([error[row[o.model]] for o in options]) if options else base[None, :]
@@ -204,13 +257,30 @@ def soft_decisions(
         return p, p["none"] + p["unknown"] * unknown_ratio
     opt_error = np.array([error[row[o.model]] for o in usable])  # (K, B)
     better = opt_error < base
+    beyond = np.array(
+        [
+            np.choose(
+                base_choice,
+                [
+                    beyond_accuracy(
+                        evidence.unit_curve_squares[b],
+                        evidence.unit_curve_squares[o.model],
+                        evidence.unit_tolerance,
+                        draws,
+                    )
+                    for b in baselines
+                ],
+            )
+            for o in usable
+        ]
+    )
+    clear = better & ((opt_error < clear_gain * base) | beyond)
     log_w = np.where(better, np.array([elpd[row[o.model]] for o in usable]), -np.inf)
     any_better = better.any(axis=0)
     top = np.where(any_better, log_w.max(axis=0), 0.0)
     w = np.where(better, np.exp(log_w - top), 0.0)
     w /= np.maximum(w.sum(axis=0), 1e-300)
-    ratio_best = np.where(any_better, opt_error.min(axis=0) / base, 1.0)
-    departs = any_better & (fails | (ratio_best < clear_gain))
+    departs = any_better & (fails | clear.any(axis=0))
     # no option better: the baseline stands where it fits, nothing removes its misfit where it fails
     p["unknown"] += ~any_better & fails
     p["none"] += ~any_better & ~fails

@@ -44,7 +44,7 @@ from workflow.discovery.misfit import (
 )
 from workflow.discovery.wording import discrepancy_sentence
 from workflow.measured.settings import AnalysisSettings
-from workflow.models.averaged import MODELS, RESPONSE_ORDER, AveragedModel
+from workflow.models.averaged import COMBINED_MODELS, MODELS, RESPONSE_ORDER, AveragedModel
 from workflow.models.averaged_fit import (
     FitContext,
     FitResult,
@@ -71,7 +71,10 @@ __all__ = [
     "record_starts",
     "diagnose_configuration_segments",
     "add_threshold_cells",
-    "add_combinations",
+    "fit_combinations",
+    "judge_combinations",
+    "needs_threshold_cells",
+    "conclude",
     "curve_led_start",
     "most_probable_verdict",
 ]
@@ -175,7 +178,7 @@ def add_threshold_cells(
     return name
 
 
-def add_combinations(
+def fit_combinations(
     data: ConfigurationData,
     scatter: Scatter,
     context: FitContext,
@@ -184,34 +187,14 @@ def add_combinations(
     cv: dict[str, dict],
     residuals: dict[str, dict[str, np.ndarray]],
     evidence: dict[str, ModelEvidence],
-    result: dict,
     settings: DiscoverySettings,
-    envelope_significant: bool,
-    extended_models: Mapping[str, str],
-) -> tuple[dict, dict[str, dict], list[VerdictOption]]:
-    """Fit the combinations of two mechanisms the single-cause decision points to, and name
-    one where it passes :func:`workflow.discovery.combined.combination_test`.
-
-    Tried after a named cause of the joint's physics, or after ``unknown``
-    (:func:`combinations_to_try`); the fits, held-out errors and residuals are added to
-    ``fits``, ``cv``, ``residuals`` and ``evidence``. A combination becomes the verdict when
-    it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
-    it has a stiffness term, predicts held-out data better than the single verdict's model,
-    and does not leave a significant misfit with less than
-    ``RESIDUAL_GAIN`` of the baseline's error; among several, the lower held-out error.
-
-    Returns
-    -------
-    result, combinations, options
-        The decision (``verdict``: its ``confidence`` key), per combination tried (its
-        key) the evidence, and the combinations as :class:`VerdictOption`.
-    """
-    result["verdict"] = result["cause"]
-    joint = f"iwan_cells_{threshold_cells(data)}"
-    tried = [] if envelope_significant else combinations_to_try(result["cause"], joint)
-    if not tried:
-        return result, {}, []
-    if joint not in fits:
+    tried: list[str],
+) -> None:
+    """Fit and cross-validate the combined models ``tried`` (:func:`combinations_to_try`)
+    from both single fits and from each mechanism's own curve; the fits, held-out errors,
+    residuals and evidence are added to ``fits``, ``cv``, ``residuals`` and ``evidence``
+    (the micro-slip joint with the slip thresholds from the data first, where missing)."""
+    if tried and combination_parts(tried[0])[0] not in fits:
         add_threshold_cells(
             data,
             scatter,
@@ -241,24 +224,40 @@ def add_combinations(
             time.perf_counter() - started,
             cv[model]["error"],
         )
-    verdict = result["cause"]
-    result = evaluate_decision(
-        data, evidence, envelope_significant=envelope_significant, extended_models=extended_models
-    )
-    result["verdict"] = verdict
+
+
+def judge_combinations(
+    data: ConfigurationData, result: dict, evidence: Mapping[str, ModelEvidence]
+) -> tuple[dict[str, dict], list[VerdictOption]]:
+    """The combinations fitted (those of ``evidence``), each judged by
+    :func:`workflow.discovery.combined.combination_test`; one may replace the single verdict.
+
+    A combination becomes the verdict (``result["verdict"]``, its ``confidence`` key) when
+    it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
+    it has a stiffness term, predicts held-out data better than the single verdict's model,
+    and does not leave a significant misfit with less than ``RESIDUAL_GAIN`` of the
+    baseline's error; among several, the lower held-out error.
+
+    Returns
+    -------
+    combinations, options
+        Per combination tried (its key) the evidence, and the combinations as
+        :class:`VerdictOption`.
+    """
+    verdict = result["verdict"]
     base, errors, bic = result["baseline"], result["errors"], result["bic"]
     combinations, options = {}, []
-    # micro-slip alone: the better predictor of the power law and the combination's own joint
-    microslip = min(("iwan", joint), key=lambda m: errors[m]["error"])
-    for model in tried:
+    for model in (m for m in COMBINED_MODELS.values() if m in evidence):
         causes = combination_causes(model)
+        # micro-slip alone: the better predictor of the power law and the combination's own joint
+        microslip = min(("iwan", combination_parts(model)[0]), key=lambda m: errors[m]["error"])
         part_models = {causes[0]: microslip, causes[1]: result["extended_models"][causes[1]]}
         parts = {c: result["unit_squares"][m] for c, m in part_models.items()}
         test = combination_test(
             result["unit_squares"][model], parts, result["unit_squares"][base], result["unit_weights"]
         )
-        bins = binned_discrepancy(data, residuals[model])
-        trend = run_order_trend(data, residuals[model], n_tests=RUN_ORDER_TESTS)
+        bins = binned_discrepancy(data, evidence[model].residuals)
+        trend = run_order_trend(data, evidence[model].residuals, n_tests=RUN_ORDER_TESTS)
         significant = any(b["significant"] for b in bins) or bool(trend and trend["significant"])
         ratio = errors[model]["error"] / errors[base]["error"]
         eligible = test["named"] and bic[model] < bic[base] and evidence[model].shows_signature
@@ -274,9 +273,6 @@ def add_combinations(
             "shows_signature": evidence[model].shows_signature,
             "residual_significant": bool(significant),
             "eligible": bool(eligible),
-            "in_sample_rms": float(np.sqrt(fits[model].cost)),
-            "params": fits[model].params,
-            "flags": bound_flags(model, fits[model].coords, data),
         }
         options.append(VerdictOption(key, model, bool(eligible), bool(significant)))
     # a combination replaces the single verdict only where it also predicts better than it
@@ -295,7 +291,68 @@ def add_combinations(
             f"{result['reason']}; two mechanisms, {combinations[best]['model']}, predict better still "
             f"({combinations[best]['rule']})"
         )
-    return result, combinations, options
+    return combinations, options
+
+
+def needs_threshold_cells(
+    data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
+) -> bool:
+    """Whether micro-slip's extended model may be the Iwan joint with the slip thresholds
+    from the data: the verdict is micro-slip and the power law does not explain the data."""
+    return (
+        result["cause"] == "microslip_power_law"
+        and not explains_data(data, evidence["iwan"].residuals)["explains_data"]
+    )
+
+
+def conclude(
+    data: ConfigurationData,
+    evidence: Mapping[str, ModelEvidence],
+    *,
+    envelope_significant: bool,
+    settings: DiscoverySettings = DiscoverySettings(),
+) -> tuple[dict, dict[str, dict], dict[str, float], list[dict]]:
+    """The verdict and its confidence on every model fitted (no fit is made here).
+
+    :func:`evaluate_decision` on ``evidence``; where :func:`needs_threshold_cells`, the
+    Iwan joint with the slip thresholds from the data (``iwan_cells_N`` in ``evidence``)
+    becomes micro-slip's extended model when it lowers both the held-out error and the BIC
+    of ``iwan``; the combinations in ``evidence`` are judged (:func:`judge_combinations`);
+    the confidence (:func:`confidence_draws`); the verdict is the most probable one of the
+    confidence (:func:`most_probable_verdict`).
+
+    Returns
+    -------
+    result, combinations, confidence, resamples
+        The decision (``verdict``: its ``confidence`` key; ``threshold_cells``: the
+        refinement's model id where it was considered, else None), the combinations'
+        evidence, the confidence and its per-draw decisions.
+    """
+    result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    errors, bic = result["errors"], result["bic"]
+    refined = f"iwan_cells_{threshold_cells(data)}"
+    result["threshold_cells"] = None
+    if refined in evidence and needs_threshold_cells(data, result, evidence):
+        result["threshold_cells"] = refined
+        if errors[refined]["error"] < errors["iwan"]["error"] and bic[refined] < bic["iwan"]:
+            result["extended_models"]["microslip_power_law"] = refined
+    result["verdict"] = result["cause"]
+    combinations, combination_options = judge_combinations(data, result, evidence)
+    confidence, resamples = confidence_draws(
+        result,
+        verdict_options(result, combination_options),
+        envelope_significant=envelope_significant,
+        n_draws=settings.resamples,
+        seed=settings.seed,
+    )
+    verdict = most_probable_verdict(result["verdict"], confidence)
+    if verdict != result["verdict"]:
+        result["reason"] = (
+            f"{verdict}, the most probable verdict over reweightings of the runs "
+            f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
+        )
+    result["verdict"] = verdict
+    return result, combinations, confidence, resamples
 
 
 def curve_led_start(
@@ -386,12 +443,8 @@ def diagnose_configuration(
     evidence[stiffness_model].shows_signature = signature["shows_signature"]
     envelope = envelope_structure(data, segment_cycles=segment_cycles)
     envelope_significant = bool(envelope and envelope["significant"])
-    result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
-    extended_models, refinement = {}, None
-    if (
-        result["cause"] == "microslip_power_law"
-        and not explains_data(data, residuals["iwan"])["explains_data"]
-    ):
+    first = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    if needs_threshold_cells(data, first, evidence):
         started = time.perf_counter()
         name = add_threshold_cells(
             data,
@@ -403,16 +456,40 @@ def diagnose_configuration(
             evidence=evidence,
             settings=settings,
         )
-        # the same decision (the candidates are unchanged), now with the refinement's error and BIC
-        result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
-        errors, bic = result["errors"], result["bic"]
-        adopted = errors[name]["error"] < errors["iwan"]["error"] and bic[name] < bic["iwan"]
-        if adopted:
-            extended_models = {"microslip_power_law": name}
-            result["extended_models"].update(extended_models)
+        log.info(
+            "%s %s (slip thresholds from the data): fitted and cross-validated in %.1f s "
+            "(held-out error %.3g, iwan %.3g)",
+            data.name,
+            name,
+            time.perf_counter() - started,
+            cv[name]["error"],
+            cv["iwan"]["error"],
+        )
+    tried = (
+        []
+        if envelope_significant
+        else combinations_to_try(first["cause"], f"iwan_cells_{threshold_cells(data)}")
+    )
+    fit_combinations(
+        data,
+        scatter,
+        context,
+        fits=fits,
+        cv=cv,
+        residuals=residuals,
+        evidence=evidence,
+        settings=settings,
+        tried=tried,
+    )
+    result, combinations, confidence, resamples = conclude(
+        data, evidence, envelope_significant=envelope_significant, settings=settings
+    )
+    refinement = None
+    if result["threshold_cells"]:
+        name, errors, bic = result["threshold_cells"], result["errors"], result["bic"]
         refinement = {
             "model": name,
-            "adopted": bool(adopted),
+            "adopted": result["extended_models"]["microslip_power_law"] == name,
             "rule": "adopted as the extended model when it lowers both the held-out error and the BIC of iwan",
             "heldout_error": errors[name]["error"],
             "bic": bic[name],
@@ -421,43 +498,13 @@ def diagnose_configuration(
             "cells": threshold_distribution(fits[name], data, scatter, context),
             "standard_error": "Gauss-Newton, scaled by the fit cost and residuals over effective observations",
         }
-        log.info(
-            "%s %s (slip thresholds from the data): fitted and cross-validated in %.1f s "
-            "(held-out error %.3g, iwan %.3g; %s)",
-            data.name,
-            name,
-            time.perf_counter() - started,
-            errors[name]["error"],
-            errors["iwan"]["error"],
-            "adopted" if adopted else "not adopted",
+    for entry in combinations.values():
+        m = entry["model"]
+        entry.update(
+            in_sample_rms=float(np.sqrt(fits[m].cost)),
+            params=fits[m].params,
+            flags=bound_flags(m, fits[m].coords, data),
         )
-    result, combinations, combination_options = add_combinations(
-        data,
-        scatter,
-        context,
-        fits=fits,
-        cv=cv,
-        residuals=residuals,
-        evidence=evidence,
-        result=result,
-        settings=settings,
-        envelope_significant=envelope_significant,
-        extended_models=extended_models,
-    )
-    confidence, resamples = confidence_draws(
-        result,
-        verdict_options(result, combination_options),
-        envelope_significant=envelope_significant,
-        n_draws=settings.resamples,
-        seed=settings.seed,
-    )
-    verdict = most_probable_verdict(result["verdict"], confidence)
-    if verdict != result["verdict"]:
-        result["reason"] = (
-            f"{verdict}, the most probable verdict over reweightings of the runs "
-            f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
-        )
-    result["verdict"] = verdict
     causes = combinations[result["verdict"]]["causes"] if result["verdict"] in combinations else None
     causes = causes or verdict_causes(result["verdict"])
     result["cause"] = causes[0]

@@ -14,8 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from workflow.discovery.confidence import (
-    ChannelEvidence,
+    HeldoutEvidence,
     VerdictOption,
+    beyond_accuracy,
     dirichlet_unit_weights,
     mean_probabilities,
     soft_decisions,
@@ -29,7 +30,7 @@ from workflow.discovery.heldout import (
     weighted_rms,
 )
 from workflow.discovery.misfit import binned_discrepancy, failure_draws, run_order_trend
-from workflow.models.configuration_data import ConfigurationData
+from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, scatter_of
 
 __all__ = [
     "CAUSE_MODELS",
@@ -67,11 +68,12 @@ of amplitude bins."""
 
 
 CLEAR_GAIN = 0.7
-"""Without a significant baseline misfit, a candidate is named only when its held-out
-error is below this fraction of the baseline's (the same margin as ``RESIDUAL_GAIN``).
+"""Without a significant baseline misfit, a candidate is named when its held-out error is
+below this fraction of the baseline's (the same margin as ``RESIDUAL_GAIN``), or when it
+removes more held-out misfit than the models' accuracy (:func:`~workflow.discovery.confidence.beyond_accuracy`).
 On no-effect (Dahl-joint) campaigns the averaged models' own bias, a few 1e-6 in
-relative frequency, let an extension reach 0.62-0.87 of the baseline's error
-(bench/hit_rate.py, seeds 1-40); 0.85 named a cause in 18 % of them."""
+relative frequency, let an extension reach 0.62-0.87 of the baseline's error where the
+scatter is small (bench/hit_rate.py, seeds 1-40); 0.85 named a cause in 18 % of them."""
 
 
 RESIDUAL_GAIN = 0.7
@@ -99,7 +101,9 @@ def decide(
         Whether the baseline shows a significant misfit (binned or run-order).
     candidates : mapping
         cause -> dict with ``heldout_error``, ``bic``, ``residual_significant`` and
-        optionally ``shows_signature`` (default true).
+        optionally ``shows_signature`` (default true) and ``beyond_accuracy`` (whether it
+        removes more held-out misfit than the models' accuracy,
+        :func:`~workflow.discovery.confidence.beyond_accuracy`; default false).
 
     envelope_structure : bool
         Whether the ring-downs are not single-mode decays (:func:`~workflow.discovery.misfit.envelope_structure`).
@@ -122,7 +126,8 @@ def decide(
       BIC is below the baseline's, and its fit shows its cause's signature
       (:func:`~workflow.discovery.misfit.stiffness_signature`).
     * ``none`` when the baseline has no significant misfit and no eligible candidate
-      cuts the held-out error below ``CLEAR_GAIN`` x the baseline's.
+      cuts the held-out error below ``CLEAR_GAIN`` x the baseline's or removes more
+      held-out misfit than the models' accuracy (``beyond_accuracy``).
     * Otherwise the best eligible candidate by held-out error; candidates whose squared
       held-out error is within one standard error of the best's (the one-standard-error
       rule of cross-validation, :func:`heldout_standard_error`) predict as well as far
@@ -153,11 +158,16 @@ def decide(
         for c, v in candidates.items()
         if v["heldout_error"] < baseline_error and v["bic"] < baseline_bic and v.get("shows_signature", True)
     }
-    clear = {c: v for c, v in eligible.items() if v["heldout_error"] < CLEAR_GAIN * baseline_error}
+    clear = {
+        c: v
+        for c, v in eligible.items()
+        if v["heldout_error"] < CLEAR_GAIN * baseline_error or v.get("beyond_accuracy", False)
+    }
     if not baseline_fails and not clear:
         return "none", (
             "no significant misfit of the baseline and no candidate reduces the "
-            f"held-out error below {CLEAR_GAIN} of the baseline's"
+            f"held-out error below {CLEAR_GAIN} of the baseline's or removes more held-out "
+            "misfit than the models' accuracy"
         )
     if not eligible:
         return "unknown", (
@@ -224,7 +234,9 @@ def evaluate_decision(
         ``cause``, ``reason``, ``baseline`` (model id), ``errors`` and ``bic`` per model,
         ``bins`` and ``trend`` of the baseline, ``baseline_fails``, ``candidates``,
         ``extended_models``, and per unit of held-out evidence (:func:`heldout_units`)
-        ``unit_squares`` (per model) and ``unit_weights``, for the confidence.
+        ``unit_squares`` (per model), ``unit_curve_squares`` (per model, shape (2, U):
+        damping, frequency), ``unit_tolerance`` (shape (2, U): the models' accuracy over
+        the scatter, squared, summed alike) and ``unit_weights``, for the confidence.
     """
     view = data
     n_runs_view = view.n_runs
@@ -234,11 +246,25 @@ def evaluate_decision(
     n_units = int(units.max()) + 1 if units.size else 0
     # the scored segments are the data's (calibration segments are not), the same for every model
     scored = next(iter(evidence.values())).heldout["scored"]
-    unit_weights = np.bincount(units[scored], weights=weights[scored], minlength=n_units)
-    errors, bic, residuals, unit_squares = {}, {}, {}, {}
+
+    def per_unit(values: np.ndarray) -> np.ndarray:
+        return np.bincount(units[scored], weights=(weights * values)[scored], minlength=n_units)
+
+    unit_weights = per_unit(np.ones(view.n))
+    scatter = scatter_of(view)
+    unit_tolerance = np.array(
+        [
+            per_unit((TOL_LN_ZETA / scatter.noise_ln_zeta) ** 2),
+            per_unit((TOL_REL_F / scatter.noise_rel_f) ** 2),
+        ]
+    )
+    errors, bic, residuals, unit_squares, unit_curve_squares = {}, {}, {}, {}, {}
     for m, ev in evidence.items():
         square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])
-        unit_squares[m] = np.bincount(units[scored], weights=(weights * square)[scored], minlength=n_units)
+        unit_curve_squares[m] = np.array(
+            [per_unit(ev.heldout["squared_zeta"]), per_unit(ev.heldout["squared_frequency"])]
+        )
+        unit_squares[m] = unit_curve_squares[m].mean(axis=0)
         errors[m] = {
             "error": weighted_rms(square[scored], weights[scored]),
             "error_zeta": weighted_rms(ev.heldout["squared_zeta"][scored], weights[scored]),
@@ -269,6 +295,7 @@ def evaluate_decision(
         any(b["significant"] for b in bins) or bool(trend and trend["significant"]) or envelope_significant
     )
     candidates = {}
+    all_units = np.ones((1, n_units))
     for cause, m in CAUSE_MODELS.items():
         if m not in evidence:
             continue
@@ -287,6 +314,9 @@ def evaluate_decision(
             ),
             "significant_bins": int(sum(b["significant"] for b in cb)),
             "shows_signature": evidence[m].shows_signature,
+            "beyond_accuracy": bool(
+                beyond_accuracy(unit_curve_squares[base], unit_curve_squares[m], unit_tolerance, all_units)[0]
+            ),
         }
     cause, reason = decide(
         errors[base]["error"],
@@ -310,6 +340,8 @@ def evaluate_decision(
         "candidates": candidates,
         "extended_models": {**CAUSE_MODELS, **(extended_models or {})},
         "unit_squares": unit_squares,
+        "unit_curve_squares": unit_curve_squares,
+        "unit_tolerance": unit_tolerance,
         "unit_weights": unit_weights,
     }
 
@@ -362,10 +394,12 @@ def confidence_draws(
         configurations' draws.
     """
     rng = np.random.default_rng(seed)
-    channel = ChannelEvidence(result["unit_squares"], result["unit_weights"], result["n_eff"])
-    weights = dirichlet_unit_weights(n_draws, channel.unit_weights.size, rng)
+    evidence = HeldoutEvidence(
+        result["unit_curve_squares"], result["unit_tolerance"], result["unit_weights"], result["n_eff"]
+    )
+    weights = dirichlet_unit_weights(n_draws, evidence.unit_weights.size, rng)
     probabilities, ratio = soft_decisions(
-        [channel],
+        evidence,
         [m for m in BASELINE_MODELS if m in result["errors"]],
         options,
         baseline_fails=failure_draws(result["bins"], result["trend"], weights),

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from scipy import special
+from scipy import optimize, special
 
 from workflow.discovery.heldout import amplitude_bin, amplitude_weights
 from workflow.measured.settings import AnalysisSettings
@@ -28,6 +28,7 @@ __all__ = [
     "binned_discrepancy",
     "run_order_trend",
     "ENVELOPE_DEPARTURE_LIMIT",
+    "proportional_departure",
     "envelope_structure",
     "EXPLAINS_LIMIT",
     "explains_data",
@@ -347,7 +348,43 @@ def failure_draws(bins: Sequence[Mapping], trend: Mapping | None, draws: np.ndar
 ENVELOPE_DEPARTURE_LIMIT = 0.05
 """Largest acceptable departure of a segment's ln-envelope from a straight line (RMS of
 the line fit, ``fit_rms``), as a fraction of the decay of ln-envelope across the segment
-(``2 pi N zeta`` for ``N`` cycles), in each run's highest-amplitude third."""
+(``2 pi N zeta`` for ``N`` cycles): its part that does not fade with the noise, in each
+run's upper half of amplitudes (:func:`proportional_departure`)."""
+
+
+def proportional_departure(amplitude: np.ndarray, departure: np.ndarray) -> float:
+    """The part of a run's envelope departures that does not fade with the noise.
+
+    Additive noise of level ``n`` on an envelope of amplitude ``A`` moves its logarithm by
+    about ``n / A``: its share of a segment's departure falls as the amplitude rises. A
+    disturbance proportional to the signal (a second mode beating in the band) departs by
+    the same fraction at every amplitude. With both independent, ``departure^2 = d^2 +
+    k / A^2``; ``d`` is found by non-negative least squares over the segments.
+
+    Parameters
+    ----------
+    amplitude : ndarray
+        The segments' envelope amplitudes, any one unit.
+    departure : ndarray
+        Their departures from a straight ln-envelope, over the decay across the segment.
+
+    Returns
+    -------
+    float
+        ``d``, in the unit of ``departure``.
+
+    Examples
+    --------
+    Noise alone (departure 0.02 at the top, ten times more a decade below) against a
+    steady 0.2:
+
+    >>> a = np.geomspace(1.0, 0.1, 20)
+    >>> round(proportional_departure(a, 0.02 / a), 6), round(proportional_departure(a, np.full(20, 0.2)), 6)
+    (0.0, 0.2)
+    """
+    scale = (amplitude.max() / amplitude) ** 2
+    (d2, _), _ = optimize.nnls(np.column_stack([np.ones_like(scale), scale]), departure**2)
+    return float(np.sqrt(d2))
 
 
 def envelope_structure(
@@ -358,12 +395,15 @@ def envelope_structure(
     Every model of the vocabulary is a single mode whose damping changes slowly with
     amplitude: over a segment of ``N`` cycles its ln-envelope is a straight line that
     falls by ``2 pi N zeta``, up to additive noise (largest at the run's low end) and
-    a curvature far smaller than that fall. In each run's highest-amplitude third
-    (best signal-to-noise) the departure ``fit_rms`` must therefore be a small
-    fraction of the fall. A disturbance proportional to the signal (a second mode
-    beating in the band, an amplitude modulation) keeps it large at every amplitude:
-    then the segments' damping and frequency are dominated by that disturbance and
-    no single-mode model applies.
+    a curvature far smaller than that fall. The departure ``fit_rms`` must therefore
+    be a small fraction of the fall once the noise's share is taken out: in each run's
+    upper half of amplitudes, the part of the departure that does not fade as ``1 / A``
+    (:func:`proportional_departure`). A disturbance proportional to the signal (a second
+    mode beating in the band, an amplitude modulation) keeps it large at every amplitude:
+    then the segments' damping and frequency are dominated by that disturbance and no
+    single-mode model applies. A sensor near a node of the mode sees it through noise even
+    at its highest amplitudes (there the departure of a plain decay grew from 0.01 to 0.3
+    of the fall over the upper half): noise, not structure.
 
     Parameters
     ----------
@@ -374,23 +414,25 @@ def envelope_structure(
     Returns
     -------
     dict or None
-        ``departure_ratio`` (median over runs of each run's median of
-        ``fit_rms / (2 pi N zeta_trend)`` in its top third), ``runs_over_limit``,
-        ``limit``, ``significant`` (ratio above the limit in at least half the runs).
-        None when the table has no ``fit_rms``.
+        ``departure_ratio`` (median over runs, each channel's run on its own, of each
+        run's proportional departure over ``2 pi N zeta_trend``), ``runs_over_limit``,
+        ``limit``, ``significant`` (ratio above the limit in at least half the runs). None
+        when the table has no ``fit_rms``.
     """
     if data.fit_rms is None:
         return None
     x = np.log10(data.velocity_in_s)
-    zeta_trend = np.exp(robust_trend(x, np.log(data.zeta), 3))
-    ratio = data.fit_rms / (2.0 * np.pi * segment_cycles * zeta_trend)
+    fall = 2.0 * np.pi * segment_cycles * np.exp(robust_trend(x, np.log(data.zeta), 3))
+    channel = np.zeros(data.n, dtype=int) if data.channel_index is None else data.channel_index
     per_run = []
-    for j in range(data.n_runs):
-        m = np.flatnonzero(data.run_index == j)
+    # each run of each channel: pooled sensors see one decay, each through its own noise
+    for group in np.unique(np.column_stack([data.run_index, channel]), axis=0):
+        m = np.flatnonzero((data.run_index == group[0]) & (channel == group[1]))
         if m.size < 3:
             continue
-        top = m[np.argsort(data.velocity_in_s[m])[::-1][: max(2, m.size // 3)]]
-        per_run.append(float(np.median(ratio[top])))
+        top = m[np.argsort(data.velocity_in_s[m])[::-1][: max(3, m.size // 2)]]
+        departure = proportional_departure(data.velocity_in_s[top], data.fit_rms[top])
+        per_run.append(departure / float(np.median(fall[top])))
     if not per_run:
         return None
     per_run = np.array(per_run)

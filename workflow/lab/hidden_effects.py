@@ -4,7 +4,7 @@ Each case is a small campaign (one configuration, ``RUNS`` runs) with the effect
 and the configuration's bearing area drawn from a range with a seed. The campaign is
 measured with the real chain (campaign reader, mode identification, band-pass + Hilbert
 envelope + segmented log decrement from :mod:`workflow.measured.runs`); the discovery's
-tests (tests/test_hidden_effects.py) and ``bench/hit_rate.py`` diagnose the segments.
+tests (tests/test_lab_hidden_effects.py) and ``bench/hit_rate.py`` diagnose the segments.
 Runs differ from run to run as the lab's ``LabSettings`` says (on by default).
 
 Two cases hold two mechanisms at once (micro-slip with a velocity-squared loss, micro-slip

@@ -17,7 +17,7 @@ cycle, gives the displacement-envelope decay rate ``s_a = -d ln a / dt =
 D omega / (2 pi a dE/da)``. The turning-point energy (not the equivalent linear system
 ``k_eq a^2 / 2``) is what makes this exact to first order for hysteretic joints: it
 agrees with a direct integration of the Dahl oscillator to ~0.1 % where the
-equivalent-linear shortcut is off by up to 3 % (tests/test_describing.py).
+equivalent-linear shortcut is off by up to 3 % (tests/test_models_averaged.py).
 
 The pipeline measures the band-passed response, i.e. the fundamental harmonic of the
 recorded quantity, whose amplitude is ``omega^n a`` (``n`` = 0, 1, 2 for displacement,

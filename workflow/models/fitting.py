@@ -125,7 +125,7 @@ def simulation_rate_hz(sample_rate_hz: float, band_hz: tuple[float, float]) -> f
     at 2560 Hz, the demo's own rate, which is kept). Between 1.6 and 12.8 kHz the
     simulated curves of the demo's Dahl and LuGre fits differ by at most 1e-2 in
     ``ln zeta`` (median 1e-4) and 4e-6 in relative frequency, below the averaged models'
-    accuracy (0.02, 1e-4) and the measured scatter (tests/test_model_fit.py).
+    accuracy (0.02, 1e-4) and the measured scatter (tests/test_models_fitting.py).
     """
     factor = max(1, int(sample_rate_hz // (SIMULATED_SAMPLES_PER_BAND_PERIOD * band_hz[1])))
     return sample_rate_hz / factor

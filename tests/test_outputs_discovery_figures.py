@@ -16,7 +16,7 @@ import pytest
 from matplotlib.colors import same_color
 
 from tests.support.discovery import diagnose_with_details
-from tests.test_discovery import synthetic_segments
+from tests.test_discovery_synthetic import synthetic_segments
 from workflow.discovery.campaign import RESIDUAL_COLUMNS, residual_table
 from workflow.discovery.heldout import amplitude_bin
 from workflow.discovery.wording import two_digits

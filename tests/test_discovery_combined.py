@@ -24,7 +24,7 @@ EXPLAINS_SCATTERS = 2.0
 TYPICAL_SCATTER = (0.015, 2e-5)
 """The lab campaigns' typical scatter of ``ln zeta`` and of the relative frequency."""
 BASE_SEED = 20240
-"""tests/test_hidden_effects.py's base seed."""
+"""tests/test_lab_hidden_effects.py's base seed."""
 
 
 def truth_data(area_in2: float, effect: str, size: float) -> tuple[ConfigurationData, Scatter]:

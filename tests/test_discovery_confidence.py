@@ -4,13 +4,14 @@
 import numpy as np
 import pytest
 
-from workflow.discovery.combined import combination_test
+from workflow.discovery.combined import PAIRED_FALSE_ALARM, combination_test
 from workflow.discovery.confidence import (
-    ChannelEvidence,
+    HeldoutEvidence,
     VerdictOption,
+    beyond_accuracy,
     dirichlet_unit_weights,
+    log_density,
     mean_probabilities,
-    pooled_log_density,
     soft_decisions,
     verdict_key,
 )
@@ -19,18 +20,35 @@ N_UNITS = 8
 RULE = {"clear_gain": 0.7, "residual_gain": 0.7, "envelope_structure": False}
 
 
-def channel(errors: dict[str, float], spread: float, seed: int, n_eff: int = 40) -> ChannelEvidence:
+def with_squares(squares: dict[str, np.ndarray], tolerance: float, n_eff: int = 40) -> HeldoutEvidence:
+    """Evidence of ``N_UNITS`` runs of unit weight whose per-run squared held-out errors
+    are ``squares`` on the damping curve, the frequency curve fitted exactly (0) by every
+    model, and the models' accuracy ``tolerance`` (squared, in scatter units) per run."""
+    curves = {m: np.array([2.0 * v, np.zeros(N_UNITS)]) for m, v in squares.items()}
+    return HeldoutEvidence(curves, np.full((2, N_UNITS), tolerance), np.ones(N_UNITS), n_eff)
+
+
+def channel(
+    errors: dict[str, float], spread: float, seed: int, n_eff: int = 40, tolerance: float = 100.0
+) -> HeldoutEvidence:
     """Held-out sums of ``N_UNITS`` runs of unit weight: model ``m``'s squared error per run
-    is ``errors[m]^2`` times a common run factor and its own lognormal scatter ``spread``."""
+    (both curves) is ``errors[m]^2`` times a common run factor and its own lognormal scatter
+    ``spread``. The default ``tolerance``, far above every error, is data whose scatter is
+    small against the models' accuracy: the relative margin alone decides."""
     rng = np.random.default_rng(seed)
     common = rng.lognormal(0.0, 0.3, N_UNITS)
     squares = {m: e**2 * common * rng.lognormal(0.0, spread, N_UNITS) for m, e in errors.items()}
-    return ChannelEvidence(squares, np.ones(N_UNITS), n_eff)
+    return with_squares(squares, tolerance, n_eff)
 
 
-def decide_softly(channels, options, *, baseline_fails=False, n_draws=400, seed=0):
+def squares_of(ev: HeldoutEvidence) -> dict[str, np.ndarray]:
+    """Per model, the per-run squared held-out error of both curves."""
+    return {m: v.mean(axis=0) for m, v in ev.unit_curve_squares.items()}
+
+
+def decide_softly(evidence, options, *, baseline_fails=False, n_draws=400, seed=0):
     draws = dirichlet_unit_weights(n_draws, N_UNITS, np.random.default_rng(seed))
-    p, ratio = soft_decisions(channels, ["dahl"], options, baseline_fails=baseline_fails, draws=draws, **RULE)
+    p, ratio = soft_decisions(evidence, ["dahl"], options, baseline_fails=baseline_fails, draws=draws, **RULE)
     return mean_probabilities(p), p, ratio
 
 
@@ -42,10 +60,10 @@ def test_dirichlet_weights_keep_every_unit_and_average_to_the_data():
     np.testing.assert_allclose(w.mean(axis=0), 1.0, atol=0.04)
 
 
-def test_log_density_with_one_channel_returns_its_error():
+def test_log_density_returns_the_heldout_error():
     ev = channel({"dahl": 2.0, "iwan": 1.0}, 0.1, seed=3)
-    elpd, error = pooled_log_density([ev], ["dahl", "iwan"], np.ones((1, N_UNITS)))
-    direct = np.sqrt([ev.unit_squares[m].sum() / N_UNITS for m in ("dahl", "iwan")])
+    elpd, error = log_density(ev, ["dahl", "iwan"], np.ones((1, N_UNITS)))
+    direct = np.sqrt([squares_of(ev)[m].sum() / N_UNITS for m in ("dahl", "iwan")])
     np.testing.assert_allclose(error[:, 0], direct, rtol=1e-12)
     # Gaussian with its own variance E^2: elpd = -n/2 (ln E^2 + 1)
     np.testing.assert_allclose(elpd[:, 0], -0.5 * 40 * (np.log(direct**2) + 1.0), rtol=1e-12)
@@ -59,26 +77,12 @@ def test_tied_candidates_share_the_confidence():
         VerdictOption("quadratic_damping", "dahl_quadratic"),
         VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
     ]
-    confidence, p, _ = decide_softly([ev], options)
+    confidence, p, _ = decide_softly(ev, options)
     assert 0.2 < confidence["quadratic_damping"] < 0.8
     assert 0.2 < confidence["stiffness_nonlinearity"] < 0.8
     assert sum(confidence.values()) == pytest.approx(1.0)
     for b in range(400):  # every draw is a probability vector
         assert sum(v[b] for v in p.values()) == pytest.approx(1.0)
-
-
-def test_a_duplicated_channel_does_not_make_a_tie_sure():
-    """The same sensor twice doubles the observations, not the evidence that one of two
-    tied models is better: the tie stays shared (the draws' winner still alternates)."""
-    ev = channel({"dahl": 1.0, "dahl_quadratic": 0.5, "dahl_stiffness": 0.505}, 0.15, seed=5)
-    options = [
-        VerdictOption("quadratic_damping", "dahl_quadratic"),
-        VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
-    ]
-    once, _, _ = decide_softly([ev], options)
-    twice, _, _ = decide_softly([ev, ev], options)
-    assert max(twice.values()) < 0.9
-    assert abs(twice["quadratic_damping"] - once["quadratic_damping"]) < 0.2
 
 
 def test_a_clear_leader_takes_the_confidence():
@@ -87,7 +91,7 @@ def test_a_clear_leader_takes_the_confidence():
         VerdictOption("microslip_power_law", "iwan"),
         VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
     ]
-    confidence, _, ratio = decide_softly([ev], options)
+    confidence, _, ratio = decide_softly(ev, options)
     assert confidence["microslip_power_law"] > 0.99
     # the gain ratio of the draws is the leader's, 0.3 up to the run scatter
     assert np.median(ratio) == pytest.approx(0.3, rel=0.15)
@@ -97,29 +101,71 @@ def test_a_small_gain_without_a_baseline_misfit_is_not_confident_of_an_effect():
     """No-effect campaigns: an extension absorbs the models' own bias to ~0.85 of the
     baseline's error. Without a significant misfit the gate (0.7) is rarely passed."""
     ev = channel({"dahl": 1.0, "dahl_drift": 0.85}, 0.1, seed=11)
-    confidence, _, _ = decide_softly([ev], [VerdictOption("run_drift", "dahl_drift")])
+    confidence, _, _ = decide_softly(ev, [VerdictOption("run_drift", "dahl_drift")])
     assert confidence["none"] > 0.9
 
 
 def test_a_gain_at_the_margin_is_uncertain():
     """A gain ratio at the margin itself: about half of the reweightings pass it."""
     ev = channel({"dahl": 1.0, "dahl_drift": 0.7}, 0.2, seed=13)
-    squares = dict(ev.unit_squares)  # the all-data ratio exactly at the margin
+    squares = squares_of(ev)  # the all-data ratio exactly at the margin
     squares["dahl_drift"] = (
         squares["dahl_drift"] * 0.7**2 * squares["dahl"].sum() / squares["dahl_drift"].sum()
     )
-    ev = ChannelEvidence(squares, ev.unit_weights, ev.effective_observations)
-    confidence, _, _ = decide_softly([ev], [VerdictOption("run_drift", "dahl_drift")])
+    ev = with_squares(squares, 100.0)
+    confidence, _, _ = decide_softly(ev, [VerdictOption("run_drift", "dahl_drift")])
+    assert 0.2 < confidence["none"] < 0.8
+
+
+def test_beyond_accuracy_is_the_removed_misfit_against_the_models_accuracy():
+    """Removed squared error per curve against the tolerance, reweighted per draw."""
+    tolerance = np.array([[0.1, 0.1], [4.0, 4.0]])
+    base = np.array([[1.5, 1.0], [9.0, 9.0]])
+    # damping: 0.25 removed per unit against 0.1 (beyond); frequency: 3 against 4 (within)
+    option = np.array([[1.25, 0.75], [6.0, 6.0]])
+    assert beyond_accuracy(base, option, tolerance, np.ones((1, 2))).tolist() == [True]
+    assert beyond_accuracy(base, option, tolerance * 3.0, np.ones((1, 2))).tolist() == [False]
+    # one unit removes 0.05 only: the draw that weighs it alone is within the accuracy
+    option = np.array([[1.0, 0.95], [9.0, 9.0]])
+    assert beyond_accuracy(base, option, tolerance, np.array([[2.0, 0.0], [0.0, 2.0]])).tolist() == [
+        True,
+        False,
+    ]
+
+
+def test_a_small_gain_in_a_large_scatter_is_an_effect_when_it_exceeds_the_accuracy():
+    """A sensor near a node of the mode: the scatter is 13 times the models' accuracy
+    (tolerance (1/13)^2 = 0.006 in squared scatter units), so a joint effect of a few times
+    the accuracy lowers the held-out error only to 0.86 of the baseline's, far from the
+    relative margin (0.7). That gain is 40 times the accuracy: the departure is sure,
+    where the relative margin alone reads it as none."""
+    errors = {"dahl": 1.0, "dahl_drift": 0.86}
+    noisy = channel(errors, 0.1, seed=29, tolerance=(1 / 13) ** 2)
+    confidence, _, _ = decide_softly(noisy, [VerdictOption("run_drift", "dahl_drift")])
+    assert confidence["run_drift"] > 0.9
+    precise = channel(errors, 0.1, seed=29)
+    confidence, _, _ = decide_softly(precise, [VerdictOption("run_drift", "dahl_drift")])
+    assert confidence["none"] > 0.9
+
+
+def test_a_gain_at_the_models_accuracy_is_uncertain():
+    """What an option removes, across the runs, about equal to the models' accuracy: the
+    data cannot tell an effect from the models' own inaccuracy, so neither is sure."""
+    ev = channel({"dahl": 1.0, "dahl_drift": 0.95}, 0.3, seed=31)
+    damping = {m: v[0] for m, v in ev.unit_curve_squares.items()}
+    removed = float(np.mean(damping["dahl"] - damping["dahl_drift"]))
+    ev = HeldoutEvidence(ev.unit_curve_squares, np.full((2, N_UNITS), removed), ev.unit_weights, 40)
+    confidence, _, _ = decide_softly(ev, [VerdictOption("run_drift", "dahl_drift")])
     assert 0.2 < confidence["none"] < 0.8
 
 
 def test_ineligible_and_misfitting_options():
     ev = channel({"dahl": 1.0, "dahl_stiffness": 0.3, "iwan": 0.8}, 0.1, seed=17)
     vetoed = [VerdictOption("stiffness_nonlinearity", "dahl_stiffness", eligible=False)]
-    confidence, _, _ = decide_softly([ev], vetoed, baseline_fails=True)
+    confidence, _, _ = decide_softly(ev, vetoed, baseline_fails=True)
     assert confidence == {"unknown": 1.0}
     misfit = [VerdictOption("microslip_power_law", "iwan", residual_significant=True)]
-    confidence, _, _ = decide_softly([ev], misfit, baseline_fails=True)
+    confidence, _, _ = decide_softly(ev, misfit, baseline_fails=True)
     assert confidence["unknown"] > 0.95  # 0.8 of the baseline's error does not reach 0.7
 
 
@@ -143,7 +189,7 @@ def test_combination_named_only_when_both_parts_add_more_than_their_scatter():
     assert not combination_test(combined, parts, baseline, w)["named"]
     # both add, but one only a twentieth of the gain: not a second cause
     parts = {"a": combined + 2.85, "b": combined + 0.15}
-    assert not combination_test(combined, parts, baseline, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, parts, baseline, w, critical_t=0.0)["named"]
 
 
 def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leaves():
@@ -162,7 +208,45 @@ def test_a_second_mechanism_is_judged_by_what_it_removes_of_what_the_first_leave
     assert result["removed"]["loss"] > 0.99
     assert result["named"] and result["causes"] == ["microslip", "loss"]
     polish = {"microslip": combined + 1290.0 * spread, "loss": combined + 0.1 * 1.7 * spread}
-    assert not combination_test(combined, polish, combined + 6700.0, w, paired_standard_errors=0.0)["named"]
+    assert not combination_test(combined, polish, combined + 6700.0, w, critical_t=0.0)["named"]
+
+
+def test_a_mechanism_that_does_nothing_is_named_at_the_stated_false_alarm_rate():
+    """Eight runs, a second term that adds nothing (each run's paired difference of squared
+    held-out errors drawn around zero): each part's test fires at its one-sided 2.5 %, not at
+    the 4.3 % of a fixed 2 standard errors estimated from the same eight runs. Binomial
+    sd of the rate over 4000 draws: 0.0025; the band is 4 sd."""
+    rng = np.random.default_rng(31)
+    w = np.ones(N_UNITS)
+    fired = 0
+    draws = 4000
+    for _ in range(draws):
+        combined = np.full(N_UNITS, 1.0)
+        parts = {"a": combined + 0.1 * rng.standard_normal(N_UNITS), "b": np.full(N_UNITS, 100.0)}
+        fired += combination_test(combined, parts, np.full(N_UNITS, 200.0), w, min_removed=0.0)["named"]
+    assert abs(fired / draws - PAIRED_FALSE_ALARM) < 0.01
+
+
+def test_a_mechanism_that_divides_every_runs_error_is_named_whatever_the_runs_levels():
+    """Micro-slip + hardening spring (lab, seed 620): the combination divides every run's
+    squared held-out error of the stiffness term alone by a large factor (16.9^2 to 1.0^2
+    in scatter units overall). A run hit harder has larger errors, both models' alike: the
+    verdict must not change when one run's level is 30 times the others'. The paired
+    differences then scatter as widely as that run (1.4 standard errors: refused);
+    the runs' log ratios do not move."""
+    rng = np.random.default_rng(8)
+    w = np.ones(N_UNITS)
+    combined = 0.3 * np.exp(0.3 * rng.standard_normal(N_UNITS))
+    stiffness_alone = 285.0 * 0.3 * np.exp(0.7 * rng.standard_normal(N_UNITS))
+    level = np.ones(N_UNITS)
+    level[0] = 30.0
+    for scale in (np.ones(N_UNITS), level):
+        parts = {"microslip": stiffness_alone * scale, "stiffness": 30.0 * combined * scale}
+        result = combination_test(combined * scale, parts, 2.0 * stiffness_alone * scale, w)
+        assert result["named"], result
+        assert result["log_ratio_t"]["microslip"] > 10.0
+    difference_t = result["contributions"]["microslip"] / result["standard_errors"]["microslip"]
+    assert difference_t < 2.0  # what a paired test of the differences reads
 
 
 def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():

@@ -4,7 +4,7 @@ frequency and segment layout are known analytically."""
 
 import numpy as np
 import pytest
-from test_decay import band, ring_down
+from test_measured_decay import band, ring_down
 
 from workflow.io.interim import ModeInfo
 from workflow.io.records import RunRecord

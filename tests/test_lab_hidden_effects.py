@@ -134,20 +134,7 @@ NODE_GAIN = 0.05
 same noise floor (26 dB less signal), the other modes as they are where it stands."""
 
 
-@pytest.mark.parametrize(
-    "cause",
-    [
-        pytest.param(
-            "run_drift",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="known limitation: at x0.05 the drift's gain ratio is 0.86 in a scatter of 0.26 "
-                "in ln zeta, and the gate reads the missing evidence as none (0.84-0.88 sure)",
-            ),
-        ),
-        "microslip_power_law",
-    ],
-)
+@pytest.mark.parametrize("cause", ["run_drift", "quadratic_damping", "microslip_power_law"])
 def test_a_sensor_near_a_node_may_be_less_sure_never_sure_of_something_else(cause, tmp_path):
     """The same ring-downs seen at the accelerometer and near a node of mode 1: the two
     verdicts are the same, or at most one of them is 0.7 sure (output contract)."""

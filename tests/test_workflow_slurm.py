@@ -9,7 +9,7 @@ with pandas, not byte for byte: Parquet files embed writer metadata).
 Needs a SLURM cluster that answers ``sinfo`` and the executor plugin
 (``pip install -e '.[slurm]'``); otherwise it is skipped with the reason. On this
 machine, as root: ``.ci/slurm_up.sh --install``, then
-``pytest tests/test_slurm.py``, then ``.ci/slurm_down.sh``. With
+``pytest tests/test_workflow_slurm.py``, then ``.ci/slurm_down.sh``. With
 ``LAPJOINT_REQUIRE_SLURM=1`` (as in CI) a missing cluster fails the test instead.
 """
 

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from tests.support.discovery import diagnose_with_details
-from tests.test_discovery import DAHL, FAST, synthetic_segments
+from tests.test_discovery_synthetic import DAHL, FAST, synthetic_segments
 from workflow.discovery.campaign import (
     campaign_document,
     campaign_fit_context,

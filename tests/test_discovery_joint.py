@@ -134,20 +134,7 @@ def test_the_joint_analysis_names_the_case(cause, three_sensor_cases):
     assert joint_entry(three_sensor_cases(cause))[0] == verdict_key(cause.split("+"))
 
 
-PER_SENSOR_MISCALIBRATION = {
-    cause: pytest.mark.xfail(
-        strict=True, reason=f"issue 31 item 3, per sensor: {why}; the joint analysis names the case"
-    )
-    for cause, why in {
-        "run_drift": "the node sensor (x0.05) alone is 0.88 sure of none, the other two 1.00 of run drift",
-        "quadratic_damping": "the node sensor (x0.05) alone is 1.00 sure of none, the other two of quadratic damping",
-    }.items()
-}
-
-
-@pytest.mark.parametrize(
-    "cause", [pytest.param(cause, marks=PER_SENSOR_MISCALIBRATION.get(cause, ())) for cause in CASES]
-)
+@pytest.mark.parametrize("cause", list(CASES))
 def test_no_two_sensors_are_sure_of_different_causes(cause, three_sensor_cases):
     """Issue 31's placement property on each cause the lab has: each sensor's own verdict
     (the ``channels`` consistency check) may be less sure where it sees less, but no two

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy import stats
-from test_discovery import DAHL, FAST, synthetic_segments
-from test_hidden_effects import run_case
+from test_discovery_synthetic import DAHL, FAST, synthetic_segments
+from test_lab_hidden_effects import run_case
 
 from workflow.discovery import decision
 from workflow.discovery.campaign import diagnose_campaign
@@ -65,7 +65,7 @@ REASONS = {
     "by more than ENVELOPE_DEPARTURE_LIMIT of their decay: a disturbance outside every single-mode model "
     "(e.g. a second mode beating in the band)",
     "none": "no significant misfit of the baseline and no candidate reduces the held-out error below 0.7 "
-    "of the baseline's",
+    "of the baseline's or removes more held-out misfit than the models' accuracy",
     "no_candidate": "the baseline misfit is significant but no candidate lowers both the held-out error and "
     "the BIC with its cause's signature",
     "misfit_left": "the best eligible candidate (quadratic_damping) leaves a significant misfit and cuts the "
@@ -84,6 +84,11 @@ def test_each_branch_of_the_rule_says_why():
         REASONS["envelope"],
     )
     assert decide(1.0, 10.0, False, {"quadratic_damping": weak}) == ("none", REASONS["none"])
+    # the same small gain in a scatter many times the models' accuracy: more than it removes
+    assert decide(1.0, 10.0, False, {"quadratic_damping": {**weak, "beyond_accuracy": True}}) == (
+        "quadratic_damping",
+        REASONS["named_gain"],
+    )
     assert decide(1.0, 10.0, True, {"quadratic_damping": candidate(1.1)}) == (
         "unknown",
         REASONS["no_candidate"],

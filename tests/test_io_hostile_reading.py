@@ -17,7 +17,7 @@ import pandas as pd
 import pytest
 from helpers import run_snakemake
 from system_format_files import lms_export_group, write_mat73, write_plain_mat, write_tdms, write_testlab_mat
-from test_hostile_inputs import BASE_YAML, FS_HZ, make_campaign, run_text
+from test_io_hostile_inputs import BASE_YAML, FS_HZ, make_campaign, run_text
 
 from workflow.io import limits
 from workflow.io.campaign import load_campaign
