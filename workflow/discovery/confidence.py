@@ -166,8 +166,10 @@ def beyond_accuracy(
     reweighting of the units.
 
     On either curve, the baseline's squared held-out error minus the option's (both over
-    the measured scatter) exceeds the squared accuracy of the averaged models over the same
-    scatter (``TOL_LN_ZETA``, ``TOL_REL_F``), amplitude weighted alike: what the option
+    the scale held-out residuals are scored in: the measured scatter and a held-out run's
+    offset uncertainty, :func:`~workflow.discovery.heldout.heldout_scales`) exceeds the
+    squared accuracy of the averaged models over the same scale (``TOL_LN_ZETA``,
+    ``TOL_REL_F``), amplitude weighted alike: what the option
     explains is more than a misfit of the models' own accuracy at every amplitude could be.
     This margin scales with the data: where the scatter is large (a sensor near a node)
     an effect several times the accuracy moves the held-out error by a few percent, far

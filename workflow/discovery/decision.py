@@ -31,7 +31,7 @@ from workflow.discovery.heldout import (
     weighted_rms,
 )
 from workflow.discovery.misfit import binned_discrepancy, failure_draws, run_order_trend
-from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData, scatter_of
+from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData
 
 __all__ = [
     "CAUSE_MODELS",
@@ -300,7 +300,8 @@ def evaluate_decision(
         ``extended_models``, and per unit of held-out evidence (:func:`heldout_units`)
         ``unit_squares`` (per model), ``unit_curve_squares`` (per model, shape (2, U):
         damping, frequency), ``unit_tolerance`` (shape (2, U): the models' accuracy over
-        the scatter, squared, summed alike) and ``unit_weights``, for the confidence.
+        the scale the baseline's held-out residuals are scored in,
+        :func:`~workflow.discovery.heldout.heldout_scales`, squared, summed alike) and ``unit_weights``, for the confidence.
     """
     view = data
     n_runs_view = view.n_runs
@@ -315,13 +316,6 @@ def evaluate_decision(
         return np.bincount(units[scored], weights=(weights * values)[scored], minlength=n_units)
 
     unit_weights = per_unit(np.ones(view.n))
-    scatter = scatter_of(view)
-    unit_tolerance = np.array(
-        [
-            per_unit((TOL_LN_ZETA / scatter.noise_ln_zeta) ** 2),
-            per_unit((TOL_REL_F / scatter.noise_rel_f) ** 2),
-        ]
-    )
     errors, bic, residuals, unit_squares, unit_curve_squares = {}, {}, {}, {}, {}
     for m, ev in evidence.items():
         square = 0.5 * (ev.heldout["squared_zeta"] + ev.heldout["squared_frequency"])
@@ -353,6 +347,13 @@ def evaluate_decision(
         offsets = 2 * (n_runs_view - 1) if n_runs_view >= 2 else 0  # frequency and zeta0 per run
         bic[m] = information_criterion(in_sample, ev.n_params + offsets, n_eff)
     base = min((m for m in BASELINE_MODELS if m in evidence), key=lambda m: errors[m]["error"])
+    # the models' accuracy in the units the held-out residuals are scored in (the baseline's)
+    unit_tolerance = np.array(
+        [
+            per_unit((TOL_LN_ZETA / evidence[base].heldout["scale_zeta"]) ** 2),
+            per_unit((TOL_REL_F / evidence[base].heldout["scale_frequency"]) ** 2),
+        ]
+    )
     bins = binned_discrepancy(view, residuals[base])
     trend = run_order_trend(view, residuals[base], n_tests=RUN_ORDER_TESTS)
     baseline_fails = (
