@@ -438,8 +438,9 @@ def envelope_rise(envelope: np.ndarray, starts: np.ndarray, stops: np.ndarray) -
     envelope = np.asarray(envelope, dtype=float)
     rises = np.zeros(len(starts))
     for rows, length in _segment_blocks(starts, stops):
-        values = sliding_window_view(envelope, length)[np.asarray(starts)[rows]]
-        rises[rows] = np.max(values - np.minimum.accumulate(values, axis=1), axis=1)
+        values = _window_rows(envelope, length, np.asarray(starts)[rows])
+        lowest = np.minimum.accumulate(values, axis=1)
+        rises[rows] = np.max(np.subtract(values, lowest, out=lowest), axis=1)
     return rises
 
 
@@ -516,7 +517,7 @@ def _noise_standard_errors(
     relative_power = (sigma / np.maximum(env, 1e-300)) ** 2
     for rows, length in _segment_blocks(starts, stops):
         duration_s = length / fs_hz
-        relative = sliding_window_view(relative_power, length)[starts[rows]].mean(axis=1)
+        relative = _window_rows(relative_power, length, starts[rows]).mean(axis=1)
         slope_std = np.sqrt(12.0 * relative / (bandwidth_hz * duration_s**3))
         zeta_std[rows] = slope_std / (2.0 * np.pi * frequency_hz[rows])
         frequency_std[rows] = slope_std / (2.0 * np.pi)
