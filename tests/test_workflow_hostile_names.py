@@ -179,7 +179,9 @@ def test_first_page_and_captions_show_names_as_text(hostile):
     _, results, description = report_parts(workdir)
     assert injected(description) == []
     shown = html.unescape(description)
-    assert "{{ 7*7 }}" in shown and "49" not in shown
+    # evaluated, the expression would read 49 before the name's next part (a bare "49"
+    # may be any number of the verdict, a held-out error of 1.49)
+    assert "{{ 7*7 }}" in shown and f"49 {MATH}" not in shown
     assert "System Message" not in shown
     assert ".. raw:: html" in shown  # the name is shown, as text
     for path, entry in results.items():
