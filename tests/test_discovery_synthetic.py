@@ -16,6 +16,7 @@ from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate, folds_of
 from workflow.discovery.microslip import iwan_as_cells
 from workflow.discovery.misfit import (
     binned_discrepancy,
+    envelope_structure,
     explains_data,
     misfit_significant,
     run_order_trend,
@@ -182,6 +183,26 @@ def test_envelopes_that_are_not_decays_give_unknown():
     assert conf["cause"] == "unknown"
     assert conf["evidence"]["envelope_structure"]["significant"]
     assert conf["extended_model"]["removes_misfit"] is False
+
+
+def test_envelope_check_takes_noise_for_noise_even_where_it_is_large():
+    """A sensor near a node of the mode: its departures fall as 1 / amplitude (additive
+    noise) but stand at 10-30 % of the fall over the upper half of each run, above the
+    5 % limit; a second mode adds a steady 10 %. Only the steady part is structure."""
+    segments = synthetic_segments("dahl", DAHL, seed=3)
+    fall = 2 * np.pi * 10 * segments["zeta"]
+    v = segments["velocity_amplitude_in_s"]
+    top = v == v.groupby(segments["run"]).transform("max")
+    # additive noise moves the ln-envelope by noise / amplitude: 10 % of the fall at the top
+    at_top = (fall * top).groupby(segments["run"]).transform("max")
+    noise = 0.1 * at_top * v.groupby(segments["run"]).transform("max") / v
+    noisy = segments.assign(fit_rms=noise)
+    assert not envelope_structure(prepare_configuration(noisy, "c"))["significant"]
+    beating = segments.assign(fit_rms=np.hypot(noise, 0.1 * fall))
+    structure = envelope_structure(prepare_configuration(beating, "c"))
+    assert structure["significant"]
+    # the steady part recovered to the noise's leak through the least squares (~10 %)
+    assert structure["departure_ratio"] == pytest.approx(0.1, rel=0.15)
 
 
 def test_single_run_uses_amplitude_blocks_and_still_decides():

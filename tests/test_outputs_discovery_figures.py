@@ -6,6 +6,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import copy
+import html
 import re
 
 import numpy as np
@@ -23,8 +25,11 @@ from workflow.models.averaged import CurveGrid, model_curves
 from workflow.models.averaged_fit import apply_run_offsets
 from workflow.models.settings import DiscoverySettings
 from workflow.outputs import discovery_figures as dfig
+from workflow.outputs import verdict_page
 from workflow.outputs.figures import save
+from workflow.outputs.plain_words import left_out_caveat
 from workflow.outputs.readability import readability_problems
+from workflow.outputs.report_html import fmt
 
 FAST = DiscoverySettings(global_samples=64, local_starts=2)
 IWAN = {
@@ -260,3 +265,27 @@ def test_candidates_close_together_are_read_off_labelled_ticks():
     assert labelled[0] <= min(scores.values()) and labelled[-1] >= max(scores.values())
     assert np.max(np.diff(labelled)) <= 0.1 + 1e-9
     assert readability_problems(fig) == []
+
+
+def test_across_configurations_sentence_quotes_the_heldout_figure(diagnosis):
+    # the demo: the page said 1730 and 1180 beside the figure's legend "mean 1,731" and "1,178"
+    _, document, _ = diagnosis
+    far = copy.deepcopy(document)  # both models far off: the caveat, on the page and the figure
+    for entry in far["across_configurations"]["configurations"].values():
+        entry["baseline_error"], entry["extended_error"] = 1731.0, 1178.0
+    far["across_configurations"].update(baseline_mean_error=1731.0, extended_mean_error=1178.0)
+    for doc in (document, far):
+        across = doc["across_configurations"]
+        fig = dfig.heldout_figure(doc)
+        legend = " ".join(t.get_text() for t in fig.axes[0].get_legend().get_texts())
+        notes = " ".join(t.get_text().replace("\n", " ") for t in fig.texts)
+        page = html.unescape(verdict_page.verdict_html(doc))
+        for role, lead in (("baseline", "is"), ("extended", "and")):
+            mean = fmt(across[f"{role}_mean_error"])
+            assert f"(mean {mean})" in legend and f"{lead} {mean} for" in page, (role, mean)
+        caveat = left_out_caveat(
+            [e for c in across["configurations"].values() for e in (c["baseline_error"], c["extended_error"])]
+        )
+        if caveat:
+            assert caveat in page and caveat in notes
+    assert caveat is not None  # the far document has one

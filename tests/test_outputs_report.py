@@ -1005,3 +1005,36 @@ def test_remaining_misfit_is_said_of_the_candidate_it_belongs_to(document):
         item.startswith("Iwan micro-slip with slip thresholds from the data explains the data")
         for item in items
     )
+
+
+def test_area_hypothesis_counts_the_amplitudes_figure_13_draws(document):
+    # the demo: "H2 ... supported at 6 of 6 amplitudes" beside figure 13's five amplitudes;
+    # the sixth test was the mean of the five slopes
+    amplitudes = [0.63, 0.742, 0.873, 1.03, 1.21]
+    areas = [0.17, 0.66, 1.36]
+    area_table = pd.DataFrame(
+        [(v, a, 0.0008 + 0.0006 * a) for v in amplitudes for a in areas],
+        columns=["velocity_amplitude_in_s", "bearing_area_in2", "zeta"],
+    )
+    figure = figures.area_fits(pd.DataFrame(columns=["configuration"]), area_table, title="t")
+    drawn = [t.get_text() for t in figure.axes[1].get_legend().get_texts()]
+    hypotheses = pd.DataFrame(
+        {
+            "hypothesis": "H2: damping rises with bearing area",
+            "configuration": "all",
+            "statistic": [f"slope at velocity amplitude {v} in/s, 1/in^2" for v in amplitudes]
+            + ["mean over the common velocity amplitudes of the slope, 1/in^2"],
+            "estimate": 7e-4,
+            "ci_low": 6e-4,
+            "ci_high": 8e-4,
+            "verdict": "supported",
+            "amplitude_low_in_s": [*amplitudes, amplitudes[0]],
+            "amplitude_high_in_s": [*amplitudes, amplitudes[-1]],
+            "note": "",
+        }
+    )
+    counted = f"at {len(drawn)} of {len(drawn)} amplitudes"
+    landing = landing_page.verdict_rst(document, hypotheses=hypotheses).replace("\\", "")
+    assert f"supported {counted}, supported over their mean" in landing
+    page = html.unescape(verdict_page.verdict_html(document, hypotheses=hypotheses))
+    assert f"supported {counted}" in page and "of 6" not in page and "of 6" not in landing

@@ -5,11 +5,14 @@ Its confidence carries the two uncertainties behind it:
 
 * **Is there a departure from the baseline at all?** The decision's gate (a significant
   baseline misfit, or a candidate predicting held-out data better than ``CLEAR_GAIN`` of
-  the baseline's error) is re-taken on Bayesian-bootstrap reweightings of the
+  the baseline's error or removing more held-out misfit than the models' accuracy,
+  :func:`beyond_accuracy`) is re-taken on Bayesian-bootstrap reweightings of the
   independent units of held-out evidence (runs; with one run, half decades of
   amplitude): every unit keeps a Dirichlet(1, ..., 1) weight, so no unit is ever left out
   (a multinomial resample of five amplitude blocks leaves the top one out in a third of
-  the draws, which is what the confidence then measured).
+  the draws). The accuracy margin carries the data's power: where the scatter is many
+  times the models' accuracy, a small gain passes it in the reweightings that show it, so
+  a scatter too large to show an effect does not make ``none`` sure.
 * **Which mechanism?** Within each reweighting the candidates share the departure by
   pseudo-BMA+ weights (Yao et al. 2018): the held-out log predictive density of each
   candidate, a Gaussian with the candidate's own discrepancy variance (its squared
@@ -22,7 +25,7 @@ Its confidence carries the two uncertainties behind it:
 Several channels (sensors) of one hit are pooled before this point into one
 configuration's data (:mod:`workflow.discovery.joint`: each channel in its own scatter
 units, the runs shared), so their evidence reaches the confidence as one
-:class:`ChannelEvidence` whose units and ``n_eff`` are the runs and cells of the hit, not
+:class:`HeldoutEvidence` whose units and ``n_eff`` are the runs and cells of the hit, not
 one per sensor: nothing is voted or multiplied across sensors, and a duplicated sensor
 adds no evidence.
 """

@@ -27,10 +27,10 @@ from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
 from workflow.outputs.plain_words import left_out_caveat  # noqa: E402
+from workflow.outputs.report_html import fmt  # noqa: E402
 
 __all__ = [
     "binned_means",
-    "plain_number",
     "residual_ticks",
     "residuals_figure",
     "candidate_rows",
@@ -115,13 +115,6 @@ def _draw_binned_means(
                 centres[mask], means[mask], "o", color=colour, mfc=face, mew=1.5, ms=6, label=label
             )
             line.set_gid(f"{role} binned mean")
-
-
-def plain_number(value: float) -> str:
-    """3 significant digits without exponent notation: 0.0123, 1.41, 1,410."""
-    if abs(value) >= 1000:
-        return f"{value:,.0f}"
-    return f"{value:.3g}"
 
 
 def residual_ticks(limit: float) -> list[float]:
@@ -408,7 +401,7 @@ def heldout_figure(document: Mapping, units: UnitSystem = INCH_SECOND) -> plt.Fi
             errors = np.array([e if e is not None else np.nan for e in errors], dtype=float)
             worst.append(errors)
             mean = across.get(f"{role}_mean_error")
-            label = f"{role}: {models[role]}" + (f" (mean {plain_number(mean)})" if mean is not None else "")
+            label = f"{role}: {models[role]}" + (f" (mean {fmt(mean)})" if mean is not None else "")
             ax.plot(x, errors, markers[role], ms=8, color=ROLE_COLOURS[role], label=label)
         for position in x:
             values = [errors[position] for errors in worst if np.isfinite(errors[position])]

@@ -20,6 +20,7 @@ from workflow.outputs.report_wording import (
     discrepancy_text,
     excluded_runs,
     explains_sentences,
+    hypothesis_verdicts,
     margin_words,
     measured_trends,
     model_name,
@@ -115,13 +116,12 @@ def verdict_rst(
         for hypothesis, part in hypotheses.groupby("hypothesis", sort=False):
             verdicts = []
             for configuration, sub in part.groupby("configuration", sort=False):
-                counts = sub["verdict"].value_counts()
-                if len(sub) == 1:
-                    verdicts.append(f"{sub['verdict'].iloc[0]} for {configuration}")
-                else:
-                    verdicts.append(
-                        ", ".join(f"{v} at {c} of {len(sub)} amplitudes" for v, c in counts.items())
+                verdicts.append(
+                    ", ".join(
+                        f"{v} {where}" if where else f"{v} for {configuration}"
+                        for v, where in hypothesis_verdicts(sub)
                     )
+                )
             parts.append(f"{hypothesis}: {'; '.join(verdicts)}.")
         lines += ["**The paper's hypotheses.** " + rst_text(" ".join(parts), limit=None), ""]
     if runs is not None and not runs.empty:

@@ -44,6 +44,7 @@ __all__ = [
     "discrepancy_text",
     "unidentified_parameters_of",
     "n_runs_of",
+    "hypothesis_verdicts",
     "excluded_runs",
 ]
 
@@ -522,6 +523,29 @@ def campaign_headline(document: Mapping) -> str:
             "the baseline's error" + (f" ({fmt(1 / best, 2)} times better)" if best > 0 else "") + "."
         )
     return text
+
+
+def hypothesis_verdicts(part: pd.DataFrame) -> list[tuple[str, str]]:
+    """The verdicts of one hypothesis in one configuration, as ``(verdict, where)``.
+
+    A test at one amplitude (``amplitude_low_in_s == amplitude_high_in_s``, one point of
+    figure 13's right panel) counts as an amplitude: ``("supported", "at 5 of 5
+    amplitudes")`` per verdict; a test over their span (the mean of the slopes) is
+    ``(verdict, "over their mean")``, never an amplitude more. A single test: ``(verdict, "")``.
+
+    Examples
+    --------
+    >>> part = pd.DataFrame({"verdict": ["supported"] * 3, "amplitude_low_in_s": [0.6, 1.0, 0.6],
+    ...                      "amplitude_high_in_s": [0.6, 1.0, 1.0]})
+    >>> hypothesis_verdicts(part)
+    [('supported', 'at 2 of 2 amplitudes'), ('supported', 'over their mean')]
+    """
+    if len(part) == 1:
+        return [(str(part["verdict"].iloc[0]), "")]
+    single = part["amplitude_low_in_s"] == part["amplitude_high_in_s"]
+    at = part[single]
+    verdicts = [(str(v), f"at {c} of {len(at)} amplitudes") for v, c in at["verdict"].value_counts().items()]
+    return verdicts + [(str(v), "over their mean") for v in part.loc[~single, "verdict"]]
 
 
 def excluded_runs(runs: pd.DataFrame) -> pd.DataFrame:

@@ -46,6 +46,7 @@ from workflow.outputs.report_wording import (
     discrepancy_text,
     excluded_runs,
     explains_sentences,
+    hypothesis_verdicts,
     margin_words,
     measured_trends,
     model_name,
@@ -200,13 +201,9 @@ def hypothesis_summary(hypotheses: pd.DataFrame, units: UnitSystem = INCH_SECOND
         return rows
     hypotheses = hypotheses_in_units(hypotheses, units)
     for (hypothesis, configuration), part in hypotheses.groupby(["hypothesis", "configuration"], sort=False):
-        counts = part["verdict"].value_counts()
-        if len(part) == 1:
-            verdicts = tag(part["verdict"].iloc[0], part["verdict"].iloc[0])
-        else:
-            verdicts = " ".join(
-                tag(f"{verdict} at {count} of {len(part)}", verdict) for verdict, count in counts.items()
-            )
+        verdicts = " ".join(
+            tag(f"{verdict} {where}".strip(), verdict) for verdict, where in hypothesis_verdicts(part)
+        )
         if (part["verdict"] == "not applicable").all():
             note = str(part["note"].iloc[0]) if "note" in part and part["note"].iloc[0] else "cannot run here"
             rows.append(
