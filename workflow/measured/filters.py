@@ -304,7 +304,10 @@ def unwrapped_phase_rad(analytic: np.ndarray) -> np.ndarray:
     >>> bool(np.array_equal(unwrapped_phase_rad(z), np.unwrap(np.angle(z))))
     True
     """
-    phase = np.angle(analytic)
+    # np.angle's own arctan2, on contiguous copies of the two parts: the same values in
+    # half the time of its strided views
+    analytic = np.asarray(analytic)
+    phase = np.arctan2(np.ascontiguousarray(analytic.imag), np.ascontiguousarray(analytic.real))
     step = np.diff(phase)
     jumps = np.flatnonzero(~(np.abs(step) < np.pi))
     if not jumps.size:
