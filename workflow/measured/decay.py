@@ -580,7 +580,12 @@ def startup_bias(
     dict of ndarray
         ``zeta_relative_error`` (estimate / truth - 1) and ``frequency_error_hz``
         (estimate - damped frequency) of each segment, on a noise-free
-        ``exp(-zeta omega_n t) sin(omega_d t)`` starting at ``onset_index``.
+        ``exp(-zeta omega_n t) sin(omega_d t)`` starting at ``onset_index``; exactly 0
+        on the segments out of both transients' reach
+        (:func:`~workflow.measured.filters.settled_samples` from the onset and from the
+        record end) while the decay stays above :data:`SYNTHETIC_ROUNDING_DEPTH` of its
+        start, the chain's answer on an endless decay (the whole record's chain gives
+        1e-11 there).
 
     Notes
     -----
