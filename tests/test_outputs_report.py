@@ -1038,3 +1038,45 @@ def test_area_hypothesis_counts_the_amplitudes_figure_13_draws(document):
     assert f"supported {counted}, supported over their mean" in landing
     page = html.unescape(verdict_page.verdict_html(document, hypotheses=hypotheses))
     assert f"supported {counted}" in page and "of 6" not in page and "of 6" not in landing
+
+
+@pytest.mark.parametrize(
+    ("baseline_fails", "gain_ratio", "beyond", "decided", "said"),
+    [
+        # UNESP: named at 0.713 because the baseline's misfit is significant; the page
+        # said "a clear gain needs a ratio below 0.70" beside it
+        (True, 0.713, False, "stiffness_nonlinearity", "the baseline's misfit is significant"),
+        (False, 0.5, False, "stiffness_nonlinearity", "below the clear-gain ratio 0.70"),
+        (False, 0.9, True, "stiffness_nonlinearity", "more held-out misfit than the models' accuracy"),
+        (False, 0.9, False, "none", None),
+    ],
+)
+def test_the_gain_sentence_gives_the_route_the_decision_took(
+    baseline_fails, gain_ratio, beyond, decided, said
+):
+    from workflow.discovery.decision import CLEAR_GAIN, decide
+
+    candidate = {
+        "model": "iwan_stiffness",
+        "heldout_error": gain_ratio,
+        "ratio_to_baseline": gain_ratio,
+        "bic": 5.0,
+        "residual_significant": False,
+        "beyond_accuracy": beyond,
+    }
+    cause, _ = decide(1.0, 10.0, baseline_fails, {"stiffness_nonlinearity": candidate})
+    assert cause == decided
+    if said is None:
+        return
+    entry = {
+        "cause": cause,
+        "gain": {"baseline": 1.0, "extended": gain_ratio, "ratio": gain_ratio},
+        "evidence": {
+            "clear_gain_threshold": CLEAR_GAIN,
+            "baseline_misfit_significant": baseline_fails,
+            "candidates": {cause: candidate},
+        },
+    }
+    (item,) = [i for i in verdict_page._sureness_items("joint", entry) if "lowers the held-out error" in i]
+    assert said in html.unescape(item)
+    assert ("a clear gain needs" in item) is False

@@ -39,6 +39,7 @@ from workflow.discovery.misfit import (
     binned_discrepancy,
     envelope_structure,
     explains_data,
+    microslip_signature,
     run_order_trend,
     stiffness_signature,
 )
@@ -213,8 +214,10 @@ def fit_combinations(
         fits[model] = fit_model(model, data, scatter, context, settings=settings, nested_start=starts)
         cv[model] = cross_validate(model, data, scatter, context, fits[model], settings=settings)
         residuals[model] = model_residuals(fits[model], data, scatter, context)
-        signature = "stiffness_shift" not in fits[model].params or bool(
-            stiffness_signature(fits[model], data)["shows_signature"]
+        # each mechanism's signature: micro-slip's on the joint, the stiffness term's where it has one
+        signature = microslip_signature(fits[model], data)["shows_signature"] and (
+            "stiffness_shift" not in fits[model].params
+            or stiffness_signature(fits[model], data)["shows_signature"]
         )
         evidence[model] = ModelEvidence(residuals[model], cv[model], len(MODELS[model].params), signature)
         log.info(
@@ -233,8 +236,8 @@ def judge_combinations(
     :func:`workflow.discovery.combined.combination_test`; one may replace the single verdict.
 
     A combination becomes the verdict (``result["verdict"]``, its ``confidence`` key) when
-    it passes the test, lowers the BIC of the baseline, shows the stiffness signature where
-    it has a stiffness term, predicts held-out data better than the single verdict's model,
+    it passes the test, lowers the BIC of the baseline, shows micro-slip's signature on its
+    joint and the stiffness signature where it has a stiffness term, predicts held-out data better than the single verdict's model,
     and does not leave a significant misfit with less than ``RESIDUAL_GAIN`` of the
     baseline's error; among several, the lower held-out error.
 

@@ -58,6 +58,7 @@ from workflow.outputs.report_wording import (
 )
 
 __all__ = [
+    "gain_route",
     "hypothesis_summary",
     "modes_section",
     "verdict_html",
@@ -99,6 +100,37 @@ def _configuration_row(name: str, entry: Mapping, area_in2: float | None, units:
     ]
 
 
+def gain_route(gain_ratio: float | None, candidate: Mapping, evidence: Mapping) -> str:
+    """Why a named candidate's gain was enough, by the decision rule's own routes
+    (:func:`workflow.discovery.decision.decide`): the baseline's misfit is significant
+    (then any candidate lowering the held-out error and the BIC may be named), or the
+    ratio is below the clear-gain threshold, or the candidate removes more held-out
+    misfit than the models' accuracy.
+
+    >>> gain_route(0.713, {}, {"clear_gain_threshold": 0.7, "baseline_misfit_significant": True})
+    "ratio 0.71; the baseline's misfit is significant, so a lower held-out error and information criterion suffice"
+    >>> gain_route(0.698, {}, {"clear_gain_threshold": 0.7, "baseline_misfit_significant": False})
+    'ratio 0.698, below the clear-gain ratio 0.70'
+    """
+    threshold = evidence.get("clear_gain_threshold")
+    text = f"ratio {ratio(gain_ratio)}"
+    if gain_ratio is not None and threshold is not None and ratio(gain_ratio) == ratio(threshold):
+        text = f"ratio {gain_ratio:.3f}"  # two decimals would read as the threshold itself
+    if evidence.get("baseline_misfit_significant"):
+        return (
+            text + "; the baseline's misfit is significant, so a lower held-out error and "
+            "information criterion suffice"
+        )
+    if gain_ratio is not None and threshold is not None and gain_ratio < threshold:
+        return text + f", below the clear-gain ratio {ratio(threshold)}"
+    if candidate.get("beyond_accuracy"):
+        return (
+            text + f", not below the clear-gain ratio {ratio(threshold)}, but it removes more "
+            "held-out misfit than the models' accuracy"
+        )
+    return text + f"; a clear gain needs a ratio below {ratio(threshold)}"
+
+
 def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[str]:
     """Plain-sentence evidence for one configuration (escaped HTML list items)."""
     evidence = entry.get("evidence") or {}
@@ -133,8 +165,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
             f"{model_name(candidate.get('model') or entry.get('extended_model', {}).get('model'))} "
             f"lowers the held-out error from {fmt(gain.get('baseline'))} to "
             f"{fmt(candidate.get('heldout_error', gain.get('extended')))} "
-            f"(ratio {ratio(candidate.get('ratio_to_baseline', gain.get('ratio')))}; a clear gain "
-            f"needs a ratio below {ratio(evidence.get('clear_gain_threshold'))})"
+            f"({gain_route(candidate.get('ratio_to_baseline', gain.get('ratio')), candidate, evidence)})"
         )
         if candidate.get("delta_bic") is not None:
             text += (
