@@ -277,7 +277,9 @@ def judge_combinations(
             "residual_significant": bool(significant),
             "eligible": bool(eligible),
         }
-        options.append(VerdictOption(key, model, bool(eligible), bool(significant)))
+        # the confidence re-takes the parsimony test on every reweighting of the units
+        rest = bic[model] < bic[base] and evidence[model].shows_signature
+        options.append(VerdictOption(key, model, bool(rest), bool(significant), parts=part_models))
     # a combination replaces the single verdict only where it also predicts better than it
     single = errors[result["extended_models"][verdict]]["error"] if verdict in CAUSE_MODELS else np.inf
     named = [
