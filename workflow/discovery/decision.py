@@ -224,8 +224,8 @@ def evaluate_decision(
     envelope_significant : bool
         :func:`~workflow.discovery.misfit.envelope_structure`'s verdict (not resampled).
     extended_models : mapping, optional
-        Cause -> the model that represents it once named, where that is not the
-        candidate of :data:`CAUSE_MODELS` (the recovered threshold distribution,
+        Cause -> the model that represents it, as candidate and once named, where that is
+        not the one of :data:`CAUSE_MODELS` (the recovered threshold distribution,
         :func:`~workflow.discovery.microslip.refine_microslip`).
 
     Returns
@@ -296,7 +296,8 @@ def evaluate_decision(
     )
     candidates = {}
     all_units = np.ones((1, n_units))
-    for cause, m in CAUSE_MODELS.items():
+    extended_models = {**CAUSE_MODELS, **(extended_models or {})}
+    for cause, m in extended_models.items():
         if m not in evidence:
             continue
         cb = binned_discrepancy(view, residuals[m])
@@ -338,7 +339,7 @@ def evaluate_decision(
         "trend": trend,
         "baseline_fails": baseline_fails,
         "candidates": candidates,
-        "extended_models": {**CAUSE_MODELS, **(extended_models or {})},
+        "extended_models": extended_models,
         "unit_squares": unit_squares,
         "unit_curve_squares": unit_curve_squares,
         "unit_tolerance": unit_tolerance,
