@@ -288,8 +288,8 @@ def evaluate_decision(
     envelope_significant : bool
         :func:`~workflow.discovery.misfit.envelope_structure`'s verdict (not resampled).
     extended_models : mapping, optional
-        Cause -> the model that represents it once named, where that is not the
-        candidate of :data:`CAUSE_MODELS` (the recovered threshold distribution,
+        Cause -> the model that represents it, as candidate and once named, where that is
+        not the one of :data:`CAUSE_MODELS` (the recovered threshold distribution,
         :func:`~workflow.discovery.microslip.refine_microslip`).
 
     Returns
@@ -362,7 +362,8 @@ def evaluate_decision(
     candidates = {}
     all_units = np.ones((1, n_units))
     critical_t = paired_critical_value(int(np.count_nonzero(unit_weights > 0)))
-    for cause, m in CAUSE_MODELS.items():
+    extended_models = {**CAUSE_MODELS, **(extended_models or {})}
+    for cause, m in extended_models.items():
         if m not in evidence:
             continue
         gain_t = heldout_gain_t(unit_squares[base], unit_squares[m], unit_weights)
@@ -407,7 +408,7 @@ def evaluate_decision(
         "trend": trend,
         "baseline_fails": baseline_fails,
         "candidates": candidates,
-        "extended_models": {**CAUSE_MODELS, **(extended_models or {})},
+        "extended_models": extended_models,
         "unit_squares": unit_squares,
         "unit_curve_squares": unit_curve_squares,
         "unit_tolerance": unit_tolerance,
