@@ -28,6 +28,7 @@ __all__ = [
     "combination_causes",
     "PAIRED_FALSE_ALARM",
     "paired_critical_value",
+    "paired_t",
     "reweighted_combination_test",
     "MIN_REMOVED_SHARE",
     "combinations_to_try",
@@ -187,6 +188,38 @@ def term_from_residuals(
     return best[1]
 
 
+def paired_t(values: np.ndarray, draws: np.ndarray | None = None) -> np.ndarray:
+    """Student's t of the weighted mean of paired values against 0, per row of unit weights.
+
+    Parameters
+    ----------
+    values : ndarray, shape (U,)
+        One value per unit of evidence (e.g. a run's log ratio of two squared errors).
+    draws : ndarray, shape (B, U), optional
+        Unit weights (e.g. Bayesian-bootstrap ones), each row scaled to sum to U; default
+        one row of ones (the data as it is).
+
+    Returns
+    -------
+    ndarray, shape (B,)
+        Weighted mean over its weighted standard error; ``inf`` (``-inf``) where the values
+        do not scatter and their mean is positive (negative), 0 with fewer than two units.
+
+    Examples
+    --------
+    >>> round(float(paired_t(np.array([1.0, 2.0, 3.0]))[0]), 3)
+    3.464
+    """
+    n = values.size
+    a = np.ones((1, n)) if draws is None else draws
+    a = a * (n / np.maximum(a.sum(axis=1, keepdims=True), np.finfo(float).tiny))
+    mean = (a @ values) / max(n, 1)
+    spread = np.sqrt(np.sum(a * (values[None, :] - mean[:, None]) ** 2, axis=1) / max(n - 1, 1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(spread > 0, mean / (spread / np.sqrt(max(n, 1))), np.copysign(np.inf, mean))
+    return np.where((n < 2) | ((spread == 0) & (mean == 0)), 0.0, t)
+
+
 def reweighted_combination_test(
     combined_squares: np.ndarray,
     part_squares: Mapping[str, np.ndarray],
@@ -246,11 +279,7 @@ def reweighted_combination_test(
             other_alone > 0, np.maximum(other_alone - combined, 0.0) / np.maximum(other_alone, floor), 0.0
         )
         log_ratio = np.log(np.maximum(other_squares, floor) / np.maximum(combined_squares[present], floor))
-        mean = (a @ log_ratio) / max(n, 1)
-        spread = np.sqrt(np.sum(a * (log_ratio[None, :] - mean[:, None]) ** 2, axis=1) / max(n - 1, 1))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(spread > 0, mean / (spread / np.sqrt(max(n, 1))), np.copysign(np.inf, mean))
-        log_t[cause] = np.where((n < 2) | ((spread == 0) & (mean == 0)), 0.0, t)
+        log_t[cause] = paired_t(log_ratio, a)
     named = np.logical_and.reduce([(log_t[c] > critical_t) & (removed[c] >= min_removed) for c in causes])
     return {"log_ratio_t": log_t, "removed": removed, "named": named, "critical_t": critical_t}
 

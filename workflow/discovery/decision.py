@@ -225,7 +225,7 @@ def heldout_gain_t(
     present = unit_weights > 0
     floor = np.finfo(float).tiny
     ratio = np.maximum(baseline_squares[present], floor) / np.maximum(candidate_squares[present], floor)
-    return paired_t(np.log(ratio))
+    return float(paired_t(np.log(ratio))[0])
 
 
 def parsimonious(cause: str, candidate: Mapping, baseline_bic: float) -> bool:
