@@ -23,6 +23,7 @@ __all__ = [
     "h1_frf",
     "h1_over_channels",
     "response_spectrum",
+    "centred_spectra",
     "find_mode_hz",
     "band_around",
     "line_hold_fraction",
@@ -203,10 +204,19 @@ def h1_over_channels(
     return frequency_hz, magnitude, coherence / len(channels)
 
 
+def centred_spectra(response_runs: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """One-sided spectrum (``rfft``) of each whole run, its mean removed: what the
+    response spectrum of a run in one segment and the line track of every run transform,
+    computed once for both."""
+    return [np.fft.rfft(run - run.mean()) for run in _as_runs(response_runs, "response_runs")]
+
+
 def response_spectrum(
     response_runs: Sequence[np.ndarray],
     fs_hz: float,
     nperseg: int | None = None,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Power spectral density of the response averaged over runs (no force recorded).
 
@@ -218,6 +228,8 @@ def response_spectrum(
         Sample rate, Hz.
     nperseg : int, optional
         Samples per segment, common to all runs; default the shortest run's length.
+    spectra : sequence of ndarray, optional
+        The runs' :func:`centred_spectra`, used for the runs of one segment.
 
     Returns
     -------
@@ -229,9 +241,12 @@ def response_spectrum(
     responses = _as_runs(response_runs, "response_runs")
     segment = _segment_length(responses, nperseg)
     total = 0.0
-    for response in responses:
-        spectra = _segment_spectra(response, segment)
-        total = total + _cross_spectral_density(spectra, spectra, segment, fs_hz).real
+    for index, response in enumerate(responses):
+        if spectra is not None and response.size == segment:
+            segments = spectra[index][None, :]
+        else:
+            segments = _segment_spectra(response, segment)
+        total = total + _cross_spectral_density(segments, segments, segment, fs_hz).real
     return np.fft.rfftfreq(segment, 1.0 / fs_hz), total / len(responses)
 
 
@@ -334,7 +349,13 @@ def band_around(mode_hz: float, half_width_fraction: float) -> tuple[float, floa
     return (mode_hz * (1.0 - half_width_fraction), mode_hz * (1.0 + half_width_fraction))
 
 
-def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_hz: float) -> float:
+def line_hold_fraction(
+    response_runs: Sequence[np.ndarray],
+    fs_hz: float,
+    line_hz: float,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
+) -> float:
     """Fraction of the record over which a spectral line stays within 3 dB of its peak.
 
     Each run's amplitude at ``line_hz`` is tracked over time through a Gaussian band of
@@ -351,6 +372,8 @@ def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_h
         Sample rate, Hz.
     line_hz : float
         Frequency of the line, Hz (below ``fs_hz / 2``).
+    spectra : sequence of ndarray, optional
+        The runs' :func:`centred_spectra`, when the caller has them.
 
     Returns
     -------
@@ -360,20 +383,22 @@ def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_h
     sigma_hz = LINE_TRACK_RELATIVE_WIDTH * line_hz
     edge_s = 3.0 / (2.0 * np.pi * sigma_hz)
     fractions = []
-    for run in _as_runs(response_runs, "response_runs"):
+    for index, run in enumerate(_as_runs(response_runs, "response_runs")):
         edge = int(np.ceil(edge_s * fs_hz))
         if run.size <= 4 * edge:
             continue
-        track = _line_track(run - run.mean(), fs_hz, line_hz, sigma_hz)[edge:-edge]
+        spectrum = np.fft.rfft(run - run.mean()) if spectra is None else spectra[index]
+        track = _line_track(spectrum, run.size, fs_hz, line_hz, sigma_hz)[edge:-edge]
         peak = track.max()
         fractions.append(float(np.mean(track >= peak / np.sqrt(2.0))) if peak > 0 else 0.0)
     return float(np.median(fractions)) if fractions else 0.0
 
 
-def _line_track(run: np.ndarray, fs_hz: float, line_hz: float, sigma_hz: float) -> np.ndarray:
-    """Amplitude over time of the part of ``run`` in a Gaussian band of standard deviation
-    ``sigma_hz`` around ``line_hz`` (positive frequencies only: the analytic signal of
-    the band, halved), in the unit of ``run``.
+def _line_track(spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigma_hz: float) -> np.ndarray:
+    """Amplitude over time of the part of a run of ``n`` samples whose one-sided spectrum
+    (``rfft``) is ``spectrum`` in a Gaussian band of standard deviation ``sigma_hz``
+    around ``line_hz`` (positive frequencies only: the analytic signal of the band,
+    halved), in the unit of the run.
 
     The band's gain underflows to exactly 0 beyond 40 standard deviations, so it is
     computed inside them only; at 0 Hz and at negative frequencies it is 0 (``line_hz``
@@ -383,8 +408,6 @@ def _line_track(run: np.ndarray, fs_hz: float, line_hz: float, sigma_hz: float) 
     spectrum's autocorrelation ``C[m] = sum_k X[k + m] conj(X[k])``: one real inverse
     transform of ``C`` (K squared products) instead of two of the band.
     """
-    n = run.size
-    spectrum = np.fft.rfft(run)
     frequency_hz = np.fft.rfftfreq(n, 1.0 / fs_hz)
     inside = np.flatnonzero(np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz)
     if not inside.size:
@@ -402,14 +425,17 @@ def forced_line_problem(
     line_hz: float,
     frequency_hz: np.ndarray,
     magnitude: np.ndarray,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
 ) -> str | None:
     """Why the spectral line at ``line_hz`` is not a mode (it does not decay in the
     analysis window, :func:`line_hold_fraction`), or None when it decays.
 
     The message names the line and, when it sits at 2 to 5 times a lower line that does
-    not decay either, says which harmonic of that line it is (a shaker dwell's).
+    not decay either, says which harmonic of that line it is (a shaker dwell's). ``spectra``:
+    the runs' :func:`centred_spectra`, when the caller has them.
     """
-    hold = line_hold_fraction(response_runs, fs_hz, line_hz)
+    hold = line_hold_fraction(response_runs, fs_hz, line_hz, spectra=spectra)
     if hold < STATIONARY_HOLD_FRACTION:
         return None
     step_hz = float(frequency_hz[1] - frequency_hz[0])
@@ -426,7 +452,7 @@ def forced_line_problem(
         around = np.abs(frequency_hz - base_hz) <= 0.1 * base_hz
         if local.max() < 10.0 * np.median(np.abs(np.asarray(magnitude))[around]):
             continue
-        if line_hold_fraction(response_runs, fs_hz, base_hz) >= STATIONARY_HOLD_FRACTION:
+        if line_hold_fraction(response_runs, fs_hz, base_hz, spectra=spectra) >= STATIONARY_HOLD_FRACTION:
             suffix = {2: "nd", 3: "rd"}.get(order, "th")
             harmonic = f", the {order}{suffix} harmonic of the steady line at {base_hz:.3f} Hz"
             break
@@ -456,6 +482,8 @@ def find_decaying_modes(
     search_hz: tuple[float, float],
     band_half_width: float,
     min_prominence: float,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
 ) -> tuple[list[float], list[str]]:
     """Every clear, decaying mode of a spectrum (``modes_hz: auto``).
 
@@ -479,6 +507,8 @@ def find_decaying_modes(
         Half width of a mode's band, fraction of its frequency.
     min_prominence : float
         Least ratio of a mode's amplitude to the spectrum at its band's edges.
+    spectra : sequence of ndarray, optional
+        The runs' :func:`centred_spectra`, when the caller has them.
 
     Returns
     -------
@@ -503,7 +533,7 @@ def find_decaying_modes(
         if magnitude[peak] < min_prominence * edges.max():
             continue
         mode_hz = find_mode_hz(frequency_hz, magnitude, band)
-        problem = forced_line_problem(response_runs, fs_hz, mode_hz, frequency_hz, magnitude)
+        problem = forced_line_problem(response_runs, fs_hz, mode_hz, frequency_hz, magnitude, spectra=spectra)
         if problem is not None:
             left_out.append(problem)
             continue
