@@ -164,27 +164,3 @@ def test_psd_integrates_to_the_variance():
     x = np.random.default_rng(4).standard_normal(4096) + 3.0
     f_hz, psd = response_spectrum([x], FS_HZ)
     assert psd.sum() * (f_hz[1] - f_hz[0]) == pytest.approx(x.var(), rel=1e-12)
-
-
-def _line_track_by_two_transforms(run, fs_hz, line_hz, sigma_hz):
-    """The band's analytic signal, halved, by two real inverse transforms of the banded
-    spectrum (its real part and the Hilbert transform), and its modulus."""
-    spectrum = np.fft.rfft(run)
-    frequency_hz = np.fft.rfftfreq(run.size, 1.0 / fs_hz)
-    banded = spectrum * np.exp(-0.5 * ((frequency_hz - line_hz) / sigma_hz) ** 2)
-    return 0.5 * np.abs(np.fft.irfft(banded, run.size) + 1j * np.fft.irfft(-1j * banded, run.size))
-
-
-@pytest.mark.parametrize("n_samples", [4001, 65536, 130000])
-def test_line_track_equals_the_band_analytic_signal(n_samples):
-    from workflow.measured.mode import _line_track
-
-    rng = np.random.default_rng(n_samples)
-    fs_hz, line_hz = 51200.0, 151.3
-    t_s = np.arange(n_samples) / fs_hz
-    run = np.exp(-2.0 * t_s) * np.sin(2 * np.pi * 151.0 * t_s) + 0.01 * rng.standard_normal(n_samples)
-    run -= run.mean()
-    track = _line_track(np.fft.rfft(run), run.size, fs_hz, line_hz, 0.01 * line_hz)
-    expected = _line_track_by_two_transforms(run, fs_hz, line_hz, 0.01 * line_hz)
-    # rounding of n-point transforms of a band holding the whole signal: ~n eps of the peak
-    np.testing.assert_allclose(track, expected, rtol=0, atol=1e-12 * expected.max())
