@@ -147,3 +147,22 @@ def test_two_hidden_mechanisms_are_named_and_explain_the_data(cause, tmp_path):
     assert configuration["cause"] == configuration["causes"][0]
     assert configuration["explains_data"], configuration["evidence"]["explains_data"]
     assert configuration["gain"]["ratio"] < 0.7, configuration["gain"]
+
+
+def test_micro_slip_at_the_edge_of_its_range_is_named_by_its_threshold_distribution(tmp_path):
+    """The lab's patch joint at 1.11 in^2 (near the 1.10 edge of its visible range), seen
+    by a sensor at x3.0 of the accelerometer (the bench's random placement, seed 902): the
+    power law (held-out 21 scatter units) loses to the stiffness candidate (17), whose
+    power law mimics micro-slip's softening; the baseline's misfit is significant and
+    micro-slip an eligible candidate, so the slip thresholds from the data represent it
+    (6.2, with micro-slip's signature) and micro-slip is named."""
+    from workflow.lab.hidden_effects import draw_mode1_gain
+
+    cause, seed = "microslip_power_law", 902
+    case, out = generate_case(cause, seed, tmp_path, mode1_gain=draw_mode1_gain(cause, seed))
+    configuration = diagnose_campaign(campaign_segments(out), out.name)["configurations"]["joint"]
+    assert configuration["causes"] == ["microslip_power_law"], configuration["evidence"]["decision_rule"]
+    refinement = configuration["evidence"]["threshold_distribution"]
+    assert refinement["adopted"] and refinement["heldout_error"] < refinement["iwan_heldout_error"]
+    stiffness = configuration["evidence"]["candidates"]["stiffness_nonlinearity"]["heldout_error"]
+    assert configuration["gain"]["extended"] < stiffness

@@ -279,3 +279,76 @@ def test_failure_draws_with_equal_weights_are_the_tests_on_the_data():
     draws = dirichlet_unit_weights(400, N_UNITS, rng)
     share = failure_draws([], {**trend, "p_limit": fit.pvalue}, draws).mean()
     assert 0.2 < share < 0.8
+
+
+def combination_at_its_limit(t_micro: float, seed: int = 41) -> HeldoutEvidence:
+    """Eight runs: the baseline far off, the loss alone leaving 30 times the combination's
+    squared error in every run, micro-slip alone (``iwan``) beaten by the combination by
+    log ratios whose paired t is exactly ``t_micro`` (mean 0.9 in ln, about 2.5 times the
+    combination's squared error: micro-slip removes ~0.9 of what the loss leaves, the loss
+    ~0.6 of what micro-slip leaves)."""
+    rng = np.random.default_rng(seed)
+    z = rng.standard_normal(N_UNITS)
+    z = (z - z.mean()) / z.std(ddof=1)
+    spread = 0.9 * np.sqrt(N_UNITS) / t_micro
+    combined = np.exp(0.2 * rng.standard_normal(N_UNITS))
+    squares = {
+        "dahl": 200.0 * combined,
+        "iwan": combined * np.exp(0.9 + spread * z),
+        "dahl_quadratic": 30.0 * combined * np.exp(0.1 * rng.standard_normal(N_UNITS)),
+        "combined": combined,
+    }
+    return with_squares(squares, 0.01)
+
+
+COMBINATION_OPTIONS = [
+    VerdictOption("microslip_power_law", "iwan"),
+    VerdictOption("quadratic_damping", "dahl_quadratic"),
+    VerdictOption(
+        "microslip_power_law+quadratic_damping",
+        "combined",
+        parts={"microslip_power_law": "iwan", "quadratic_damping": "dahl_quadratic"},
+    ),
+]
+
+
+def test_a_combination_at_the_limit_of_its_test_shares_the_confidence_with_its_better_part():
+    """The combination predicts best in every reweighting, but its test over the runs
+    against micro-slip alone sits at Student's quantile: about half of the reweightings
+    pass it, and where it fails the rule names the better part alone. Neither is sure."""
+    from workflow.discovery.combined import paired_critical_value
+
+    key = "microslip_power_law+quadratic_damping"
+    at_limit = combination_at_its_limit(paired_critical_value(N_UNITS))
+    squares = squares_of(at_limit)
+    test = combination_test(
+        squares["combined"],
+        {k: squares[m] for k, m in COMBINATION_OPTIONS[2].parts.items()},
+        squares["dahl"],
+        np.ones(N_UNITS),
+    )
+    assert test["log_ratio_t"]["quadratic_damping"] == pytest.approx(paired_critical_value(N_UNITS))
+    assert min(test["removed"].values()) > 0.5  # the removed shares do not decide here
+    confidence, _, _ = decide_softly(at_limit, COMBINATION_OPTIONS, baseline_fails=True)
+    assert 0.2 < confidence[key] < 0.8
+    assert 0.2 < confidence["microslip_power_law"] < 0.8
+    assert confidence[key] + confidence["microslip_power_law"] == pytest.approx(1.0, abs=0.01)
+    # the same runs twice as consistent: the test passes in (nearly) every reweighting
+    clear = combination_at_its_limit(2.0 * paired_critical_value(N_UNITS))
+    confidence, _, _ = decide_softly(clear, COMBINATION_OPTIONS, baseline_fails=True)
+    assert confidence[key] > 0.95
+
+
+def test_the_reweighted_combination_test_on_the_data_is_the_test():
+    """A row of ones is the data: the reweighted statistics equal combination_test's."""
+    from workflow.discovery.combined import reweighted_combination_test
+
+    ev = combination_at_its_limit(3.0)
+    squares = squares_of(ev)
+    parts = {"microslip_power_law": squares["iwan"], "quadratic_damping": squares["dahl_quadratic"]}
+    test = combination_test(squares["combined"], parts, squares["dahl"], np.ones(N_UNITS))
+    again = reweighted_combination_test(squares["combined"], parts, np.ones(N_UNITS), np.ones((1, N_UNITS)))
+    for cause in parts:
+        assert again["log_ratio_t"][cause][0] == pytest.approx(test["log_ratio_t"][cause], rel=1e-12)
+        assert again["removed"][cause][0] == pytest.approx(test["removed"][cause], rel=1e-12)
+    assert bool(again["named"][0]) == test["named"]

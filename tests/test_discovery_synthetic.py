@@ -37,6 +37,7 @@ from workflow.models.averaged_fit import (
     model_residuals,
     parameter_box,
     run_groups,
+    run_offset_variances,
     run_offsets,
 )
 from workflow.models.configuration_data import (
@@ -640,6 +641,27 @@ def test_run_offsets_recover_each_runs_frequency_and_linear_damping():
     assert np.max(np.abs(ln)) < np.max(x) ** 2
 
 
+def test_run_offset_variances_are_the_spread_of_the_offsets_over_noise_draws():
+    """The offsets of runs calibrated on a few noisy segments, estimated over 4000 draws of
+    the noise: their variance is the stated one within the Monte Carlo error (a variance
+    from 4000 draws is known to sqrt(2 / 4000) = 2.2 %: 10 % is 4.5 of them), on weights
+    (total uncertainty) that differ from the noise, as the fit's do."""
+    rng = np.random.default_rng(11)
+    n_runs, per_run, draws = 3, 8, 4000
+    run = np.repeat(np.arange(n_runs), per_run)
+    zeta_model = np.tile(np.geomspace(1e-3, 3e-3, per_run), n_runs)
+    noise_z = np.tile(np.geomspace(0.3, 0.02, per_run), n_runs)
+    noise_f = np.tile(np.geomspace(4e-4, 2e-5, per_run), n_runs)
+    total_z, total_f = np.hypot(noise_z, 0.02), np.hypot(noise_f, 1e-4)
+    groups = run_groups(run, n_runs, np.tile(np.arange(per_run) < 5, n_runs))  # the five lowest
+    rel_f = noise_f * rng.standard_normal((draws, run.size))
+    ln_zeta = noise_z * rng.standard_normal((draws, run.size))
+    got_f, got_z = run_offsets(rel_f, ln_zeta, zeta_model, total_f, total_z, groups)
+    var_f, var_z = run_offset_variances(zeta_model, total_f, total_z, noise_f, noise_z, groups)
+    np.testing.assert_allclose(got_f.var(axis=0), var_f, rtol=0.1)
+    np.testing.assert_allclose(got_z.var(axis=0), var_z, rtol=0.1)
+
+
 def test_centred_run_offsets_are_each_runs_offset_less_the_mean_of_the_runs_used():
     rng = np.random.default_rng(5)
     n_runs, per_run = 4, 20
@@ -685,6 +707,17 @@ def test_a_held_out_run_is_calibrated_only_on_its_unscored_lowest_segments():
     after = model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
     assert after["delta_f"][2] == before["delta_f"][2]
     assert after["delta_zeta0"][2] == before["delta_zeta0"][2]
+    # and the prediction is scored over the scatter and those offsets' uncertainty,
+    # which the calibration segments' noise sets, not the scored segments'
+    assert np.array_equal(after["offset_variance_ln_zeta"][held], before["offset_variance_ln_zeta"][held])
+    # (the fold's fit, not the all-data one, sets the model damping the variance is over:
+    # they differ by a few percent)
+    assert np.all(before["offset_variance_ln_zeta"][scored_part] > 0)
+    np.testing.assert_allclose(
+        cv["scale_zeta"][scored_part] ** 2,
+        scatter.noise_ln_zeta[scored_part] ** 2 + before["offset_variance_ln_zeta"][scored_part],
+        rtol=0.05,
+    )
 
 
 def test_verdict_is_the_evaluation_of_all_the_data_and_confidence_sums_to_one():

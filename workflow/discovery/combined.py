@@ -29,6 +29,7 @@ __all__ = [
     "PAIRED_FALSE_ALARM",
     "paired_critical_value",
     "paired_t",
+    "reweighted_combination_test",
     "MIN_REMOVED_SHARE",
     "combinations_to_try",
     "combination_starts",
@@ -187,19 +188,100 @@ def term_from_residuals(
     return best[1]
 
 
-def paired_t(values: np.ndarray) -> float:
-    """Student's t of the mean of paired values against 0 (``inf`` or ``-inf`` when they do
-    not scatter, 0 with fewer than two).
+def paired_t(values: np.ndarray, draws: np.ndarray | None = None) -> np.ndarray:
+    """Student's t of the weighted mean of paired values against 0, per row of unit weights.
 
-    >>> round(paired_t(np.array([1.0, 2.0, 3.0])), 3)
+    Parameters
+    ----------
+    values : ndarray, shape (U,)
+        One value per unit of evidence (e.g. a run's log ratio of two squared errors).
+    draws : ndarray, shape (B, U), optional
+        Unit weights (e.g. Bayesian-bootstrap ones), each row scaled to sum to U; default
+        one row of ones (the data as it is).
+
+    Returns
+    -------
+    ndarray, shape (B,)
+        Weighted mean over its weighted standard error; ``inf`` (``-inf``) where the values
+        do not scatter and their mean is positive (negative), 0 with fewer than two units.
+
+    Examples
+    --------
+    >>> round(float(paired_t(np.array([1.0, 2.0, 3.0]))[0]), 3)
     3.464
     """
-    if values.size < 2:
-        return 0.0
-    mean, spread = float(np.mean(values)), float(np.std(values, ddof=1))
-    if spread == 0.0:
-        return float(np.copysign(np.inf, mean)) if mean != 0.0 else 0.0
-    return float(mean / (spread / np.sqrt(values.size)))
+    n = values.size
+    a = np.ones((1, n)) if draws is None else draws
+    a = a * (n / np.maximum(a.sum(axis=1, keepdims=True), np.finfo(float).tiny))
+    mean = (a @ values) / max(n, 1)
+    spread = np.sqrt(np.sum(a * (values[None, :] - mean[:, None]) ** 2, axis=1) / max(n - 1, 1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(spread > 0, mean / (spread / np.sqrt(max(n, 1))), np.copysign(np.inf, mean))
+    return np.where((n < 2) | ((spread == 0) & (mean == 0)), 0.0, t)
+
+
+def reweighted_combination_test(
+    combined_squares: np.ndarray,
+    part_squares: Mapping[str, np.ndarray],
+    unit_weights: np.ndarray,
+    draws: np.ndarray,
+    *,
+    critical_t: float | None = None,
+    min_removed: float = MIN_REMOVED_SHARE,
+) -> dict:
+    """The statistics of :func:`combination_test` on reweightings of the units of evidence.
+
+    Per row of ``draws`` (unit weights, e.g. Bayesian-bootstrap ones; a row of ones is the
+    data): each part's paired t of the units' log ratios of its squared held-out error to
+    the combination's (weighted mean over its weighted standard error, as
+    :func:`workflow.discovery.misfit.failure_draws` re-takes the baseline's tests), the
+    share of what the other part alone leaves that each mechanism removes (reweighted
+    squared errors), and whether both pass. A combination whose test sits at its limit
+    passes in about half of the reweightings.
+
+    Parameters
+    ----------
+    combined_squares, part_squares, unit_weights, critical_t, min_removed
+        As :func:`combination_test`.
+    draws : ndarray, shape (B, U)
+        Unit weights.
+
+    Returns
+    -------
+    dict
+        ``log_ratio_t`` and ``removed`` (cause -> array (B,)) and ``named`` (array (B,) of
+        bool). A t is ``inf`` (``-inf``) where the log ratios do not scatter and their mean
+        is positive (negative), 0 with fewer than two units.
+
+    Examples
+    --------
+    >>> combined = np.ones(3)
+    >>> parts = {"a": np.exp([1.0, 2.0, 3.0]), "b": np.full(3, 2.0)}
+    >>> test = reweighted_combination_test(combined, parts, np.ones(3), np.ones((1, 3)), critical_t=4.0)
+    >>> round(float(test["log_ratio_t"]["b"][0]), 3), bool(test["named"][0])
+    (3.464, False)
+    """
+    causes = list(part_squares)
+    present = unit_weights > 0
+    n = int(np.count_nonzero(present))
+    if critical_t is None:
+        critical_t = paired_critical_value(n)
+    a = draws[:, present]
+    a = a * (n / np.maximum(a.sum(axis=1, keepdims=True), np.finfo(float).tiny))
+    total = a @ unit_weights[present]
+    combined = (a @ combined_squares[present]) / total
+    floor = np.finfo(float).tiny
+    removed, log_t = {}, {}
+    for cause, other in ((causes[0], causes[1]), (causes[1], causes[0])):
+        other_squares = part_squares[other][present]
+        other_alone = (a @ other_squares) / total
+        removed[cause] = np.where(
+            other_alone > 0, np.maximum(other_alone - combined, 0.0) / np.maximum(other_alone, floor), 0.0
+        )
+        log_ratio = np.log(np.maximum(other_squares, floor) / np.maximum(combined_squares[present], floor))
+        log_t[cause] = paired_t(log_ratio, a)
+    named = np.logical_and.reduce([(log_t[c] > critical_t) & (removed[c] >= min_removed) for c in causes])
+    return {"log_ratio_t": log_t, "removed": removed, "named": named, "critical_t": critical_t}
 
 
 def combination_test(
@@ -263,26 +345,26 @@ def combination_test(
     (True, ['b', 'a'])
     """
     causes = list(part_squares)
-    present = unit_weights > 0
-    if critical_t is None:
-        critical_t = paired_critical_value(int(np.count_nonzero(present)))
+    test = reweighted_combination_test(
+        combined_squares,
+        part_squares,
+        unit_weights,
+        np.ones((1, unit_weights.size)),
+        critical_t=critical_t,
+        min_removed=min_removed,
+    )
+    critical_t = test["critical_t"]
     total = float(np.sum(unit_weights))
     combined = float(np.sum(combined_squares)) / total
-    floor = np.finfo(float).tiny
-    contributions, errors, removed, log_t = {}, {}, {}, {}
+    contributions, errors = {}, {}
     for cause, other in ((causes[0], causes[1]), (causes[1], causes[0])):
-        difference = part_squares[other] - combined_squares
-        other_alone = float(np.sum(part_squares[other])) / total
-        contributions[cause] = other_alone - combined
-        errors[cause] = heldout_standard_error(difference, unit_weights)
-        removed[cause] = max(contributions[cause], 0.0) / other_alone if other_alone > 0 else 0.0
-        log_ratio = np.log(
-            np.maximum(part_squares[other][present], floor) / np.maximum(combined_squares[present], floor)
-        )
-        log_t[cause] = paired_t(log_ratio)
+        contributions[cause] = float(np.sum(part_squares[other])) / total - combined
+        errors[cause] = heldout_standard_error(part_squares[other] - combined_squares, unit_weights)
+    removed = {c: float(test["removed"][c][0]) for c in causes}
+    log_t = {c: float(test["log_ratio_t"][c][0]) for c in causes}
     gain = float(np.sum(baseline_squares)) / total - combined
     shares = {c: (max(v, 0.0) / gain if gain > 0 else 0.0) for c, v in contributions.items()}
-    named = all(log_t[c] > critical_t and removed[c] >= min_removed for c in causes)
+    named = bool(test["named"][0])
     return {
         "contributions": contributions,
         "standard_errors": errors,

@@ -33,9 +33,11 @@ adds no evidence.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+from workflow.discovery.combined import reweighted_combination_test
 
 __all__ = [
     "HeldoutEvidence",
@@ -45,6 +47,7 @@ __all__ = [
     "dirichlet_unit_weights",
     "log_density",
     "beyond_accuracy",
+    "combination_passes",
     "soft_decisions",
     "mean_probabilities",
 ]
@@ -115,12 +118,18 @@ class VerdictOption:
         signature, for a combination the parsimony rule), decided on all the data.
     residual_significant : bool
         Whether it leaves a significant binned misfit (then it needs a clear gain).
+    parts : mapping
+        For a combination, each cause -> the model of that cause alone (its micro-slip
+        joint, its extension): its parsimony test
+        (:func:`workflow.discovery.combined.reweighted_combination_test`) is re-taken on
+        every reweighting, and ``eligible`` is then the rest of the rule (BIC, signatures).
     """
 
     key: str
     model: str
     eligible: bool = True
     residual_significant: bool = False
+    parts: Mapping[str, str] = field(default_factory=dict)
 
 
 def dirichlet_unit_weights(n_draws: int, n_units: int, rng: np.random.Generator) -> np.ndarray:
@@ -166,8 +175,10 @@ def beyond_accuracy(
     reweighting of the units.
 
     On either curve, the baseline's squared held-out error minus the option's (both over
-    the measured scatter) exceeds the squared accuracy of the averaged models over the same
-    scatter (``TOL_LN_ZETA``, ``TOL_REL_F``), amplitude weighted alike: what the option
+    the scale held-out residuals are scored in: the measured scatter and a held-out run's
+    offset uncertainty, :func:`~workflow.discovery.heldout.heldout_scales`) exceeds the
+    squared accuracy of the averaged models over the same scale (``TOL_LN_ZETA``,
+    ``TOL_REL_F``), amplitude weighted alike: what the option
     explains is more than a misfit of the models' own accuracy at every amplitude could be.
     This margin scales with the data: where the scatter is large (a sensor near a node)
     an effect several times the accuracy moves the held-out error by a few percent, far
@@ -257,6 +268,11 @@ def soft_decisions(
         return p, p["none"] + p["unknown"] * unknown_ratio
     opt_error = np.array([error[row[o.model]] for o in usable])  # (K, B)
     better = opt_error < base
+    for k, o in enumerate(usable):
+        if o.parts:
+            # a combination is an option only where its parsimony test passes: elsewhere its
+            # weight goes where the rule puts it, to the best of the single causes (its better part)
+            better[k] &= combination_passes(evidence, o, draws)
     beyond = np.array(
         [
             np.choose(
@@ -294,6 +310,15 @@ def soft_decisions(
         p[o.key] += np.where(to_unknown, 0.0, share)
         ratio += np.where(to_unknown, 0.0, share * ratio_k)
     return p, ratio + p["none"] + p["unknown"] * unknown_ratio
+
+
+def combination_passes(evidence: HeldoutEvidence, option: VerdictOption, draws: np.ndarray) -> np.ndarray:
+    """Whether a combination passes its parsimony test on each reweighting of the units
+    (:func:`workflow.discovery.combined.reweighted_combination_test` on the units' squared
+    held-out errors, both curves), shape (B,)."""
+    squares = {m: v.mean(axis=0) for m, v in evidence.unit_curve_squares.items()}
+    parts = {cause: squares[model] for cause, model in option.parts.items()}
+    return reweighted_combination_test(squares[option.model], parts, evidence.unit_weights, draws)["named"]
 
 
 REPORTED_PROBABILITY = 1e-3

@@ -175,7 +175,8 @@ def add_threshold_cells(
     name = f"iwan_cells_{threshold_cells(data)}"
     fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
     residuals[name] = model_residuals(fits[name], data, scatter, context)
-    evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params))
+    signature = microslip_signature(fits[name], data)["shows_signature"]
+    evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params), signature)
     return name
 
 
@@ -277,7 +278,9 @@ def judge_combinations(
             "residual_significant": bool(significant),
             "eligible": bool(eligible),
         }
-        options.append(VerdictOption(key, model, bool(eligible), bool(significant)))
+        # the confidence re-takes the parsimony test on every reweighting of the units
+        rest = bic[model] < bic[base] and evidence[model].shows_signature
+        options.append(VerdictOption(key, model, bool(rest), bool(significant), parts=part_models))
     # a combination replaces the single verdict only where it also predicts better than it
     single = errors[result["extended_models"][verdict]]["error"] if verdict in CAUSE_MODELS else np.inf
     named = [
@@ -300,11 +303,21 @@ def judge_combinations(
 def needs_threshold_cells(
     data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
 ) -> bool:
-    """Whether micro-slip's extended model may be the Iwan joint with the slip thresholds
-    from the data: the verdict is micro-slip and the power law does not explain the data."""
-    return (
-        result["cause"] == "microslip_power_law"
-        and not explains_data(data, evidence["iwan"].residuals)["explains_data"]
+    """Whether micro-slip may be represented by the Iwan joint with the slip thresholds
+    from the data: the power law does not explain the data, and micro-slip is the verdict
+    or, where the baseline's misfit is significant, an eligible candidate (its held-out
+    error and BIC below the baseline's). A patch joint's micro-slip is not one power law
+    over the measured decades: at the edge of its visible range the power law can lose to
+    a candidate of another cause, or to none, that the thresholds from the data beat."""
+    candidate = result["candidates"]["microslip_power_law"]
+    base = result["baseline"]
+    eligible = (
+        candidate["heldout_error"] < result["errors"][base]["error"]
+        and candidate["bic"] < result["bic"][base]
+        and candidate["shows_signature"]
+    )
+    return (result["cause"] == "microslip_power_law" or (result["baseline_fails"] and eligible)) and not (
+        explains_data(data, evidence["iwan"].residuals)["explains_data"]
     )
 
 
@@ -334,11 +347,21 @@ def conclude(
     result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
     errors, bic = result["errors"], result["bic"]
     refined = f"iwan_cells_{threshold_cells(data)}"
-    result["threshold_cells"] = None
-    if refined in evidence and needs_threshold_cells(data, result, evidence):
-        result["threshold_cells"] = refined
-        if errors[refined]["error"] < errors["iwan"]["error"] and bic[refined] < bic["iwan"]:
-            result["extended_models"]["microslip_power_law"] = refined
+    considered = refined in evidence and needs_threshold_cells(data, result, evidence)
+    if (
+        considered
+        and errors[refined]["error"] < errors["iwan"]["error"]
+        and bic[refined] < bic["iwan"]
+        and evidence[refined].shows_signature
+    ):
+        # micro-slip is then the thresholds from the data, in the decision as in its model
+        result = evaluate_decision(
+            data,
+            evidence,
+            envelope_significant=envelope_significant,
+            extended_models={"microslip_power_law": refined},
+        )
+    result["threshold_cells"] = refined if considered else None
     result["verdict"] = result["cause"]
     combinations, combination_options = judge_combinations(data, result, evidence)
     confidence, resamples = confidence_draws(

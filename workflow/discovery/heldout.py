@@ -24,6 +24,7 @@ from workflow.models.settings import DiscoverySettings
 __all__ = [
     "HELD_OUT_METRIC",
     "HELD_OUT_SCALE",
+    "heldout_scales",
     "folds_of",
     "AMPLITUDE_BINS_PER_DECADE",
     "MIN_BIN_SEGMENTS",
@@ -42,8 +43,37 @@ HELD_OUT_METRIC = "heldout_rms_residual_over_scatter_amplitude_weighted"
 
 
 HELD_OUT_SCALE = "noise"
-"""Held-out residuals are divided by the measured scatter alone ("noise"), not by the
-scatter combined with the model accuracy used as fit weights ("norm")."""
+"""Residuals are scored over the measured scatter alone ("noise"), not over the scatter
+combined with the model accuracy used as fit weights ("norm"); a held-out run's also
+over the uncertainty its own offsets carry (:func:`heldout_scales`)."""
+
+
+def heldout_scales(residuals: dict, scatter: Scatter) -> tuple[np.ndarray, np.ndarray]:
+    """The standard deviations a held-out prediction's residuals are scored in, per
+    segment, in ``ln zeta`` and relative frequency: the measured scatter and the
+    uncertainty of the run's own offsets in quadrature.
+
+    A held-out run's frequency and linear damping are set by its lowest-amplitude
+    segments (:func:`~workflow.models.averaged_fit.calibration_segments`), so its
+    prediction carries their estimation error
+    (:func:`~workflow.models.averaged_fit.run_offset_variances`) on top of the scatter
+    of the segment it predicts: the residual over both is the prediction's standardised
+    error. A mode a sensor sees weakly has a noisy low end (0.05-0.2 in ``ln zeta``):
+    there a run's ``zeta0`` is known to a few percent, and at the top of the run, where
+    the scatter is 0.0035, that error over the scatter alone reads as 10-35 scatters of
+    model misfit, common to every model but not equal between them.
+
+    Parameters
+    ----------
+    residuals : dict
+        :func:`~workflow.models.averaged_fit.model_residuals` (its
+        ``offset_variance_ln_zeta`` and ``offset_variance_rel_f``).
+    scatter : Scatter
+    """
+    return (
+        np.sqrt(scatter.noise_ln_zeta**2 + residuals["offset_variance_ln_zeta"]),
+        np.sqrt(scatter.noise_rel_f**2 + residuals["offset_variance_rel_f"]),
+    )
 
 
 def folds_of(data: ConfigurationData, n_folds: int) -> list[np.ndarray]:
@@ -140,8 +170,9 @@ def cross_validate(
     held-out run may know of it is its own beam, not its physics: the shared parameters
     come from the other runs, and the run's own frequency and linear-damping offsets
     from its lowest-amplitude segments (:func:`calibration_segments`), which are then
-    not scored. With one run, contiguous amplitude blocks are held out and predicted
-    from the rest.
+    not scored; its residuals are scored over the scatter and those offsets'
+    uncertainty (:func:`heldout_scales`). With one run, contiguous amplitude blocks are
+    held out and predicted from the rest (no offsets: over the scatter alone).
 
     Returns
     -------
@@ -149,11 +180,13 @@ def cross_validate(
         ``error`` (RMS residual over the scatter, scored held-out segments, both curves,
         amplitude weighted by :func:`amplitude_weights`), ``error_zeta``,
         ``error_frequency`` (per curve), ``fold_errors``, per segment its held-out
-        squared residuals ``squared_zeta``, ``squared_frequency``, and ``scored``
+        squared residuals ``squared_zeta``, ``squared_frequency``, the scales they are
+        in (``scale_zeta``, ``scale_frequency``: :func:`heldout_scales`), and ``scored``
         (False for the calibration segments).
     """
     model = MODELS[model] if isinstance(model, str) else model
     sq_z, sq_f, fold_errors = np.zeros(data.n), np.zeros(data.n), []
+    scale_z, scale_f = scatter.noise_ln_zeta.copy(), scatter.noise_rel_f.copy()
     scored = np.ones(data.n, dtype=bool)
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
     for held in folds_of(data, settings.folds):
@@ -169,8 +202,10 @@ def cross_validate(
             scored &= ~calibration
         res = model_residuals(fit, data, scatter, context, offsets_from=offsets_from)
         part = held & scored
-        sq_z[part] = res[f"z_{HELD_OUT_SCALE}"][part] ** 2
-        sq_f[part] = res[f"f_{HELD_OUT_SCALE}"][part] ** 2
+        predictive_z, predictive_f = heldout_scales(res, scatter)
+        scale_z[part], scale_f[part] = predictive_z[part], predictive_f[part]
+        sq_z[part] = (res["ln_zeta"][part] / scale_z[part]) ** 2
+        sq_f[part] = (res["rel_f"][part] / scale_f[part]) ** 2
         fold_errors.append(weighted_rms(0.5 * (sq_z[part] + sq_f[part]), w[part]))
     return {
         "error": weighted_rms(0.5 * (sq_z + sq_f)[scored], w[scored]),
@@ -179,6 +214,8 @@ def cross_validate(
         "fold_errors": fold_errors,
         "squared_zeta": sq_z,
         "squared_frequency": sq_f,
+        "scale_zeta": scale_z,
+        "scale_frequency": scale_f,
         "scored": scored,
     }
 

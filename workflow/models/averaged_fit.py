@@ -38,6 +38,7 @@ __all__ = [
     "RunGroups",
     "run_groups",
     "run_offsets",
+    "run_offset_variances",
     "apply_run_offsets",
     "centred_run_offsets",
     "calibration_segments",
@@ -263,6 +264,48 @@ def run_offsets(
     w_z = 1.0 / s_ln_zeta**2
     delta_z = ((ln_zeta * g * w_z) @ member) / np.maximum((g * g * w_z) @ member, 1e-300)
     return delta_f, delta_z
+
+
+def run_offset_variances(
+    zeta_model: np.ndarray,
+    s_rel_f: np.ndarray,
+    s_ln_zeta: np.ndarray,
+    noise_rel_f: np.ndarray,
+    noise_ln_zeta: np.ndarray,
+    groups: RunGroups,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Variances of :func:`run_offsets`' estimates from the scatter of the segments used.
+
+    Each offset is a weighted mean of its segments' residuals (weights from the total
+    uncertainties ``s_rel_f``, ``s_ln_zeta``); where those scatter independently by the
+    measured scatter alone (``noise_rel_f``, ``noise_ln_zeta``), its variance is
+    ``sum (a_i noise_i)^2 / (sum a_i)^2`` with ``a_i`` its weights. A run calibrated on
+    a few noisy segments carries a large one.
+
+    Returns
+    -------
+    var_delta_f, var_delta_zeta0 : ndarray, shape (n_runs,)
+        Variances of the relative frequency offset and of the linear-damping offset; 0
+        for a run with no segment used.
+
+    Examples
+    --------
+    Four segments of one run, each scattering by 0.1 in ``ln zeta`` around a damping
+    ratio of 1e-3: the linear damping of the run is known to ``1e-3 x 0.1 / 2``.
+
+    >>> groups = run_groups(np.zeros(4, dtype=int), 1)
+    >>> one = np.ones(4)
+    >>> var_f, var_z = run_offset_variances(np.full(4, 1e-3), one, one, one, np.full(4, 0.1), groups)
+    >>> float(np.sqrt(var_z[0]))
+    5e-05
+    """
+    member = groups.member
+    w_f = 1.0 / s_rel_f**2
+    var_f = ((w_f * noise_rel_f) ** 2 @ member) / np.maximum((w_f @ member) ** 2, 1e-300)
+    g = 1.0 / np.maximum(zeta_model, 1e-12)
+    a_z = g * g / s_ln_zeta**2  # the weight of each segment's linear-damping estimate ln_res / g
+    var_z = ((a_z * noise_ln_zeta / g) ** 2 @ member) / np.maximum((a_z @ member) ** 2, 1e-300)
+    return var_f, var_z
 
 
 def apply_run_offsets(
@@ -572,8 +615,11 @@ def model_residuals(
     ``ln_zeta_calibrated``, the damping residual with each run's offsets set by its own
     lowest-amplitude segments (``calibration``, :func:`calibration_segments`) as a
     held-out run's are, ``ln_zeta_slope``, the shared model's log-log damping slope
-    (:func:`damping_curve_slope`), and ``scatter_ln_zeta``, the measured scatter of
-    ``ln zeta`` at each segment.
+    (:func:`damping_curve_slope`), ``scatter_ln_zeta``, the measured scatter of
+    ``ln zeta`` at each segment, and ``offset_variance_ln_zeta``,
+    ``offset_variance_rel_f``, the variance each segment's residual carries from its
+    run's offsets, estimated (before centring) from the noise of the segments they were
+    set by (:func:`run_offset_variances`; 0 with one run).
     """
     model = MODELS[fit.model]
     problem = _Problem(model, data, scatter, np.ones(data.n, dtype=bool), context)
@@ -585,6 +631,7 @@ def model_residuals(
     ln_shared, shared_zeta = ln_res, zeta
     calibration = np.zeros(data.n, dtype=bool)
     ln_calibrated = ln_res
+    offset_variance_rel_f, offset_variance_ln_zeta = np.zeros(data.n), np.zeros(data.n)
     if data.n_runs >= 2:
         calibration = calibration_segments(data.velocity_in_s, data.run_index, np.arange(n_runs))
         calibration_groups = run_groups(data.run_index, n_runs, calibration)
@@ -593,6 +640,11 @@ def model_residuals(
         offsets = run_offsets if offsets_from is not None else centred_run_offsets
         fitted_groups = run_groups(data.run_index, n_runs, offsets_from)
         delta_f, delta_z = offsets(f_res, ln_res, zeta, scatter.rel_f, scatter.ln_zeta, fitted_groups)
+        var_f, var_z = run_offset_variances(
+            zeta, scatter.rel_f, scatter.ln_zeta, scatter.noise_rel_f, scatter.noise_ln_zeta, fitted_groups
+        )
+        offset_variance_rel_f = var_f[data.run_index]
+        offset_variance_ln_zeta = var_z[data.run_index] / np.maximum(zeta, 1e-12) ** 2
         f_res, ln_res = apply_run_offsets(f_res, ln_res, zeta, delta_f, delta_z, data.run_index)
         zeta = zeta * np.maximum(1.0 + delta_z[data.run_index] / np.maximum(zeta, 1e-12), RUN_OFFSET_FLOOR)
         freq = freq * (1.0 + delta_f[data.run_index])
@@ -614,6 +666,8 @@ def model_residuals(
         ),
         "calibration": calibration,
         "scatter_ln_zeta": scatter.noise_ln_zeta,
+        "offset_variance_ln_zeta": offset_variance_ln_zeta,
+        "offset_variance_rel_f": offset_variance_rel_f,
     }
 
 
