@@ -304,10 +304,11 @@ def find_mode_hz(frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tup
     log_mag = np.full(magnitude.shape, np.log(magnitude[finite].min()) - 1.0)
     log_mag[finite] = np.log(magnitude[finite])
 
-    inner = np.arange(1, magnitude.size - 1)
-    is_peak = (log_mag[inner] > log_mag[inner - 1]) & (log_mag[inner] > log_mag[inner + 1])
-    in_range = (frequency_hz[inner] >= low_hz) & (frequency_hz[inner] <= high_hz)
-    candidates = inner[is_peak & in_range & finite[inner]]
+    # the interior bins compared with their neighbours as slices (views), not gathered copies
+    centre = log_mag[1:-1]
+    is_peak = (centre > log_mag[:-2]) & (centre > log_mag[2:])
+    in_range = (frequency_hz[1:-1] >= low_hz) & (frequency_hz[1:-1] <= high_hz)
+    candidates = np.flatnonzero(is_peak & in_range & finite[1:-1]) + 1
     if candidates.size == 0:
         raise ValueError(
             f"no spectral peak inside the search range {low_hz:g}-{high_hz:g} Hz: the "
@@ -467,10 +468,10 @@ def _local_peaks(
     frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tuple[float, float]
 ) -> np.ndarray:
     """Indices of the bins above both neighbours inside the search range, largest first."""
-    inner = np.arange(1, magnitude.size - 1)
-    is_peak = (magnitude[inner] > magnitude[inner - 1]) & (magnitude[inner] >= magnitude[inner + 1])
-    in_range = (frequency_hz[inner] >= search_hz[0]) & (frequency_hz[inner] <= search_hz[1])
-    peaks = inner[is_peak & in_range]
+    centre = magnitude[1:-1]
+    is_peak = (centre > magnitude[:-2]) & (centre >= magnitude[2:])
+    in_range = (frequency_hz[1:-1] >= search_hz[0]) & (frequency_hz[1:-1] <= search_hz[1])
+    peaks = np.flatnonzero(is_peak & in_range) + 1
     return peaks[np.argsort(magnitude[peaks])[::-1]]
 
 
