@@ -663,6 +663,7 @@ def test_mat5_unused_vectors_are_not_decompressed(tmp_path, monkeypatch):
     import scipy.io
 
     from workflow.io.readers import mat
+    from workflow.io.records import CampaignFormatError
 
     force, response = samples()
     path = tmp_path / "run.mat"
@@ -678,3 +679,16 @@ def test_mat5_unused_vectors_are_not_decompressed(tmp_path, monkeypatch):
     assert [c.name for c in channels] == ["t", "x", "f"] and not loaded
     np.testing.assert_array_equal(channels[1].samples(), response)
     assert [list(variables) for variables in loaded] == [["x"]]
+    # damage inside the unused vector f goes unnoticed; inside x it is an error naming x
+    headers = {h.name: h for h in mat.mat5_variable_headers(path.read_bytes())}
+    for name, fails in (("f", False), ("x", True)):
+        data = bytearray(path.read_bytes())
+        middle = (headers[name].first + headers[name].stop) // 2
+        data[middle : middle + 64] = bytes(64)
+        path.write_bytes(bytes(data))
+        channels = mat.read_mat_channels(path, "run.mat").channels
+        if fails:
+            with pytest.raises(CampaignFormatError, match="cannot read as a MAT file"):
+                channels[1].samples()
+        else:
+            np.testing.assert_array_equal(channels[1].samples(), response)
