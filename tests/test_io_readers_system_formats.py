@@ -679,7 +679,7 @@ def test_mat5_unused_vectors_are_not_decompressed(tmp_path, monkeypatch):
     assert [c.name for c in channels] == ["t", "x", "f"] and not loaded
     np.testing.assert_array_equal(channels[1].samples(), response)
     assert [list(variables) for variables in loaded] == [["x"]]
-    # damage inside the unused vector f goes unnoticed; inside x it is an error naming x
+    # damage inside the unused vector f goes unnoticed; inside x it is an error
     headers = {h.name: h for h in mat.mat5_variable_headers(path.read_bytes())}
     for name, fails in (("f", False), ("x", True)):
         data = bytearray(path.read_bytes())
