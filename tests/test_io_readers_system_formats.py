@@ -617,3 +617,78 @@ def test_campaign_json_copy_keeps_channels_and_decimal(tmp_path):
     campaign = load_campaign(tmp_path)
     assert campaign.response.channel == "Time Laser:+X" and campaign.force.channel == 2
     assert campaign_from_dict(campaign_to_dict(campaign)) == dataclasses.replace(campaign)
+
+
+@pytest.mark.parametrize("compressed", [True, False])
+def test_mat5_headers_name_every_variable_and_defer_exactly_the_plain_vectors(tmp_path, compressed):
+    import scipy.io
+
+    from workflow.io.readers.mat import _DeferredVector, _read_mat5, mat5_variable_headers
+
+    path = tmp_path / "run.mat"
+    samples = np.linspace(-1.0, 1.0, 50)
+    variables = {
+        "column": samples[:, None],
+        "row": samples[None, :],
+        "whole": (samples * 100).astype(np.int16),
+        "wave": samples + 1j * samples,
+        "fs": 1000.0,
+        "matrix": np.ones((3, 4)),
+        "flags": samples > 0,
+        "label": "text",
+        "group": {"y_values": {"values": samples}, "x_values": {"increment": 0.001}},
+        "one": np.array([[2.0]]),
+        "a_rather_long_variable_name_of_sixty_characters_abcdefghijklm": samples,
+    }
+    scipy.io.savemat(path, variables, do_compression=compressed)
+    headers = mat5_variable_headers(path.read_bytes())
+    expected = scipy.io.loadmat(path, squeeze_me=True, simplify_cells=True)
+    assert [h.name for h in headers] == [name for name, _, _ in scipy.io.whosmat(path)]
+    read = _read_mat5(path, "run.mat")
+    assert list(read) == [name for name in expected if not name.startswith("__")]
+    for header in headers:
+        value = expected[header.name]
+        vector = isinstance(value, np.ndarray) and value.ndim == 1 and value.size > 1
+        assert header.plain_vector == (vector and np.issubdtype(value.dtype, np.number)), header.name
+        mine = read[header.name]
+        if header.plain_vector and header.name != "fs":
+            assert isinstance(mine, _DeferredVector)
+            mine = mine.load()
+            assert mine.dtype == value.dtype
+        if isinstance(value, np.ndarray):
+            np.testing.assert_array_equal(mine, value)
+
+
+def test_mat5_unused_vectors_are_not_decompressed(tmp_path, monkeypatch):
+    import scipy.io
+
+    from workflow.io.readers import mat
+    from workflow.io.records import CampaignFormatError
+
+    force, response = samples()
+    path = tmp_path / "run.mat"
+    scipy.io.savemat(
+        path, {"t": np.arange(response.size) * DT_S, "x": response, "f": force}, do_compression=True
+    )
+    loaded = []
+    read_bytes = mat._loadmat_bytes
+    monkeypatch.setattr(
+        mat, "_loadmat_bytes", lambda data, shown: loaded.append(read_bytes(data, shown)) or loaded[-1]
+    )
+    channels = mat.read_mat_channels(path, "run.mat").channels
+    assert [c.name for c in channels] == ["t", "x", "f"] and not loaded
+    np.testing.assert_array_equal(channels[1].samples(), response)
+    assert [list(variables) for variables in loaded] == [["x"]]
+    # damage inside the unused vector f goes unnoticed; inside x it is an error
+    headers = {h.name: h for h in mat.mat5_variable_headers(path.read_bytes())}
+    for name, fails in (("f", False), ("x", True)):
+        data = bytearray(path.read_bytes())
+        middle = (headers[name].first + headers[name].stop) // 2
+        data[middle : middle + 64] = bytes(64)
+        path.write_bytes(bytes(data))
+        channels = mat.read_mat_channels(path, "run.mat").channels
+        if fails:
+            with pytest.raises(CampaignFormatError, match="cannot read as a MAT file"):
+                channels[1].samples()
+        else:
+            np.testing.assert_array_equal(channels[1].samples(), response)

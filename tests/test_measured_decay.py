@@ -417,3 +417,15 @@ def test_a_decay_cut_after_the_settling_time_keeps_its_band_passed_envelope_peak
     assert int(np.argmax(cut)) == peak
     near = slice(max(0, peak - 100), min(reach, peak + 100))
     assert np.abs(cut[near] - whole[near]).max() < 1e-13 * whole[peak]
+
+
+@pytest.mark.parametrize("scale_rad", [1e-8, 1e-3, 1.0, 30.0, 1e5])
+def test_sine_squared_by_the_tangent_equals_the_sine_to_a_few_units_in_the_last_place(scale_rad):
+    from workflow.measured.decay import _sine_squared
+
+    angle_rad = np.random.default_rng(3).normal(scale=scale_rad, size=100_000)
+    expected = np.sin(angle_rad) ** 2
+    # tan, square, sum and quotient: about four roundings of 1.1e-16 each
+    np.testing.assert_allclose(_sine_squared(angle_rad.copy()), expected, rtol=1e-15, atol=0)
+    quarter_turns = np.array([np.pi / 2, -np.pi / 2, 3 * np.pi / 2, 0.0])
+    np.testing.assert_allclose(_sine_squared(quarter_turns), [1.0, 1.0, 1.0, 0.0], rtol=1e-15, atol=0)

@@ -23,6 +23,7 @@ __all__ = [
     "h1_frf",
     "h1_over_channels",
     "response_spectrum",
+    "centred_spectra",
     "find_mode_hz",
     "band_around",
     "line_hold_fraction",
@@ -203,10 +204,19 @@ def h1_over_channels(
     return frequency_hz, magnitude, coherence / len(channels)
 
 
+def centred_spectra(response_runs: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """One-sided spectrum (``rfft``) of each whole run, its mean removed: what the
+    response spectrum of a run in one segment and the line track of every run transform,
+    computed once for both."""
+    return [np.fft.rfft(run - run.mean()) for run in _as_runs(response_runs, "response_runs")]
+
+
 def response_spectrum(
     response_runs: Sequence[np.ndarray],
     fs_hz: float,
     nperseg: int | None = None,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Power spectral density of the response averaged over runs (no force recorded).
 
@@ -218,6 +228,8 @@ def response_spectrum(
         Sample rate, Hz.
     nperseg : int, optional
         Samples per segment, common to all runs; default the shortest run's length.
+    spectra : sequence of ndarray, optional
+        The runs' :func:`centred_spectra`, used for the runs of one segment.
 
     Returns
     -------
@@ -229,9 +241,12 @@ def response_spectrum(
     responses = _as_runs(response_runs, "response_runs")
     segment = _segment_length(responses, nperseg)
     total = 0.0
-    for response in responses:
-        spectra = _segment_spectra(response, segment)
-        total = total + _cross_spectral_density(spectra, spectra, segment, fs_hz).real
+    for index, response in enumerate(responses):
+        if spectra is not None and response.size == segment:
+            segments = spectra[index][None, :]
+        else:
+            segments = _segment_spectra(response, segment)
+        total = total + _cross_spectral_density(segments, segments, segment, fs_hz).real
     return np.fft.rfftfreq(segment, 1.0 / fs_hz), total / len(responses)
 
 
@@ -289,10 +304,11 @@ def find_mode_hz(frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tup
     log_mag = np.full(magnitude.shape, np.log(magnitude[finite].min()) - 1.0)
     log_mag[finite] = np.log(magnitude[finite])
 
-    inner = np.arange(1, magnitude.size - 1)
-    is_peak = (log_mag[inner] > log_mag[inner - 1]) & (log_mag[inner] > log_mag[inner + 1])
-    in_range = (frequency_hz[inner] >= low_hz) & (frequency_hz[inner] <= high_hz)
-    candidates = inner[is_peak & in_range & finite[inner]]
+    # the interior bins compared with their neighbours as slices (views), not gathered copies
+    centre = log_mag[1:-1]
+    is_peak = (centre > log_mag[:-2]) & (centre > log_mag[2:])
+    in_range = (frequency_hz[1:-1] >= low_hz) & (frequency_hz[1:-1] <= high_hz)
+    candidates = np.flatnonzero(is_peak & in_range & finite[1:-1]) + 1
     if candidates.size == 0:
         raise ValueError(
             f"no spectral peak inside the search range {low_hz:g}-{high_hz:g} Hz: the "
@@ -334,7 +350,13 @@ def band_around(mode_hz: float, half_width_fraction: float) -> tuple[float, floa
     return (mode_hz * (1.0 - half_width_fraction), mode_hz * (1.0 + half_width_fraction))
 
 
-def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_hz: float) -> float:
+def line_hold_fraction(
+    response_runs: Sequence[np.ndarray],
+    fs_hz: float,
+    line_hz: float,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
+) -> float:
     """Fraction of the record over which a spectral line stays within 3 dB of its peak.
 
     Each run's amplitude at ``line_hz`` is tracked over time through a Gaussian band of
@@ -351,6 +373,8 @@ def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_h
         Sample rate, Hz.
     line_hz : float
         Frequency of the line, Hz (below ``fs_hz / 2``).
+    spectra : sequence of ndarray, optional
+        The runs' :func:`centred_spectra`, when the caller has them.
 
     Returns
     -------
@@ -360,39 +384,40 @@ def line_hold_fraction(response_runs: Sequence[np.ndarray], fs_hz: float, line_h
     sigma_hz = LINE_TRACK_RELATIVE_WIDTH * line_hz
     edge_s = 3.0 / (2.0 * np.pi * sigma_hz)
     fractions = []
-    for run in _as_runs(response_runs, "response_runs"):
+    for index, run in enumerate(_as_runs(response_runs, "response_runs")):
         edge = int(np.ceil(edge_s * fs_hz))
         if run.size <= 4 * edge:
             continue
-        track = _line_track(run - run.mean(), fs_hz, line_hz, sigma_hz)[edge:-edge]
+        spectrum = np.fft.rfft(run - run.mean()) if spectra is None else spectra[index]
+        track = _line_track(spectrum, run.size, fs_hz, line_hz, sigma_hz)[edge:-edge]
         peak = track.max()
         fractions.append(float(np.mean(track >= peak / np.sqrt(2.0))) if peak > 0 else 0.0)
     return float(np.median(fractions)) if fractions else 0.0
 
 
-def _line_track(run: np.ndarray, fs_hz: float, line_hz: float, sigma_hz: float) -> np.ndarray:
-    """Amplitude over time of the part of ``run`` in a Gaussian band of standard deviation
-    ``sigma_hz`` around ``line_hz`` (positive frequencies only: the analytic signal of
-    the band, halved), in the unit of ``run``.
+def _line_track(spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigma_hz: float) -> np.ndarray:
+    """Amplitude over time of the part of a run of ``n`` samples whose one-sided spectrum
+    (``rfft``) is ``spectrum`` in a Gaussian band of standard deviation ``sigma_hz``
+    around ``line_hz`` (positive frequencies only: the analytic signal of the band,
+    halved), in the unit of the run.
 
     The band's gain underflows to exactly 0 beyond 40 standard deviations, so it is
     computed inside them only; at 0 Hz and at negative frequencies it is 0 (``line_hz``
-    is 100 standard deviations from them), so the complex inverse transform of the
-    one-sided product is that of two real inverse transforms: the product's (real part)
-    and the product's times -i (imaginary part), each halved.
+    is 100 standard deviations from them). The analytic signal of the band's ``K`` bins
+    ``X[k]`` is ``(2 / n) S(t)``, ``S(t) = sum_k X[k] exp(2 pi i k t / n)``, and its
+    squared modulus ``|S|^2 = C[0] + 2 Re sum_m C[m] exp(2 pi i m t / n)`` with the
+    spectrum's autocorrelation ``C[m] = sum_k X[k + m] conj(X[k])``: one real inverse
+    transform of ``C`` (K squared products) instead of two of the band.
     """
-    spectrum = np.fft.rfft(run)
-    frequency_hz = np.fft.rfftfreq(run.size, 1.0 / fs_hz)
-    inside = np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz
-    banded = np.zeros_like(spectrum)
-    banded[inside] = spectrum[inside] * np.exp(-0.5 * ((frequency_hz[inside] - line_hz) / sigma_hz) ** 2)
-    analytic = np.empty(run.size, dtype=complex)
-    analytic.real = np.fft.irfft(banded, run.size)
-    banded *= -1j
-    analytic.imag = np.fft.irfft(banded, run.size)
-    # the modulus of the complex array, not np.hypot of its parts: the same to one unit in
-    # the last place, in a thirtieth of the time
-    return 0.5 * np.abs(analytic)
+    frequency_hz = np.fft.rfftfreq(n, 1.0 / fs_hz)
+    inside = np.flatnonzero(np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz)
+    if not inside.size:
+        return np.zeros(n)
+    banded = spectrum[inside] * np.exp(-0.5 * ((frequency_hz[inside] - line_hz) / sigma_hz) ** 2)
+    autocorrelation = np.correlate(banded, banded, mode="full")[banded.size - 1 :]
+    squared = np.fft.irfft(autocorrelation, n)
+    # |S|^2 = n irfft(C); rounding may leave it a hair below 0 where the band is silent
+    return np.sqrt(np.maximum(squared, 0.0) / n)
 
 
 def forced_line_problem(
@@ -401,14 +426,17 @@ def forced_line_problem(
     line_hz: float,
     frequency_hz: np.ndarray,
     magnitude: np.ndarray,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
 ) -> str | None:
     """Why the spectral line at ``line_hz`` is not a mode (it does not decay in the
     analysis window, :func:`line_hold_fraction`), or None when it decays.
 
     The message names the line and, when it sits at 2 to 5 times a lower line that does
-    not decay either, says which harmonic of that line it is (a shaker dwell's).
+    not decay either, says which harmonic of that line it is (a shaker dwell's). ``spectra``:
+    the runs' :func:`centred_spectra`, when the caller has them.
     """
-    hold = line_hold_fraction(response_runs, fs_hz, line_hz)
+    hold = line_hold_fraction(response_runs, fs_hz, line_hz, spectra=spectra)
     if hold < STATIONARY_HOLD_FRACTION:
         return None
     step_hz = float(frequency_hz[1] - frequency_hz[0])
@@ -425,7 +453,7 @@ def forced_line_problem(
         around = np.abs(frequency_hz - base_hz) <= 0.1 * base_hz
         if local.max() < 10.0 * np.median(np.abs(np.asarray(magnitude))[around]):
             continue
-        if line_hold_fraction(response_runs, fs_hz, base_hz) >= STATIONARY_HOLD_FRACTION:
+        if line_hold_fraction(response_runs, fs_hz, base_hz, spectra=spectra) >= STATIONARY_HOLD_FRACTION:
             suffix = {2: "nd", 3: "rd"}.get(order, "th")
             harmonic = f", the {order}{suffix} harmonic of the steady line at {base_hz:.3f} Hz"
             break
@@ -440,10 +468,10 @@ def _local_peaks(
     frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tuple[float, float]
 ) -> np.ndarray:
     """Indices of the bins above both neighbours inside the search range, largest first."""
-    inner = np.arange(1, magnitude.size - 1)
-    is_peak = (magnitude[inner] > magnitude[inner - 1]) & (magnitude[inner] >= magnitude[inner + 1])
-    in_range = (frequency_hz[inner] >= search_hz[0]) & (frequency_hz[inner] <= search_hz[1])
-    peaks = inner[is_peak & in_range]
+    centre = magnitude[1:-1]
+    is_peak = (centre > magnitude[:-2]) & (centre >= magnitude[2:])
+    in_range = (frequency_hz[1:-1] >= search_hz[0]) & (frequency_hz[1:-1] <= search_hz[1])
+    peaks = np.flatnonzero(is_peak & in_range) + 1
     return peaks[np.argsort(magnitude[peaks])[::-1]]
 
 
@@ -455,6 +483,8 @@ def find_decaying_modes(
     search_hz: tuple[float, float],
     band_half_width: float,
     min_prominence: float,
+    *,
+    spectra: Sequence[np.ndarray] | None = None,
 ) -> tuple[list[float], list[str]]:
     """Every clear, decaying mode of a spectrum (``modes_hz: auto``).
 
@@ -478,6 +508,8 @@ def find_decaying_modes(
         Half width of a mode's band, fraction of its frequency.
     min_prominence : float
         Least ratio of a mode's amplitude to the spectrum at its band's edges.
+    spectra : sequence of ndarray, optional
+        The runs' :func:`centred_spectra`, when the caller has them.
 
     Returns
     -------
@@ -502,7 +534,7 @@ def find_decaying_modes(
         if magnitude[peak] < min_prominence * edges.max():
             continue
         mode_hz = find_mode_hz(frequency_hz, magnitude, band)
-        problem = forced_line_problem(response_runs, fs_hz, mode_hz, frequency_hz, magnitude)
+        problem = forced_line_problem(response_runs, fs_hz, mode_hz, frequency_hz, magnitude, spectra=spectra)
         if problem is not None:
             left_out.append(problem)
             continue

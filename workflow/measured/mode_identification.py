@@ -103,6 +103,7 @@ def identify_mode(
     sample_rate_hz = records[0].sample_rate_hz
     search_hz = mode_search_range(sample_rate_hz, campaign_mode_hz, mode_search_hz, mode_search_fraction)
     responses, owners, channels = channel_responses(records, windows)
+    spectra = None
     coherence_at_mode = None
     if all(record.force_lbf is not None for record in records):
         forces = [owner.force_lbf[start:stop] for owner, (start, stop) in owners]
@@ -113,7 +114,8 @@ def identify_mode(
         coherence_at_mode = float(np.interp(mode_hz, frequency_hz, coherence))
         method = "h1"
     else:
-        frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
+        spectra = modal_id.centred_spectra(responses)
+        frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz, spectra=spectra)
         mode_hz = modal_id.find_mode_hz(frequency_hz, psd, search_hz)
         method = "spectrum"
         amplitude = np.sqrt(np.abs(psd))
@@ -127,7 +129,9 @@ def identify_mode(
         raise ValueError(f"the {method} spectrum of the runs gives no finite peak frequency")
     if coherence_at_mode is not None and not np.isfinite(coherence_at_mode):
         coherence_at_mode = None  # no force energy at the mode: no coherence estimate
-    forced = modal_id.forced_line_problem(responses, sample_rate_hz, mode_hz, frequency_hz, amplitude)
+    forced = modal_id.forced_line_problem(
+        responses, sample_rate_hz, mode_hz, frequency_hz, amplitude, spectra=spectra
+    )
     if forced is not None:
         raise ValueError(f"{forced}; {WINDOW_ADVICE}")
     if campaign_band_hz is not None:
@@ -303,9 +307,17 @@ def find_every_mode(
     sample_rate_hz = records[0].sample_rate_hz
     search_hz = mode_search_range(sample_rate_hz, None, mode_search_hz, mode_search_fraction)
     responses, _, _ = channel_responses(records, windows)
-    frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz)
+    spectra = modal_id.centred_spectra(responses)
+    frequency_hz, psd = modal_id.response_spectrum(responses, sample_rate_hz, spectra=spectra)
     found, left_out = modal_id.find_decaying_modes(
-        responses, sample_rate_hz, frequency_hz, np.sqrt(psd), search_hz, band_half_width, min_mode_prominence
+        responses,
+        sample_rate_hz,
+        frequency_hz,
+        np.sqrt(psd),
+        search_hz,
+        band_half_width,
+        min_mode_prominence,
+        spectra=spectra,
     )
     if not found:
         reasons = "".join(f"; {reason}" for reason in left_out)

@@ -21,6 +21,7 @@ Decisions where the contract leaves room:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime
 from typing import TYPE_CHECKING
@@ -64,8 +65,8 @@ class Channel:
     name : str
         The name ``channel:`` in campaign.yaml refers to (variable name, Test.Lab
         ``function_record.name``, UFF58 ID line, TDMS ``group/channel``).
-    values : ndarray
-        The samples, in ``unit``.
+    values : ndarray or None
+        The samples, in ``unit``; None when the reader reads them on demand (``load``).
     record : str
         How error messages name the channel's place in the file, e.g. ``variable 'x'``.
     unit : str or None
@@ -86,6 +87,9 @@ class Channel:
     record_start : datetime or None
         Wall-clock time the recording started, as the file states it (aware when the
         file gives the time zone).
+    load : callable or None
+        Reads the samples from the file, for a channel whose ``values`` are None: a MAT
+        file's variables are decompressed only when a channel the run uses needs them.
     """
 
     name: str
@@ -99,6 +103,15 @@ class Channel:
     aliases: tuple[str, ...] = ()
     role_name: str | None = None
     record_start: datetime | None = None
+    load: Callable[[], NDArray] | None = None
+
+    def samples(self) -> NDArray:
+        """The samples: ``values``, or ``load()``'s, read once."""
+        if self.values is not None:
+            return self.values
+        if "_loaded" not in self.__dict__:
+            object.__setattr__(self, "_loaded", self.load())
+        return self.__dict__["_loaded"]
 
 
 @dataclass(frozen=True)
@@ -229,7 +242,7 @@ def _select_channels(
 
 def _checked_samples(channel: Channel, shown: str) -> NDArray[np.float64]:
     """The channel's samples as finite float64; at least MIN_SAMPLES of them."""
-    values = np.asarray(channel.values)
+    values = np.asarray(channel.samples())
     if values.ndim != 1 or not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
         raise CampaignFormatError(
             shown,
@@ -277,7 +290,7 @@ def _force_factor_lbf(channel: Channel, campaign: Campaign, shown: str) -> float
 
 def _time_channel(channels: list[Channel], n_samples: int, shown: str) -> Channel | None:
     """The file's time vector (role time, as many samples as the response), if it has one."""
-    found = [c for c in channels if channel_role(c) == "time" and np.size(c.values) == n_samples]
+    found = [c for c in channels if channel_role(c) == "time" and np.size(c.samples()) == n_samples]
     return found[0] if found else None
 
 
@@ -288,7 +301,7 @@ def _rate_from_time(channel: Channel, shown: str) -> tuple[NDArray[np.float64], 
         raise CampaignFormatError(
             shown, None, f"{channel.record}: time unit {channel.unit!r}: expected s or ms"
         )
-    time_s = np.ascontiguousarray(np.asarray(channel.values, dtype=np.float64).ravel() * factor_s)
+    time_s = np.ascontiguousarray(np.asarray(channel.samples(), dtype=np.float64).ravel() * factor_s)
     steps = np.diff(time_s)
     bad = first_bad_time_step(steps)
     if bad is not None:

@@ -20,6 +20,8 @@ str, numeric arrays squeezed), so the channel logic below serves both.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -60,16 +62,160 @@ def read_mat_channels(path: Path, shown: str) -> FileChannels:
     return channels_from_variables(variables, format_name, shown)
 
 
+@dataclass(frozen=True)
+class _DeferredVector:
+    """A plain numeric vector of a MAT 5 file, read only when a channel needs it."""
+
+    load: Callable[[], np.ndarray]
+
+
 def _read_mat5(path: Path, shown: str) -> dict[str, Any]:
+    """The variables of a MAT 5 file as ``loadmat(squeeze_me=True, simplify_cells=True)``
+    gives them, each plain numeric vector (a channel, perhaps unused) as a
+    :class:`_DeferredVector`: decompressing a vector costs more than the rest of reading it,
+    and a file often holds vectors no run uses (PFF's record: the force beside the response).
+    A file whose layout :func:`mat5_variable_headers` does not follow is read whole."""
+    data = path.read_bytes()
+    headers = mat5_variable_headers(data)
+    if headers is None:
+        return _loadmat_bytes(data, shown)
+    eager = [
+        h
+        for h in headers
+        if not (h.plain_vector and h.name.lower() not in _RATE_NAMES_HZ | _INTERVAL_NAMES_S)
+    ]
+    loaded = (
+        _loadmat_bytes(data[:128] + b"".join(data[h.first : h.stop] for h in eager), shown) if eager else {}
+    )
+    variables: dict[str, Any] = {}
+    for header in headers:
+        if header.name.startswith("__"):
+            continue
+        if any(header is h for h in eager):
+            variables[header.name] = loaded[header.name]
+        else:
+            element = data[:128] + data[header.first : header.stop]
+            variables[header.name] = _DeferredVector(
+                lambda element=element, name=header.name: _loadmat_bytes(element, shown)[name]
+            )
+    return variables
+
+
+def _loadmat_bytes(data: bytes, shown: str) -> dict[str, Any]:
+    """``scipy.io.loadmat`` of a MAT file's bytes, the ``__header__``-like entries left out."""
+    import io
+
     import scipy.io
 
     try:
-        variables = scipy.io.loadmat(path, squeeze_me=True, simplify_cells=True)
+        variables = scipy.io.loadmat(io.BytesIO(data), squeeze_me=True, simplify_cells=True)
     except Exception as error:  # scipy raises many types for damaged files
         raise CampaignFormatError(
             shown, None, f"cannot read as a MAT file ({type(error).__name__}: {error})"
         ) from None
     return {name: value for name, value in variables.items() if not name.startswith("__")}
+
+
+_MAT5_NUMERIC_CLASSES = range(6, 16)
+"""MATLAB array classes double, single and int8 ... uint64 (mxDOUBLE_CLASS = 6 ... 15)."""
+_MI_MATRIX, _MI_COMPRESSED = 14, 15
+_HEADER_BYTES = 1024
+"""Bytes of an array element read for its header (flags, dimensions, name)."""
+
+
+@dataclass(frozen=True)
+class Mat5VariableHeader:
+    """Where one top-level variable of a MAT 5 file lies and what its header says.
+
+    Attributes
+    ----------
+    name : str
+        The variable's name.
+    first, stop : int
+        Its element (tag included) is ``data[first:stop]`` of the file's bytes.
+    plain_vector : bool
+        A numeric array (real, complex or logical, which scipy reads as uint8) with one
+        dimension above 1: ``loadmat(squeeze_me=True)`` gives a 1-D numeric vector of 2
+        samples or more.
+    """
+
+    name: str
+    first: int
+    stop: int
+    plain_vector: bool
+
+
+def mat5_variable_headers(data: bytes) -> list[Mat5VariableHeader] | None:
+    """Every top-level variable of a MAT 5 file's bytes, from its element tags and the
+    first bytes of each (decompressed) array header; None when the bytes are not a MAT 5
+    file laid out as MATLAB and scipy write it (version 0x0100, elements of type
+    miMATRIX or miCOMPRESSED that end within the file, array flags, dimensions and name in
+    that order, distinct names), left to scipy to read or to refuse."""
+    import struct
+    import zlib
+
+    if len(data) < 128 or data[126:128] not in (b"IM", b"MI"):
+        return None
+    order = "<" if data[126:128] == b"IM" else ">"
+    if struct.unpack(order + "H", data[124:126])[0] != 0x0100:
+        return None
+    headers, position = [], 128
+    try:
+        while position < len(data):
+            element_type, size = struct.unpack(order + "II", data[position : position + 8])
+            stop = position + 8 + size
+            if stop > len(data) or element_type not in (_MI_MATRIX, _MI_COMPRESSED):
+                return None
+            body = data[position + 8 : stop]
+            if element_type == _MI_COMPRESSED:
+                body = zlib.decompressobj().decompress(body, _HEADER_BYTES)
+            else:
+                body = data[position : position + 8 + _HEADER_BYTES]
+            header = _array_header(body, order)
+            if header is None:
+                return None
+            name, plain_vector = header
+            headers.append(Mat5VariableHeader(name, position, stop, plain_vector))
+            position = stop
+    except (struct.error, zlib.error, UnicodeDecodeError):
+        return None
+    if len({h.name for h in headers}) != len(headers):
+        return None
+    return headers
+
+
+def _array_header(body: bytes, order: str) -> tuple[str, bool] | None:
+    """Name and plain-vector flag of a miMATRIX element's first bytes (tag included)."""
+    import struct
+
+    def sub_element(at: int) -> tuple[int, bytes, int]:
+        # type, data, position of the next sub-element (small data elements use 4 bytes)
+        first, second = struct.unpack(order + "II", body[at : at + 8])
+        if first >> 16:
+            kind, start, size, following = first & 0xFFFF, at + 4, first >> 16, at + 8
+        else:
+            kind, start, size, following = first, at + 8, second, at + 8 + -(-second // 8) * 8
+        if start + size > len(body):
+            raise struct.error("sub-element beyond the bytes read")
+        return kind, body[start : start + size], following
+
+    if struct.unpack(order + "I", body[:4])[0] != _MI_MATRIX:
+        return None
+    flags_type, flags, at = sub_element(8)
+    dims_type, dims, at = sub_element(at)
+    name_type, name, _ = sub_element(at)
+    if flags_type != 6 or len(flags) != 8 or dims_type != 5 or len(dims) % 4 or name_type != 1:
+        return None
+    if not name:  # a MATLAB 7 function workspace, which scipy reads apart
+        return None
+    flag_word = struct.unpack(order + "I", flags[:4])[0]
+    shape = struct.unpack(order + f"{len(dims) // 4}i", dims)
+    plain_vector = (
+        flag_word & 0xFF in _MAT5_NUMERIC_CLASSES
+        and sum(extent > 1 for extent in shape) == 1
+        and min(shape) >= 1
+    )
+    return name.decode("latin1"), plain_vector
 
 
 def _read_mat73(path: Path, shown: str) -> dict[str, Any]:
@@ -243,6 +389,9 @@ def channels_from_variables(variables: dict[str, Any], format_name: str, shown: 
     rates: list[tuple[str, float]] = []
     plain: list[tuple[str, np.ndarray]] = []
     for name, value in variables.items():
+        if isinstance(value, _DeferredVector):
+            plain.append((name, value))
+            continue
         if isinstance(value, dict) and "y_values" in value and "x_values" in value:
             channels += _testlab_channels(name, value, shown)
             testlab = True
@@ -275,7 +424,8 @@ def channels_from_variables(variables: dict[str, Any], format_name: str, shown: 
         channels.append(
             Channel(
                 name=name,
-                values=array,
+                values=None if isinstance(array, _DeferredVector) else array,
+                load=array.load if isinstance(array, _DeferredVector) else None,
                 record=f"variable {name!r}",
                 sample_interval_s=interval_s,
                 interval_source=f"variable {rates[0][0]!r}" if rates else None,
