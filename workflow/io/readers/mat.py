@@ -35,6 +35,8 @@ from workflow.io.records import CampaignFormatError
 __all__ = [
     "read_mat_channels",
     "channels_from_variables",
+    "Mat5VariableHeader",
+    "mat5_variable_headers",
 ]
 
 
