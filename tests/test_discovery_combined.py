@@ -166,3 +166,52 @@ def test_micro_slip_at_the_edge_of_its_range_is_named_by_its_threshold_distribut
     assert refinement["adopted"] and refinement["heldout_error"] < refinement["iwan_heldout_error"]
     stiffness = configuration["evidence"]["candidates"]["stiffness_nonlinearity"]["heldout_error"]
     assert configuration["gain"]["extended"] < stiffness
+
+
+def judged_verdict(single_verdict: str, combination_square: float, tolerance_square: float) -> str:
+    """The verdict after :func:`judge_combinations` on eight runs whose held-out squared
+    errors (per run, both curves alike) are: baseline 1, micro-slip alone and the
+    velocity-squared loss alone 0.95, micro-slip + velocity-squared ``combination_square``
+    (the combination's test passes by far at 0.5: 0.47 of what either part leaves is
+    removed, consistently over the runs); the baseline's misfit not significant."""
+    from workflow.discovery.configuration import judge_combinations
+    from workflow.discovery.decision import ModelEvidence
+
+    n_runs, per_run = 8, 12
+    v = np.tile(np.geomspace(0.1, 3.0, per_run), n_runs)
+    data = ConfigurationData(
+        "x", v, np.full(v.size, 1e-3), np.full(v.size, 100.0), np.repeat(np.arange(n_runs), per_run),
+        [f"r{i}" for i in range(n_runs)], 1.0,
+    )  # fmt: skip
+    combination, joint = "iwan_cells_4_quadratic", "iwan_cells_4"
+    spread = np.exp(np.random.default_rng(0).normal(0.0, 0.02, n_runs))
+    units = {"dahl": np.ones(n_runs), "iwan": np.full(n_runs, 0.95), joint: np.full(n_runs, 0.95)}
+    units |= {"dahl_quadratic": np.full(n_runs, 0.95), combination: combination_square * spread}
+    result = {
+        "verdict": single_verdict,
+        "reason": "",
+        "baseline": "dahl",
+        "errors": {m: {"error": float(np.sqrt(u.mean()))} for m, u in units.items()},
+        "bic": {m: -10.0 if m == combination else 0.0 for m in units},
+        "unit_squares": units,
+        "unit_curve_squares": {m: np.array([u, u]) for m, u in units.items()},
+        "unit_tolerance": np.full((2, n_runs), tolerance_square),
+        "unit_weights": np.ones(n_runs),
+        "baseline_fails": False,
+        "extended_models": {"microslip_power_law": "iwan", "quadratic_damping": "dahl_quadratic"},
+    }
+    no_misfit = {k: np.zeros(v.size) for k in ("ln_zeta", "rel_f", "z_norm", "f_norm", "z_noise", "f_noise")}
+    judge_combinations(data, result, {combination: ModelEvidence(no_misfit, {}, 6)})
+    return result["verdict"]
+
+
+def test_a_combination_replaces_none_only_through_the_gate_a_single_cause_passes():
+    """Where no single cause departs from the baseline (`none`), a combination that beats
+    its parts is named only if it departs itself as decision.decide asks of a single cause:
+    here its error is 0.71 of the baseline's (no clear gain), so it must remove more
+    held-out misfit than the models' accuracy."""
+    both = "microslip_power_law+quadratic_damping"
+    assert judged_verdict("none", 0.5, tolerance_square=1.0) == "none"
+    assert judged_verdict("none", 0.5, tolerance_square=1e-6) == both
+    # after a single cause, the combination's own test and its gain over that cause suffice
+    assert judged_verdict("microslip_power_law", 0.5, tolerance_square=1.0) == both

@@ -20,7 +20,7 @@ from workflow.discovery.combined import (
     one_curve_scatter,
     term_from_residuals,
 )
-from workflow.discovery.confidence import VerdictOption, verdict_causes, verdict_key
+from workflow.discovery.confidence import VerdictOption, beyond_accuracy, verdict_causes, verdict_key
 from workflow.discovery.decision import (
     BASELINE_MODELS,
     CAUSE_MODELS,
@@ -237,7 +237,8 @@ def judge_combinations(
     :func:`workflow.discovery.combined.combination_test`; one may replace the single verdict.
 
     A combination becomes the verdict (``result["verdict"]``, its ``confidence`` key) when
-    it passes the test, lowers the BIC of the baseline, shows micro-slip's signature on its
+    it passes the test, lowers the BIC of the baseline, passes the gate of a departure from
+    the baseline where the single verdict is ``none``, shows micro-slip's signature on its
     joint and the stiffness signature where it has a stiffness term, predicts held-out data better than the single verdict's model,
     and does not leave a significant misfit with less than ``RESIDUAL_GAIN`` of the
     baseline's error; among several, the lower held-out error.
@@ -264,7 +265,22 @@ def judge_combinations(
         trend = run_order_trend(data, evidence[model].residuals, n_tests=RUN_ORDER_TESTS)
         significant = any(b["significant"] for b in bins) or bool(trend and trend["significant"])
         ratio = errors[model]["error"] / errors[base]["error"]
-        eligible = test["named"] and bic[model] < bic[base] and evidence[model].shows_signature
+        # where no single cause departs from the baseline, a combination must pass the same
+        # gate as a single cause does (decision.decide): its own clear gain or accuracy margin
+        departs = (
+            verdict != "none"
+            or result["baseline_fails"]
+            or ratio < CLEAR_GAIN
+            or bool(
+                beyond_accuracy(
+                    result["unit_curve_squares"][base],
+                    result["unit_curve_squares"][model],
+                    result["unit_tolerance"],
+                    np.ones((1, len(result["unit_weights"]))),
+                )[0]
+            )
+        )
+        eligible = test["named"] and departs and bic[model] < bic[base] and evidence[model].shows_signature
         key = verdict_key(causes)
         combinations[key] = {
             "model": model,
