@@ -72,9 +72,9 @@ REASONS = {
     "misfit_left": "the best eligible candidate (quadratic_damping) leaves a significant misfit and cuts the "
     "held-out error only to 0.75 of the baseline's",
     "named_misfit": "baseline misfit significant; quadratic_damping has the lowest held-out error among "
-    "candidates that also lower the BIC",
+    "candidates that also pay for their parameters",
     "named_gain": "clear held-out gain; quadratic_damping has the lowest held-out error among candidates that "
-    "also lower the BIC",
+    "also pay for their parameters",
 }
 
 

@@ -206,7 +206,9 @@ def decide(
             "the baseline's"
         )
     why = "baseline misfit significant" if baseline_fails else "clear held-out gain"
-    return best, (f"{why}; {best} has the lowest held-out error among candidates that also lower the BIC")
+    return best, (
+        f"{why}; {best} has the lowest held-out error among candidates that also pay for their parameters"
+    )
 
 
 def heldout_gain_t(

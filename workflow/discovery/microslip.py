@@ -1,7 +1,8 @@
 """Micro-slip refinement: the Iwan joint whose slip-threshold distribution the data set.
 
-When the power-law Iwan joint is the cause but does not explain the data, the thresholds
-are recovered as half-decade cells of stiffness share, started from the power-law fit
+When the power-law Iwan joint does not explain the data and micro-slip is the verdict or,
+with a significant baseline misfit, an eligible candidate
+(:func:`workflow.discovery.configuration.needs_threshold_cells`), the thresholds are recovered as half-decade cells of stiffness share, started from the power-law fit
 written as cells, with Gauss-Newton standard errors.
 """
 
