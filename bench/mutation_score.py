@@ -46,7 +46,7 @@ TARGETS = {
     ),
     # Segment layout only (the decay's other functions take hours of mutants on one core).
     "segment_bounds": (
-        "workflow/measured/decay.py:segment_bounds",
+        "workflow/measured/segment_fits.py:segment_bounds",
         ["tests/test_measured_decay.py", "tests/test_measured_decay_truth.py"],
         "segment or overlap",
     ),

@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from workflow.measured import decay, filters
-from workflow.measured.decay import analyse_decay, log_decrement_segments, segment_bounds
+from workflow.measured import decay, filters, segment_fits
+from workflow.measured.decay import analyse_decay
 from workflow.measured.filters import analytic_signal, bandpass, envelope
+from workflow.measured.segment_fits import log_decrement_segments, segment_bounds
 
 PRETRIGGER = 25
 
@@ -102,7 +103,7 @@ def test_segments_analysed_side_by_side_equal_a_line_fit_of_each(monkeypatch):
     env[4000] = 0.0
     starts, stops = segment_bounds(100, x.size - 100, fs_hz, 125.0)
     starts, stops = np.append(starts, 1234), np.append(stops, 1234 + int(rng.integers(50, 90)))
-    monkeypatch.setattr(decay, "SEGMENT_BLOCK_SAMPLES", 3 * int(stops[0] - starts[0]))
+    monkeypatch.setattr(segment_fits, "SEGMENT_BLOCK_SAMPLES", 3 * int(stops[0] - starts[0]))
     seg = log_decrement_segments(env, phase, fs_hz, starts, stops)
     for k, (start, stop) in enumerate(zip(starts, stops)):
         t = np.arange(start, stop) / fs_hz
@@ -421,7 +422,7 @@ def test_a_decay_cut_after_the_settling_time_keeps_its_band_passed_envelope_peak
 
 @pytest.mark.parametrize("scale_rad", [1e-8, 1e-3, 1.0, 30.0, 1e5])
 def test_sine_squared_by_the_tangent_equals_the_sine_to_a_few_units_in_the_last_place(scale_rad):
-    from workflow.measured.decay import _sine_squared
+    from workflow.measured.segment_fits import _sine_squared
 
     angle_rad = np.random.default_rng(3).normal(scale=scale_rad, size=100_000)
     expected = np.sin(angle_rad) ** 2

@@ -8,8 +8,9 @@ from test_measured_decay import band, ring_down
 
 from workflow.io.interim import ModeInfo
 from workflow.io.records import RunRecord
-from workflow.measured.decay import analyse_decay, segment_bounds
+from workflow.measured.decay import analyse_decay
 from workflow.measured.runs import analyse_run_with_quality
+from workflow.measured.segment_fits import segment_bounds
 from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 F_HZ, ZETA, FS_HZ, DURATION_S = 125.0, 0.002, 2560.0, 3.2

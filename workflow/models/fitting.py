@@ -54,7 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from workflow.measured import decay, filters
+from workflow.measured import filters, segment_fits
 from workflow.measured.settings import AnalysisSettings
 from workflow.models.ringdown import simulate_ringdown
 from workflow.models.sampling import scrambled_sobol_points
@@ -289,7 +289,7 @@ def analyse_batch(responses: np.ndarray, ctx: RingdownFitContext) -> list[dict[s
         if not np.isfinite(mode_hz) or mode_hz <= 0:
             out.append(empty)
             continue
-        starts, stops = decay.segment_bounds(
+        starts, stops = segment_fits.segment_bounds(
             start + edge,
             n - edge,
             ctx.fs_hz,
@@ -297,7 +297,7 @@ def analyse_batch(responses: np.ndarray, ctx: RingdownFitContext) -> list[dict[s
             ctx.analysis.segment_cycles,
             ctx.analysis.segment_overlap,
         )
-        seg = decay.log_decrement_segments(env, phase, ctx.fs_hz, starts, stops)
+        seg = segment_fits.log_decrement_segments(env, phase, ctx.fs_hz, starts, stops)
         amp, zeta, freq = seg["amplitude"], seg["zeta"], seg["frequency_hz"]
         ok = np.isfinite(zeta) & np.isfinite(freq) & (amp > 0) & (freq > 0)
         amp, zeta, freq = amp[ok], zeta[ok], freq[ok]
