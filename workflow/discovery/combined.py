@@ -29,6 +29,7 @@ __all__ = [
     "PAIRED_FALSE_ALARM",
     "paired_critical_value",
     "paired_t",
+    "squared_error_log_ratio",
     "reweighted_combination_test",
     "MIN_REMOVED_SHARE",
     "combinations_to_try",
@@ -188,6 +189,18 @@ def term_from_residuals(
     return best[1]
 
 
+def squared_error_log_ratio(worse_squares: np.ndarray, better_squares: np.ndarray) -> np.ndarray:
+    """Per unit of evidence, ``ln(worse / better)`` of two models' squared held-out errors
+    (both floored at the smallest positive double): the scale-free comparison that
+    :func:`paired_t` tests.
+
+    >>> squared_error_log_ratio(np.array([np.e, 0.0]), np.array([1.0, 0.0])).tolist()
+    [1.0, 0.0]
+    """
+    floor = np.finfo(float).tiny
+    return np.log(np.maximum(worse_squares, floor) / np.maximum(better_squares, floor))
+
+
 def paired_t(values: np.ndarray, draws: np.ndarray | None = None) -> np.ndarray:
     """Student's t of the weighted mean of paired values against 0, per row of unit weights.
 
@@ -278,8 +291,7 @@ def reweighted_combination_test(
         removed[cause] = np.where(
             other_alone > 0, np.maximum(other_alone - combined, 0.0) / np.maximum(other_alone, floor), 0.0
         )
-        log_ratio = np.log(np.maximum(other_squares, floor) / np.maximum(combined_squares[present], floor))
-        log_t[cause] = paired_t(log_ratio, a)
+        log_t[cause] = paired_t(squared_error_log_ratio(other_squares, combined_squares[present]), a)
     named = np.logical_and.reduce([(log_t[c] > critical_t) & (removed[c] >= min_removed) for c in causes])
     return {"log_ratio_t": log_t, "removed": removed, "named": named, "critical_t": critical_t}
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from workflow.discovery.combined import paired_critical_value, paired_t
+from workflow.discovery.combined import paired_critical_value, paired_t, squared_error_log_ratio
 from workflow.discovery.confidence import (
     HeldoutEvidence,
     VerdictOption,
@@ -225,9 +225,7 @@ def heldout_gain_t(
     5.27
     """
     present = unit_weights > 0
-    floor = np.finfo(float).tiny
-    ratio = np.maximum(baseline_squares[present], floor) / np.maximum(candidate_squares[present], floor)
-    return float(paired_t(np.log(ratio))[0])
+    return float(paired_t(squared_error_log_ratio(baseline_squares[present], candidate_squares[present]))[0])
 
 
 def parsimonious(cause: str, candidate: Mapping, baseline_bic: float) -> bool:
