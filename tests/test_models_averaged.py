@@ -21,6 +21,7 @@ from workflow.models.joint_averages import (
     iwan_cells_averages,
     jenkins_dissipation,
     jenkins_inphase,
+    jenkins_log_integral,
     lugre_averages,
     power_stiffness_harmonic_factor,
     threshold_cell_edges,
@@ -339,6 +340,26 @@ def test_gradient_along_grid_is_numpys_gradient_to_the_bit(coordinate):
     np.testing.assert_array_equal(
         gradient_along_grid(values, coordinate), np.gradient(values, coordinate, axis=-1)
     )
+
+
+def test_jenkins_log_integral_is_numpys_interp_of_its_table_to_the_bit():
+    # the Iwan cells' fits are unchanged only if every value is: random points, the
+    # table's own points and their neighbours on both sides, the ends
+    from workflow.models.joint_averages import _JENKINS_LOG_H, _JENKINS_LOG_TAU
+
+    tau = _JENKINS_LOG_TAU
+    points = np.concatenate(
+        [
+            np.random.default_rng(0).random(200_000),
+            np.geomspace(1e-12, 1.0, 1000),
+            tau,
+            np.nextafter(tau, 2.0),
+            np.nextafter(tau[1:], -1.0),
+            [0.0, 1.0],
+        ]
+    )
+    points = np.minimum(points, 1.0).reshape(-1, 4)
+    np.testing.assert_array_equal(jenkins_log_integral(points), np.interp(points, tau, _JENKINS_LOG_H))
 
 
 def test_gradient_along_grid_of_a_quadratic_is_exact_inside():

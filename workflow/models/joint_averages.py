@@ -33,6 +33,7 @@ __all__ = [
     "jenkins_inphase",
     "iwan_averages",
     "iwan_cells_averages",
+    "jenkins_log_integral",
     "threshold_cell_edges",
     "lugre_averages",
     "power_stiffness_harmonic_factor",
@@ -212,6 +213,26 @@ def _jenkins_log_integral_table(n: int = 20001) -> tuple[np.ndarray, np.ndarray]
 
 
 _JENKINS_LOG_TAU, _JENKINS_LOG_H = _jenkins_log_integral_table()
+_JENKINS_LOG_SLOPE = np.diff(_JENKINS_LOG_H) / np.diff(_JENKINS_LOG_TAU)
+
+
+def jenkins_log_integral(tau: np.ndarray) -> np.ndarray:
+    """``H(tau)`` (:func:`_jenkins_log_integral_table`) at ``0 <= tau <= 1``, interpolated
+    linearly between the table's points.
+
+    The arithmetic of ``np.interp(tau, *table)``, to the bit (tested), with the interval
+    found from the table's even spacing instead of a binary search: 6 times faster on the
+    fits' arrays, where it was a fifth of the Iwan cells' averages.
+    """
+    last = _JENKINS_LOG_TAU.size - 1
+    # the spacing's estimate, then the correction to the interval tau_j <= tau < tau_(j+1)
+    j = np.minimum((tau * last).astype(np.intp), last - 1)
+    j -= _JENKINS_LOG_TAU[j] > tau
+    j += (j < last - 1) & (_JENKINS_LOG_TAU[np.minimum(j + 1, last)] <= tau)
+    at = _JENKINS_LOG_TAU[j]
+    inside = _JENKINS_LOG_SLOPE[j] * (tau - at) + _JENKINS_LOG_H[j]
+    # np.interp returns the table's value on a point and at or past the end
+    return np.where(tau >= 1.0, _JENKINS_LOG_H[last], np.where(tau == at, _JENKINS_LOG_H[j], inside))
 
 
 def threshold_cell_edges(n_cells: int) -> np.ndarray:
@@ -257,8 +278,8 @@ def iwan_cells_averages(y: ArrayLike, shares: ArrayLike) -> JointAverages:
     m = np.clip(x, low, high)
     d = np.sum(4.0 * c * (x * (m - low) - 0.5 * (m**2 - low**2)), axis=-1)
     safe_x = np.where(x > 0, x, 1.0)
-    h_top = np.interp(np.minimum(m / safe_x, 1.0), _JENKINS_LOG_TAU, _JENKINS_LOG_H)
-    h_low = np.interp(np.minimum(low / safe_x, 1.0), _JENKINS_LOG_TAU, _JENKINS_LOG_H)
+    h_top = jenkins_log_integral(np.minimum(m / safe_x, 1.0))
+    h_low = jenkins_log_integral(np.minimum(low / safe_x, 1.0))
     stuck = c * np.log(high / m)
     g = np.sum(c * (h_top - h_low) + stuck, axis=-1)
     slope = x[..., 0] * np.sum(stuck, axis=-1)
