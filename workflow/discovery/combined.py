@@ -15,7 +15,6 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 import numpy as np
-from scipy import special
 
 from workflow.discovery.heldout import heldout_standard_error
 from workflow.models.averaged import COMBINED_MODELS, MODELS
@@ -62,8 +61,11 @@ def paired_critical_value(n_units: int, false_alarm: float = PAIRED_FALSE_ALARM)
     >>> round(paired_critical_value(8), 2), round(paired_critical_value(5), 2)
     (2.36, 2.78)
     """
-    # scipy.special's inverse is the one scipy.stats.t.ppf calls; importing scipy.stats
-    # cost every job that imports the discovery a quarter of a second.
+    # scipy.special's inverse is the one scipy.stats.t.ppf calls; scipy.stats would cost
+    # every job that imports the discovery a quarter of a second, and scipy.special is
+    # imported here, for the jobs that import the discovery to assemble or draw it
+    from scipy import special
+
     return float(special.stdtrit(max(n_units - 1, 1), 1.0 - false_alarm))
 
 

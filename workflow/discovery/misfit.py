@@ -12,8 +12,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 import numpy as np
-from scipy import optimize, special
 
+# scipy is imported in the functions that test: the jobs that assemble, word or draw the
+# diagnosis import this module without calling them (scipy.optimize costs them 0.3 s)
 from workflow.discovery.heldout import amplitude_bin, amplitude_weights
 from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import model_curves
@@ -146,6 +147,7 @@ def binned_discrepancy(
         ``tolerance``, ``significant``; with several runs also ``run_ids`` and
         ``run_means`` (the observations, for :func:`failure_draws`).
     """
+    from scipy import special
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     rows = []
     for curve, key, scaled, tol in (
@@ -242,6 +244,7 @@ def run_order_trend(
     the model accuracy), ``order`` (which run order, ``data.run_order``) and ``runs`` (the
     run names in that order).
     """
+    from scipy import special
     x = np.arange(data.n_runs, dtype=float)
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
@@ -314,6 +317,7 @@ def failure_draws(bins: Sequence[Mapping], trend: Mapping | None, draws: np.ndar
     -------
     ndarray of bool, shape (B,)
     """
+    from scipy import special
     fails = np.zeros(draws.shape[0], dtype=bool)
     for row in bins:
         if "run_means" not in row:
@@ -384,6 +388,7 @@ def proportional_departure(amplitude: np.ndarray, departure: np.ndarray) -> floa
     >>> round(proportional_departure(a, 0.02 / a), 6), round(proportional_departure(a, np.full(20, 0.2)), 6)
     (0.0, 0.2)
     """
+    from scipy import optimize
     scale = (amplitude.max() / amplitude) ** 2
     (d2, _), _ = optimize.nnls(np.column_stack([np.ones_like(scale), scale]), departure**2)
     return float(np.sqrt(d2))
