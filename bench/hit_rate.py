@@ -515,9 +515,13 @@ def report(results: list[dict], causes: list[str]) -> None:
         if rows:
             hit = sum(is_right(r) for r in visible) / len(visible) if visible else float("nan")
             smallest = min(r["case"][key] for r in rows)
+            ratios = sorted(r["ratio"] for r in visible if is_right(r) and r["ratio"] is not None)
+            gains = (
+                f", gain ratio median {ratios[len(ratios) // 2]:.3f} max {ratios[-1]:.3f}" if ratios else ""
+            )
             print(
                 f"  {cause:{width}s} in the data {len(visible)}/{len(rows)} (smallest {smallest:g} scatters), "
-                f"hit rate there {hit:.2f}"
+                f"hit rate there {hit:.2f}{gains}"
             )
     print("\nmisses:")
     for r in results:
