@@ -148,6 +148,7 @@ def binned_discrepancy(
         ``run_means`` (the observations, for :func:`failure_draws`).
     """
     from scipy import special
+
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     rows = []
     for curve, key, scaled, tol in (
@@ -245,6 +246,7 @@ def run_order_trend(
     run names in that order).
     """
     from scipy import special
+
     x = np.arange(data.n_runs, dtype=float)
     r = residuals.get("ln_zeta_calibrated", residuals.get("ln_zeta_shared", residuals["ln_zeta"]))
     w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
@@ -318,6 +320,7 @@ def failure_draws(bins: Sequence[Mapping], trend: Mapping | None, draws: np.ndar
     ndarray of bool, shape (B,)
     """
     from scipy import special
+
     fails = np.zeros(draws.shape[0], dtype=bool)
     for row in bins:
         if "run_means" not in row:
@@ -389,6 +392,7 @@ def proportional_departure(amplitude: np.ndarray, departure: np.ndarray) -> floa
     (0.0, 0.2)
     """
     from scipy import optimize
+
     scale = (amplitude.max() / amplitude) ** 2
     (d2, _), _ = optimize.nnls(np.column_stack([np.ones_like(scale), scale]), departure**2)
     return float(np.sqrt(d2))

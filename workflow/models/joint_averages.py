@@ -91,6 +91,7 @@ def dahl_averages(y: ArrayLike) -> JointAverages:
     JointAverages
     """
     from scipy import special
+
     y = np.abs(np.asarray(y, dtype=float))
     small = y < 1e-3
     ys = np.where(small, 1.0, y)
@@ -371,5 +372,6 @@ def power_stiffness_harmonic_factor(p: ArrayLike) -> np.ndarray:
     3/4), its potential ``k_p a^(p+2) / (p + 2)``.
     """
     from scipy import special
+
     m = np.asarray(p, dtype=float) + 2.0
     return 2.0 / np.sqrt(np.pi) * np.exp(special.gammaln((m + 1.0) / 2.0) - special.gammaln(m / 2.0 + 1.0))
