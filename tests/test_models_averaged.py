@@ -344,7 +344,7 @@ def test_gradient_along_grid_is_numpys_gradient_to_the_bit(coordinate):
 
 def test_jenkins_log_integral_is_numpys_interp_of_its_table_to_the_bit():
     # the Iwan cells' fits are unchanged only if every value is: random points, the
-    # table's own points and their neighbours on both sides, the ends
+    # table's own points and their neighbours on both sides, the ends, NaN
     from workflow.models.joint_averages import _JENKINS_LOG_H, _JENKINS_LOG_TAU
 
     tau = _JENKINS_LOG_TAU
@@ -355,11 +355,12 @@ def test_jenkins_log_integral_is_numpys_interp_of_its_table_to_the_bit():
             tau,
             np.nextafter(tau, 2.0),
             np.nextafter(tau[1:], -1.0),
-            [0.0, 1.0],
+            [0.0, 1.0, np.nan, np.nan, 0.5, 1.0],
         ]
     )
     points = np.minimum(points, 1.0).reshape(-1, 4)
-    np.testing.assert_array_equal(jenkins_log_integral(points), np.interp(points, tau, _JENKINS_LOG_H))
+    with np.errstate(invalid="ignore"):
+        np.testing.assert_array_equal(jenkins_log_integral(points), np.interp(points, tau, _JENKINS_LOG_H))
 
 
 def test_gradient_along_grid_of_a_quadratic_is_exact_inside():

@@ -220,16 +220,17 @@ _JENKINS_LOG_SLOPE = np.diff(_JENKINS_LOG_H) / np.diff(_JENKINS_LOG_TAU)
 
 
 def jenkins_log_integral(tau: np.ndarray) -> np.ndarray:
-    """``H(tau)`` (:func:`_jenkins_log_integral_table`) at ``0 <= tau <= 1``, interpolated
-    linearly between the table's points.
+    """``H(tau)`` (:func:`_jenkins_log_integral_table`) at ``0 <= tau <= 1`` (or NaN),
+    interpolated linearly between the table's points.
 
     The arithmetic of ``np.interp(tau, *table)``, to the bit (tested), with the interval
     found from the table's even spacing instead of a binary search: 6 times faster on the
     fits' arrays, where it was a fifth of the Iwan cells' averages.
     """
     last = _JENKINS_LOG_TAU.size - 1
-    # the spacing's estimate, then the correction to the interval tau_j <= tau < tau_(j+1)
-    j = np.minimum((tau * last).astype(np.intp), last - 1)
+    # the spacing's estimate, then the correction to the interval tau_j <= tau < tau_(j+1);
+    # a NaN (a fit's trial point beyond the curves' range) gets any interval and stays NaN
+    j = np.minimum(np.maximum((tau * last).astype(np.intp), 0), last - 1)
     j -= _JENKINS_LOG_TAU[j] > tau
     j += (j < last - 1) & (_JENKINS_LOG_TAU[np.minimum(j + 1, last)] <= tau)
     at = _JENKINS_LOG_TAU[j]
