@@ -141,8 +141,7 @@ def log_decrement_segments(
     starts, stops : array_like of int
         Segment ``k`` covers samples ``starts[k]:stops[k]`` (from :func:`segment_bounds`).
     residuals : bool, optional
-        False leaves ``fit_rms`` and ``phase_rms_rad`` NaN (for a caller that needs the
-        slopes only).
+        False leaves ``fit_rms`` NaN (for a caller that needs the slopes only).
 
     Returns
     -------
@@ -151,8 +150,8 @@ def log_decrement_segments(
         U; ``zeta``: damping ratio (fraction of critical); ``frequency_hz``: damped
         frequency ``omega_d / 2 pi``, Hz; ``decay_rate_1_s``: ``-s = zeta omega_n``,
         1/s; ``fit_rms``: rms residual of the ln-envelope line (relative amplitude
-        scatter); ``phase_rms_rad``: rms residual of the phase line, rad;
-        ``min_envelope``: smallest envelope value, U; ``start_index``, ``stop_index``.
+        scatter); ``min_envelope``: smallest envelope value, U; ``start_index``,
+        ``stop_index``.
 
     Notes
     -----
@@ -188,7 +187,6 @@ def log_decrement_segments(
             "frequency_hz",
             "decay_rate_1_s",
             "fit_rms",
-            "phase_rms_rad",
             "min_envelope",
         )
     }
@@ -208,11 +206,9 @@ def log_decrement_segments(
         _, slope, fit_rms = _line_fits(
             t_centred, window_rows(log_envelope, length, first), residual=residuals
         )
-        _, omega_d, phase_rms = _line_fits(
-            t_centred, window_rows(phase_rad, length, first), residual=residuals
-        )
+        _, omega_d, _ = _line_fits(t_centred, window_rows(phase_rad, length, first), residual=False)
         if residuals:
-            out["fit_rms"][rows], out["phase_rms_rad"][rows] = fit_rms, phase_rms
+            out["fit_rms"][rows] = fit_rms
         out["decay_rate_1_s"][rows] = -slope
         out["zeta"][rows] = -slope / np.hypot(slope, omega_d)
         out["frequency_hz"][rows] = omega_d / (2.0 * np.pi)
