@@ -440,6 +440,29 @@ def test_the_synthetic_decay_is_the_exact_decay_to_the_rounding_of_its_phase(
     )
 
 
+@pytest.mark.parametrize("overlap", [0.0, 0.25, 0.5, 0.6, 0.9])
+def test_envelope_rise_is_each_segments_largest_rise_to_the_bit(overlap):
+    """The rises from blocks of one hop equal each segment's own running minimum's, to the
+    bit (minima, maxima and one subtraction of the same two values), for segments that
+    end inside a block, at the envelope's last sample, and at irregular starts."""
+    from workflow.measured.segment_fits import envelope_rise
+
+    rng = np.random.default_rng(5)
+    for trial in range(40):
+        n = int(rng.integers(60, 3000))
+        noise = rng.standard_normal(n)
+        envelope = np.exp(-np.linspace(0, 5, n)) + 0.05 * noise if trial % 2 else noise
+        length = int(rng.integers(3, n // 3))
+        starts, stops = segment_bounds(int(rng.integers(0, n // 4)), n, 1.0, 1.0, length, overlap)
+        if trial % 5 == 0:  # irregular starts: each segment alone
+            starts = np.sort(rng.choice(n - length, size=4, replace=False))
+            stops = starts + length
+        expected = [
+            np.max(envelope[a:b] - np.minimum.accumulate(envelope[a:b])) for a, b in zip(starts, stops)
+        ]
+        assert np.array_equal(envelope_rise(envelope, starts, stops), expected)
+
+
 @pytest.mark.parametrize("scale_rad", [1e-8, 1e-3, 1.0, 30.0, 1e5])
 def test_sine_squared_by_the_tangent_equals_the_sine_to_a_few_units_in_the_last_place(scale_rad):
     from workflow.measured.segment_fits import _sine_squared
