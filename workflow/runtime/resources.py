@@ -2,7 +2,7 @@
 
 A job's peak grows with the samples of the runs it reads, so a fixed ``mem_mb`` is either
 far too much for the usual 8192-sample run or too little for a long record (a 1e7-sample
-ASCII run peaked at 2003 MB in ``analyse_runs``, declared 1500 MB). The rules call these
+ASCII run peaks at 1258 MB in ``analyse_runs``). The rules call these
 functions with the job's run files once they exist; the peaks per sample are measured by
 bench/bench_long_record_memory.py.
 """
@@ -43,8 +43,8 @@ sample, the text parsed in chunks, the columns as float64), which it follows."""
 
 ANALYSE_BYTES_PER_SAMPLE = 200
 """Peak of reading and analysing one run (band-pass forward and backward, analytic signal,
-envelope, segments), per sample: 187 B measured on a 1e7-sample ASCII run, 122 B on a
-5.6e6-sample one."""
+envelope, segments), per sample: 121-122 B measured on ASCII runs of 5.6e6 and 1e7
+samples."""
 
 BINARY_BYTES_PER_SAMPLE = 4
 """Fewest bytes a system format (MAT, UFF, TDMS) stores per sample: a float32 response
@@ -79,7 +79,7 @@ def analyse_runs_mem_mb(run_files: Iterable[str | os.PathLike]) -> int:
 
     Examples
     --------
-    A 1e7-sample ASCII run (362 MB) peaked at 2003 MB (bench/bench_long_record_memory.py):
+    A 1e7-sample ASCII run (362 MB) peaked at 1258 MB (bench/bench_long_record_memory.py):
 
     >>> import tempfile
     >>> with tempfile.NamedTemporaryFile(suffix=".txt") as run:
