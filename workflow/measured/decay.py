@@ -184,8 +184,9 @@ def _decay_from_rest(n_samples: int, fs_hz: float, mode_hz: float, zeta: float) 
     It is the imaginary part of ``exp(p k)``, ``p = (-zeta omega_n + i omega_d) / fs_hz``,
     taken as ``exp(p B b) exp(p j)`` for ``k = B b + j``, ``B`` about ``sqrt(n_samples)``:
     2 sqrt(n) complex exponentials and n products instead of an exponential and a sine of
-    every sample (NumPy's float64 sine is not vectorised): a third of their time. Either way the phase of sample ``k`` is rounded once it is
-    thousands of radians: both are within 2 eps x that phase of the exact decay (tested).
+    every sample (NumPy's float64 sine is not vectorised): a third of their time. Either
+    way the phase of sample ``k`` is rounded once it is thousands of radians: both are
+    within 2 eps x that phase of the exact decay (tested).
     """
     omega_n = 2.0 * np.pi * mode_hz
     pole = complex(-zeta * omega_n, omega_n * np.sqrt(1.0 - zeta**2)) / fs_hz
