@@ -5,9 +5,10 @@ Run: ``PYTHONPATH=$PWD .venv/bin/python bench/bench_long_record_memory.py [size_
 (default 200). Writes a ring-down of about ``size_mb`` MB (time, force, response at
 25.6 kHz) to a temporary campaign, then runs each stage in a fresh process and prints
 its peak resident memory (``VmHWM``): the interpreter and imports alone, the reader
-(``read_run``), the mode search of ``identify_mode`` on two such runs (it holds every run
-of its configuration) and the whole ``analyse_runs`` work for one run; beside each, the
-bytes per sample above the imports.
+(``read_run``), the whole ``identify_mode`` job on a configuration of two such runs (as
+scripts/identify_mode.py does it: every run read and held for the mode search, then its
+first group, here both runs, analysed from the runs held) and the whole ``analyse_runs``
+work for one run (a later group's); beside each, the bytes per sample above the imports.
 """
 
 import shutil
@@ -29,10 +30,13 @@ STAGES = {
     "imports": "",
     "read_run": "record = read_run(root, 'long/run01.txt', campaign)",
     "identify_mode": (
+        "reads = read_runs(root, RUNS, campaign, quality_settings)\n"
         "found = identify_configuration_mode(root, RUNS, configuration='long', campaign=campaign,\n"
-        "    mode_search=AnalysisSettings(), quality_settings=quality_settings)\n"
+        "    mode_search=AnalysisSettings(), quality_settings=quality_settings, reads=reads)\n"
         "write_mode(sys.argv[2], found)\n"
-        "print(found.mode)"
+        "results = analyse_run_group(root, RUNS, reads=reads, configuration='long', campaign=campaign,\n"
+        "    mode=found, quality_settings=quality_settings, decay_settings=AnalysisSettings())\n"
+        "print([result.status['status'] for result in results], found.mode)"
     ),
     "analyse_runs": (
         "result = analyse_run_file(root, 'long/run01.txt', configuration='long', campaign=campaign,\n"
@@ -50,7 +54,7 @@ from workflow.io.run_files import read_run
 from workflow.io.interim import read_mode, write_mode
 from workflow.measured.settings import AnalysisSettings, QualitySettings
 from workflow.measured.mode_identification import identify_configuration_mode
-from workflow.measured.runs import analyse_run_file
+from workflow.measured.runs import analyse_run_file, analyse_run_group, read_runs
 root = Path(sys.argv[1])
 RUNS = ['long/run01.txt', 'long/run02.txt']
 campaign = load_campaign(root)
@@ -107,8 +111,9 @@ def main(size_mb: float = 200.0) -> None:
         file_mb = path.stat().st_size / 1e6
         n_samples = sum(1 for _ in open(path)) - 2
         print(f"run file: {file_mb:.0f} MB, {n_samples} samples")
+        runs = [path, root / "long" / "run02.txt"]
         declared = {
-            "identify_mode": identify_mode_mem_mb([path, root / "long" / "run02.txt"]),
+            "identify_mode": identify_mode_mem_mb(runs, runs),
             "analyse_runs": analyse_runs_mem_mb([path]),
         }
         print(f"{'stage':<16}{'peak MB':>9}{'B/sample':>9}{'wall s':>8}  declared mem_mb")
@@ -117,7 +122,7 @@ def main(size_mb: float = 200.0) -> None:
         for stage, extra, what in (
             ("imports", (), ""),
             ("read_run", (), ""),
-            ("identify_mode", (mode_path,), "2 runs"),
+            ("identify_mode", (mode_path,), "2 runs held, both analysed"),
             ("analyse_runs", (mode_path,), "1 run"),
         ):
             peak, elapsed_s, last = peak_mb(stage, root, *extra)

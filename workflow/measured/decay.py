@@ -164,11 +164,14 @@ class DecayResult:
 
 
 def _synthetic_decay(
-    n_samples: int, fs_hz: float, mode_hz: float, zeta: float, onset_index: int
+    n_samples: int, fs_hz: float, mode_hz: float, zeta: float, onset_index: int, stop: int | None = None
 ) -> np.ndarray:
-    """Unit ``exp(-zeta omega_n t) sin(omega_d t)`` from rest at ``onset_index``."""
-    x = np.zeros(n_samples)
-    x[onset_index:] = _decay_from_rest(n_samples, fs_hz, mode_hz, zeta)[: n_samples - onset_index]
+    """Unit ``exp(-zeta omega_n t) sin(omega_d t)`` from rest at ``onset_index``, its first
+    ``stop`` samples (default all ``n_samples``)."""
+    stop = n_samples if stop is None else min(int(stop), n_samples)
+    x = np.zeros(stop)
+    if onset_index < stop:
+        x[onset_index:] = _decay_from_rest(n_samples, fs_hz, mode_hz, zeta)[: stop - onset_index]
     return x
 
 
@@ -176,10 +179,23 @@ def _synthetic_decay(
 def _decay_from_rest(n_samples: int, fs_hz: float, mode_hz: float, zeta: float) -> np.ndarray:
     """Unit ``exp(-zeta omega_n t) sin(omega_d t)`` at ``t = k / fs_hz``, ``k`` from 0 to
     ``n_samples - 1`` (read-only). Kept for the next call: a record's probe and its
-    start-up bias are the same decay started at two samples."""
+    start-up bias are the same decay started at two samples.
+
+    It is the imaginary part of ``exp(p k)``, ``p = (-zeta omega_n + i omega_d) / fs_hz``,
+    taken as ``exp(p B b) exp(p j)`` for ``k = B b + j``, ``B`` about ``sqrt(n_samples)``:
+    2 sqrt(n) complex exponentials and n products instead of an exponential and a sine of
+    every sample (NumPy's float64 sine is not vectorised): a third of their time. Either
+    way the phase of sample ``k`` is rounded once it is thousands of radians: both are
+    within 2 eps x that phase of the exact decay (tested).
+    """
     omega_n = 2.0 * np.pi * mode_hz
-    t = np.arange(n_samples) / fs_hz
-    x = np.exp(-zeta * omega_n * t) * np.sin(omega_n * np.sqrt(1.0 - zeta**2) * t)
+    pole = complex(-zeta * omega_n, omega_n * np.sqrt(1.0 - zeta**2)) / fs_hz
+    block = max(1, int(np.ceil(np.sqrt(n_samples))))
+    within = np.exp(pole * np.arange(block))
+    block_starts = np.exp(pole * block * np.arange(-(-n_samples // block)))
+    x = np.multiply.outer(block_starts.real, within.imag)
+    x += np.multiply.outer(block_starts.imag, within.real)
+    x = x.ravel()[:n_samples]
     x.flags.writeable = False
     return x
 
@@ -423,7 +439,7 @@ def analyse_decay(
             # 0.01-3 % damping), so the probe is band-passed that far only.
             reach = start + settled_samples(fs_hz, band_hz, filter_order)
             probe = analytic_bandpass(
-                _synthetic_decay(n, fs_hz, fn_ref, zeta_ref, start)[: min(n, reach)],
+                _synthetic_decay(n, fs_hz, fn_ref, zeta_ref, start, stop=reach),
                 fs_hz,
                 band_hz,
                 filter_order,

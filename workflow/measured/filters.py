@@ -89,6 +89,7 @@ def _check_band(fs_hz: float, band_hz: tuple[float, float], order: int) -> tuple
     return low_hz, high_hz
 
 
+@functools.lru_cache(maxsize=8)
 def _fast_fft_length(n: int) -> int:
     """Smallest ``2**a * 3**b * 5**c`` not below ``n``: a length NumPy's FFT transforms
     fast (``scipy.fft.next_fast_len`` would do, but importing ``scipy.fft`` costs a
@@ -124,11 +125,13 @@ def _zero_phase_spectrum(
     """
     n = x.size
     extension = int(min(n - 1, 3 * (order + 1)))
-    head = 2.0 * x[0] - x[extension:0:-1]
-    tail = 2.0 * x[-1] - x[-2 : -extension - 2 : -1]
-    extended = np.concatenate([head, x, tail])
-    padded = _fast_fft_length(extended.size + settled_samples(fs_hz, band_hz, order))
-    spectrum = np.fft.rfft(extended, padded)
+    padded = _fast_fft_length(n + 2 * extension + settled_samples(fs_hz, band_hz, order))
+    # extended and zero-padded in one array (a concatenation, then padding, copy it twice)
+    extended = np.zeros(padded)
+    extended[:extension] = 2.0 * x[0] - x[extension:0:-1]
+    extended[extension : extension + n] = x
+    extended[extension + n : n + 2 * extension] = 2.0 * x[-1] - x[-2 : -extension - 2 : -1]
+    spectrum = np.fft.rfft(extended)
     del extended
     # In place: a long record's padded spectrum is the largest array of a run's analysis.
     spectrum *= _padded_band_power(padded, float(fs_hz), (float(band_hz[0]), float(band_hz[1])), order)
@@ -287,9 +290,10 @@ def analytic_bandpass(
     # of the padded length.
     record = slice(extension, extension + x.size)
     analytic = np.empty(x.size, dtype=complex)
-    analytic.real = np.fft.irfft(spectrum, padded)[record]
+    inverse = np.fft.irfft(spectrum, padded)
+    analytic.real = inverse[record]
     spectrum *= -1j
-    analytic.imag = np.fft.irfft(spectrum, padded)[record]
+    analytic.imag = np.fft.irfft(spectrum, padded, out=inverse)[record]
     return analytic
 
 

@@ -301,14 +301,19 @@ def find_mode_hz(frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tup
     finite = np.isfinite(magnitude) & (magnitude > 0)
     if not finite.any():
         raise ValueError("magnitude has no positive finite value")
-    log_mag = np.full(magnitude.shape, np.log(magnitude[finite].min()) - 1.0)
-    log_mag[finite] = np.log(magnitude[finite])
+    floor = np.log(magnitude[finite].min()) - 1.0
+    # Logs only of the interior bins in range (contiguous: the frequencies increase) and
+    # of their two neighbours, the only bins compared.
+    inside = np.flatnonzero((frequency_hz[1:-1] >= low_hz) & (frequency_hz[1:-1] <= high_hz)) + 1
+    first, stop = (int(inside[0]) - 1, int(inside[-1]) + 2) if inside.size else (0, 0)
+    finite = finite[first:stop]
+    log_mag = np.full(stop - first, floor)
+    log_mag[finite] = np.log(magnitude[first:stop][finite])
 
-    # the interior bins compared with their neighbours as slices (views), not gathered copies
+    # the bins compared with their neighbours as slices (views), not gathered copies
     centre = log_mag[1:-1]
     is_peak = (centre > log_mag[:-2]) & (centre > log_mag[2:])
-    in_range = (frequency_hz[1:-1] >= low_hz) & (frequency_hz[1:-1] <= high_hz)
-    candidates = np.flatnonzero(is_peak & in_range & finite[1:-1]) + 1
+    candidates = np.flatnonzero(is_peak & finite[1:-1]) + 1
     if candidates.size == 0:
         raise ValueError(
             f"no spectral peak inside the search range {low_hz:g}-{high_hz:g} Hz: the "
@@ -319,7 +324,7 @@ def find_mode_hz(frequency_hz: np.ndarray, magnitude: np.ndarray, search_hz: tup
     left, centre, right = log_mag[peak - 1 : peak + 2]
     curvature = left - 2.0 * centre + right  # negative at a strict maximum
     offset_bins = 0.5 * (left - right) / curvature
-    return float(frequency_hz[peak] + offset_bins * step_hz[0])
+    return float(frequency_hz[first + peak] + offset_bins * step_hz[0])
 
 
 def band_around(mode_hz: float, half_width_fraction: float) -> tuple[float, float]:

@@ -96,11 +96,28 @@ def _read_mat5(path: Path, shown: str) -> dict[str, Any]:
         if any(header is h for h in eager):
             variables[header.name] = loaded[header.name]
         else:
-            element = data[:128] + data[header.first : header.stop]
-            variables[header.name] = _DeferredVector(
-                lambda element=element, name=header.name: _loadmat_bytes(element, shown)[name]
-            )
+            variables[header.name] = _DeferredVector(lambda header=header: _plain_vector(data, header, shown))
     return variables
+
+
+def _plain_vector(data: bytes, header: Mat5VariableHeader, shown: str) -> np.ndarray:
+    """The samples of a plain vector of a MAT 5 file's bytes, as ``loadmat(squeeze_me=True)``
+    gives them: inflated by libdeflate (twice as fast as zlib, which scipy uses) and taken
+    as a view of the inflated bytes when they are real, not logical and
+    little-endian; anything else, or bytes libdeflate refuses, read by scipy (which names
+    the damage)."""
+    import deflate
+
+    element = data[header.first : header.stop]
+    if header.compressed:
+        try:
+            element = deflate.zlib_decompress(element[8:], header.element_bytes)
+        except deflate.DeflateError:
+            element = b""
+    samples = _real_samples(element, "<" if data[126:128] == b"IM" else ">")
+    if samples is None:
+        return _loadmat_bytes(data[:128] + data[header.first : header.stop], shown)[header.name]
+    return samples
 
 
 def _loadmat_bytes(data: bytes, shown: str) -> dict[str, Any]:
@@ -139,12 +156,18 @@ class Mat5VariableHeader:
         A numeric array (real, complex or logical, which scipy reads as uint8) with one
         dimension above 1: ``loadmat(squeeze_me=True)`` gives a 1-D numeric vector of 2
         samples or more.
+    compressed : bool
+        The element is miCOMPRESSED (zlib), the array element inside it.
+    element_bytes : int
+        Bytes of the array element, tag included, once inflated.
     """
 
     name: str
     first: int
     stop: int
     plain_vector: bool
+    compressed: bool
+    element_bytes: int
 
 
 def mat5_variable_headers(data: bytes) -> list[Mat5VariableHeader] | None:
@@ -177,7 +200,9 @@ def mat5_variable_headers(data: bytes) -> list[Mat5VariableHeader] | None:
             if header is None:
                 return None
             name, plain_vector = header
-            headers.append(Mat5VariableHeader(name, position, stop, plain_vector))
+            element_bytes = 8 + struct.unpack(order + "I", body[4:8])[0]
+            compressed = element_type == _MI_COMPRESSED
+            headers.append(Mat5VariableHeader(name, position, stop, plain_vector, compressed, element_bytes))
             position = stop
     except (struct.error, zlib.error, UnicodeDecodeError):
         return None
@@ -186,38 +211,94 @@ def mat5_variable_headers(data: bytes) -> list[Mat5VariableHeader] | None:
     return headers
 
 
-def _array_header(body: bytes, order: str) -> tuple[str, bool] | None:
-    """Name and plain-vector flag of a miMATRIX element's first bytes (tag included)."""
+def _sub_element(body: bytes, at: int, order: str) -> tuple[int, int, int, int]:
+    """Type, first byte and size of the data of the MAT 5 sub-element at ``at`` (small data
+    elements keep theirs in the tag's 4 bytes), and the position of the next one."""
     import struct
 
-    def sub_element(at: int) -> tuple[int, bytes, int]:
-        # type, data, position of the next sub-element (small data elements use 4 bytes)
-        first, second = struct.unpack(order + "II", body[at : at + 8])
-        if first >> 16:
-            kind, start, size, following = first & 0xFFFF, at + 4, first >> 16, at + 8
-        else:
-            kind, start, size, following = first, at + 8, second, at + 8 + -(-second // 8) * 8
-        if start + size > len(body):
-            raise struct.error("sub-element beyond the bytes read")
-        return kind, body[start : start + size], following
+    first, second = struct.unpack(order + "II", body[at : at + 8])
+    if first >> 16:
+        kind, start, size, following = first & 0xFFFF, at + 4, first >> 16, at + 8
+    else:
+        kind, start, size, following = first, at + 8, second, at + 8 + -(-second // 8) * 8
+    if start + size > len(body):
+        raise struct.error("sub-element beyond the bytes read")
+    return kind, start, size, following
+
+
+def _array_layout(body: bytes, order: str) -> tuple[str, int, tuple[int, ...], int] | None:
+    """Name, array flags word, dimensions and the position of the first data sub-element
+    of a miMATRIX element's bytes (tag included), or None when they are not laid out as
+    MATLAB writes them."""
+    import struct
 
     if struct.unpack(order + "I", body[:4])[0] != _MI_MATRIX:
         return None
-    flags_type, flags, at = sub_element(8)
-    dims_type, dims, at = sub_element(at)
-    name_type, name, _ = sub_element(at)
-    if flags_type != 6 or len(flags) != 8 or dims_type != 5 or len(dims) % 4 or name_type != 1:
+    flags_type, flags_at, flags_size, at = _sub_element(body, 8, order)
+    dims_type, dims_at, dims_size, at = _sub_element(body, at, order)
+    name_type, name_at, name_size, at = _sub_element(body, at, order)
+    if flags_type != 6 or flags_size != 8 or dims_type != 5 or dims_size % 4 or name_type != 1:
         return None
-    if not name:  # a MATLAB 7 function workspace, which scipy reads apart
+    if not name_size:  # a MATLAB 7 function workspace, which scipy reads apart
         return None
-    flag_word = struct.unpack(order + "I", flags[:4])[0]
-    shape = struct.unpack(order + f"{len(dims) // 4}i", dims)
+    flag_word = struct.unpack(order + "I", body[flags_at : flags_at + 4])[0]
+    shape = struct.unpack(order + f"{dims_size // 4}i", body[dims_at : dims_at + dims_size])
+    return body[name_at : name_at + name_size].decode("latin1"), flag_word, shape, at
+
+
+def _array_header(body: bytes, order: str) -> tuple[str, bool] | None:
+    """Name and plain-vector flag of a miMATRIX element's first bytes (tag included)."""
+    layout = _array_layout(body, order)
+    if layout is None:
+        return None
+    name, flag_word, shape, _ = layout
     plain_vector = (
         flag_word & 0xFF in _MAT5_NUMERIC_CLASSES
         and sum(extent > 1 for extent in shape) == 1
         and min(shape) >= 1
     )
-    return name.decode("latin1"), plain_vector
+    return name, plain_vector
+
+
+_MAT5_SAMPLE_TYPES = {
+    1: "i1",
+    2: "u1",
+    3: "i2",
+    4: "u2",
+    5: "i4",
+    6: "u4",
+    7: "f4",
+    9: "f8",
+    12: "i8",
+    13: "u8",
+}
+"""NumPy types of the MAT 5 data types miINT8 ... miUINT64 that a numeric array's samples
+are stored in (MATLAB may store a double array in a narrower integer type; scipy then
+gives that type, as here)."""
+_MAT5_COMPLEX_FLAG, _MAT5_LOGICAL_FLAG = 0x800, 0x200
+
+
+def _real_samples(element: bytes, order: str) -> np.ndarray | None:
+    """The samples of a little-endian, real, non-logical numeric array element (inflated,
+    tag included) as a 1-D view of its bytes, in the type they are stored in;
+    None for anything else."""
+    import struct
+
+    try:
+        layout = _array_layout(element, order) if order == "<" and len(element) >= 8 else None
+        if layout is None:
+            return None
+        _, flag_word, shape, at = layout
+        kind, start, size, _ = _sub_element(element, at, order)
+    except (struct.error, UnicodeDecodeError):
+        return None
+    if flag_word & (_MAT5_COMPLEX_FLAG | _MAT5_LOGICAL_FLAG) or flag_word & 0xFF not in _MAT5_NUMERIC_CLASSES:
+        return None
+    sample_type = _MAT5_SAMPLE_TYPES.get(kind)
+    count = int(np.prod(shape))
+    if sample_type is None or size != count * np.dtype(sample_type).itemsize:
+        return None
+    return np.frombuffer(element, dtype="<" + sample_type, count=count, offset=start)
 
 
 def _read_mat73(path: Path, shown: str) -> dict[str, Any]:
