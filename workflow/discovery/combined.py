@@ -61,9 +61,9 @@ def paired_critical_value(n_units: int, false_alarm: float = PAIRED_FALSE_ALARM)
     >>> round(paired_critical_value(8), 2), round(paired_critical_value(5), 2)
     (2.36, 2.78)
     """
-    # scipy.special's inverse is the one scipy.stats.t.ppf calls; scipy.stats would cost
-    # every job that imports the discovery a quarter of a second, and scipy.special is
-    # imported here, for the jobs that import the discovery to assemble or draw it
+    # stdtrit is what scipy.stats.t.ppf calls (importing scipy.stats would cost every job
+    # that imports the discovery 0.25 s); imported here, as the jobs that only assemble or
+    # draw the diagnosis never call this
     from scipy import special
 
     return float(special.stdtrit(max(n_units - 1, 1), 1.0 - false_alarm))
