@@ -9,6 +9,7 @@ from workflow.io.tables import (
     concatenate_columns,
     read_columns,
     read_table,
+    table_rows,
     with_si_columns,
     write_columns,
     write_json,
@@ -24,6 +25,13 @@ def test_units_round_trip_as_field_metadata(tmp_path):
     assert units["velocity_amplitude_in_s"] == "in/s"
     assert units["run"] == "label"
     pd.testing.assert_frame_equal(read_table(path)[list(frame.columns)], frame)
+
+
+def test_table_rows_counts_what_read_table_reads(tmp_path):
+    for n in (0, 1, 37):
+        path = tmp_path / f"t{n}.parquet"
+        write_table(pd.DataFrame({"zeta": np.linspace(0.01, 0.02, n)}), path)
+        assert table_rows(path) == len(read_table(path)) == n
 
 
 def test_failed_write_leaves_no_file(tmp_path):

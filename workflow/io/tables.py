@@ -37,6 +37,7 @@ __all__ = [
     "with_si_columns",
     "write_table",
     "read_table",
+    "table_rows",
     "column_units",
 ]
 
@@ -213,6 +214,13 @@ def read_table(path: Path | str) -> pd.DataFrame:
     # ParquetFile, not pq.read_table: the latter imports pyarrow.dataset (0.35 s of
     # start-up in every job that reads a table) for features a single file never needs.
     return pq.ParquetFile(path).read().to_pandas()
+
+
+def table_rows(path: Path | str) -> int:
+    """Rows of a Parquet table, from its footer (no column is read, no pandas imported)."""
+    import pyarrow.parquet as pq
+
+    return pq.ParquetFile(path).metadata.num_rows
 
 
 def column_units(path: Path | str) -> dict[str, str]:

@@ -297,13 +297,11 @@ def nothing_analysed_message(runs: pd.DataFrame, n_kept_segments: int, rejected:
 
 def nothing_analysed_in_tables(runs_path, segments_path, rejected_path) -> str | None:
     """:func:`nothing_analysed_message` of the tables rule ``collect_tables`` wrote."""
-    import pyarrow.parquet as pq
+    from workflow.io.tables import read_table, table_rows
 
-    from workflow.io.tables import read_table
-
-    # the kept segments counted from the file's metadata: where there are some, the message
-    # is None and no table is read (the job imports no pandas, 0.3 s of its start)
-    n_kept_segments = pq.ParquetFile(segments_path).metadata.num_rows
+    # where segments were kept the message is None and no table is read (the job imports
+    # no pandas, 0.3 s of its start)
+    n_kept_segments = table_rows(segments_path)
     if n_kept_segments > 0:
         return None
     return nothing_analysed_message(read_table(runs_path), n_kept_segments, read_table(rejected_path))
