@@ -20,6 +20,7 @@ str, numeric arrays squeezed), so the channel logic below serves both.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -176,7 +177,6 @@ def mat5_variable_headers(data: bytes) -> list[Mat5VariableHeader] | None:
     file laid out as MATLAB and scipy write it (version 0x0100, elements of type
     miMATRIX or miCOMPRESSED that end within the file, array flags, dimensions and name in
     that order, distinct names), left to scipy to read or to refuse."""
-    import struct
     import zlib
 
     if len(data) < 128 or data[126:128] not in (b"IM", b"MI"):
@@ -214,7 +214,6 @@ def mat5_variable_headers(data: bytes) -> list[Mat5VariableHeader] | None:
 def _sub_element(body: bytes, at: int, order: str) -> tuple[int, int, int, int]:
     """Type, first byte and size of the data of the MAT 5 sub-element at ``at`` (small data
     elements keep theirs in the tag's 4 bytes), and the position of the next one."""
-    import struct
 
     first, second = struct.unpack(order + "II", body[at : at + 8])
     if first >> 16:
@@ -230,7 +229,6 @@ def _array_layout(body: bytes, order: str) -> tuple[str, int, tuple[int, ...], i
     """Name, array flags word, dimensions and the position of the first data sub-element
     of a miMATRIX element's bytes (tag included), or None when they are not laid out as
     MATLAB writes them."""
-    import struct
 
     if struct.unpack(order + "I", body[:4])[0] != _MI_MATRIX:
         return None
@@ -282,7 +280,6 @@ def _real_samples(element: bytes, order: str) -> np.ndarray | None:
     """The samples of a little-endian, real, non-logical numeric array element (inflated,
     tag included) as a 1-D view of its bytes, in the type they are stored in;
     None for anything else."""
-    import struct
 
     try:
         layout = _array_layout(element, order) if order == "<" and len(element) >= 8 else None
