@@ -34,6 +34,7 @@ __all__ = [
     "candidate_margin",
     "signature_sentences",
     "explains_sentences",
+    "accuracy_words",
     "threshold_sentences",
     "margin_words",
     "gain_words",
