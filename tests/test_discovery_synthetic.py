@@ -770,6 +770,33 @@ def test_explains_data_fails_where_a_model_misses_by_more_than_two_scatters():
     assert verdict["failing_bins"][0]["v_low_in_s"] == pytest.approx(TOP_BIN_LOW_IN_S)
 
 
+@pytest.mark.parametrize("runs_reaching", [2, 3])
+def test_explains_data_judges_the_half_decades_the_misfit_test_judges(runs_reaching):
+    """Six runs from 0.1 to 3 in/s, some hit harder, on to 10 in/s, where the model misses by
+    3 scatters: a mean over two runs is their draw of the run-to-run spread and is not judged
+    (as the misfit test does not test it); over three it is the model's misfit."""
+    data, res = _data_with_offset(0.0)
+    top = np.geomspace(3.5, 10.0, 5)
+    v = np.concatenate([data.velocity_in_s, np.tile(top, runs_reaching)])
+    run = np.concatenate([data.run_index, np.repeat(np.arange(runs_reaching), top.size)])
+    data = ConfigurationData("c", v, np.full(v.size, 1e-3), np.full(v.size, 100.0), run, data.run_names, None)
+    extra = np.full(runs_reaching * top.size, 3.0)
+    res = {
+        "z_noise": np.concatenate([res["z_noise"], extra]),
+        "f_noise": np.concatenate([res["f_noise"], 0 * extra]),
+    }
+    verdict = explains_data(data, res)
+    assert verdict["explains_data"] == (runs_reaching < 3), verdict["failing_bins"]
+    assert all(b["n_runs"] >= 3 for b in verdict["bins"])
+    tested = {
+        (r["curve"], r["v_low_in_s"])
+        for r in binned_discrepancy(
+            data, {**res, "ln_zeta": 0.01 * res["z_noise"], "rel_f": 1e-5 * res["f_noise"]}
+        )
+    }
+    assert {(b["curve"], b["v_low_in_s"]) for b in verdict["bins"]} == tested
+
+
 def test_parameters_on_the_edge_of_their_range_are_flagged():
     data, _ = _data_with_offset(0.0)
     lo, hi = parameter_box(MODELS["iwan"], data)

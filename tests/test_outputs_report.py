@@ -944,7 +944,10 @@ def test_first_page_says_of_a_none_verdict_what_the_residual_figure_shows(docume
     assert "Dahl leaves no significant misfit (held-out error 1.03)." in page
     assert "fits within the run-to-run scatter" not in page
     if explains:
-        assert "Dahl explains the data: every half decade of amplitude is within 2 scatters." in page
+        assert (
+            "Dahl explains the data: every half decade of amplitude with 3 runs or more (one run: 4 segments) "
+            "is within 2 scatters." in page
+        )
     else:
         assert "misses by more than 2 scatters in frequency at 1.37–4.35 in/s (2.4 scatters)" in page
 

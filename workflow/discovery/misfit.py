@@ -26,6 +26,9 @@ __all__ = [
     "ALPHA",
     "misfit_significant",
     "bin_observations",
+    "MIN_BIN_RUNS",
+    "MIN_BIN_SEGMENTS_ONE_RUN",
+    "bin_is_judged",
     "binned_discrepancy",
     "run_order_trend",
     "ENVELOPE_DEPARTURE_LIMIT",
@@ -121,6 +124,28 @@ def bin_observations(
     return np.zeros(1, dtype=int), values[in_bin]
 
 
+MIN_BIN_RUNS = 3
+"""Fewest runs with segments in an amplitude bin for its mean to be judged (one run: the
+segments, at least :data:`MIN_BIN_SEGMENTS_ONE_RUN`): a mean over fewer is one or two
+runs' draws of the run-to-run spread, not a misfit of the model."""
+
+MIN_BIN_SEGMENTS_ONE_RUN = 4
+"""With one run, fewest segments in an amplitude bin for its mean to be judged."""
+
+
+def bin_is_judged(n_bin_runs: int, n_bin_segments: int, n_runs: int) -> bool:
+    """Whether an amplitude bin holds enough observations for its mean to be judged: at
+    least :data:`MIN_BIN_RUNS` runs, or with one run :data:`MIN_BIN_SEGMENTS_ONE_RUN`
+    segments (both the misfit test and ``explains_data``).
+
+    >>> bin_is_judged(2, 40, 8), bin_is_judged(3, 3, 8), bin_is_judged(1, 4, 1)
+    (False, True, True)
+    """
+    if n_runs >= 2:
+        return n_bin_runs >= MIN_BIN_RUNS
+    return n_bin_segments >= MIN_BIN_SEGMENTS_ONE_RUN
+
+
 def binned_discrepancy(
     data: ConfigurationData, residuals: Mapping[str, np.ndarray], *, alpha: float = ALPHA
 ) -> list[dict]:
@@ -134,7 +159,7 @@ def binned_discrepancy(
     the number of bins x curves tested (Bonferroni with half of ``alpha``; the
     run-order test has the other half), and ``|mean|`` exceeds the model accuracy
     (``TOL_LN_ZETA`` or ``TOL_REL_F``). Bins with fewer than 3 runs (one run: 4
-    segments) are not tested.
+    segments) are not tested (:func:`bin_is_judged`).
 
     Returns
     -------
@@ -159,9 +184,9 @@ def binned_discrepancy(
         for b in np.unique(code):
             in_bin = code == b
             runs, observations = bin_observations(r, data.run_index, in_bin, data.n_runs)
+            if not bin_is_judged(runs.size, observations.size, data.n_runs):
+                continue
             if data.n_runs >= 2:
-                if runs.size < 3:
-                    continue
                 m = float(observations.mean())
                 se = float(observations.std(ddof=1) / np.sqrt(observations.size))
                 dof = observations.size - 1
@@ -169,8 +194,6 @@ def binned_discrepancy(
             else:
                 per_run = {}
                 seg = observations[np.argsort(data.velocity_in_s[in_bin])]
-                if seg.size < 4:
-                    continue
                 m = float(seg.mean())
                 n_eff = _lag1_effective(seg)
                 se = float(seg.std(ddof=1) / np.sqrt(n_eff))
@@ -471,7 +494,10 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
     of the residuals over the measured scatter (``z_noise``, ``f_noise``: each run with
     its own offsets), taken as every binned mean is (:func:`bin_observations`: the mean
     over runs of each run's mean). The model explains the data when every such mean is
-    within :data:`EXPLAINS_LIMIT`.
+    within :data:`EXPLAINS_LIMIT`, over the bins the misfit test judges too
+    (:func:`bin_is_judged`): a mean over one or two runs at the edge of the measured
+    range (one segment, at worst) is their draw of the run-to-run spread, beyond 2
+    scatters one time in twenty in each bin, not a misfit the model leaves.
 
     Returns
     -------
@@ -487,6 +513,8 @@ def explains_data(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) 
         for b in np.unique(code):
             in_bin = code == b
             runs, observations = bin_observations(residuals[key], data.run_index, in_bin, data.n_runs)
+            if not bin_is_judged(runs.size, observations.size, data.n_runs):
+                continue
             bins.append(
                 {
                     "curve": curve,

@@ -70,7 +70,7 @@ BINNED_MEAN_NOTE = (
     "over runs of each run's mean), the numbers the verdict quotes. Baseline: filled where "
     "the misfit is significant (statistically clear after correction and larger than the "
     "models' accuracy), open where not; half decades with fewer than 3 runs (one run: 4 "
-    "segments) are not tested and have no baseline mean."
+    "segments) are not judged and have no mean."
 )
 
 

@@ -195,7 +195,10 @@ def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str
     model = model_name((entry.get("extended_model") or {}).get("model"))
     limit = fmt(explained.get("limit", 2))
     if entry["explains_data"]:
-        return [f"{model} explains the data: every half decade of amplitude is within {limit} scatters."]
+        return [
+            f"{model} explains the data: every half decade of amplitude with 3 runs or more (one run: "
+            f"4 segments) is within {limit} scatters."
+        ]
     failing = explained.get("failing_bins") or []
     where = "; ".join(
         f"{b['curve']} at {amplitude_range(b['v_low_in_s'], b['v_high_in_s'], units)} "
