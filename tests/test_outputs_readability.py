@@ -56,6 +56,27 @@ def test_save_logs_the_problems_of_the_figure_as_saved(tmp_path, caplog):
     assert not [record for record in caplog.records if "hard to read" in record.getMessage()]
 
 
+def test_save_keeps_the_canvas_of_a_laid_out_figure_and_crops_one_that_spills(tmp_path):
+    # a laid-out figure is saved at its own size (no cropping pass); one whose legend
+    # reaches past its edge is saved again with everything it draws
+    from PIL import Image
+
+    dpi = figures.STYLE["savefig.dpi"]
+    with plt.rc_context(figures.STYLE):
+        figure, axis = plt.subplots(figsize=(4.0, 3.0))
+        axis.plot([1, 2], [1, 2], label="a line")
+        figures.legend_beside(axis)
+        figures.lay_out(figure)
+        figures.save(figure, tmp_path / "inside.png")
+        figure, axis = plt.subplots(figsize=(4.0, 3.0))
+        axis.plot([1, 2], [1, 2], label="a line with a long name")
+        axis.legend(loc="upper left", bbox_to_anchor=(1.3, 1.0))
+        figures.save(figure, tmp_path / "spills.png")
+    assert Image.open(tmp_path / "inside.png").size == (round(4.0 * dpi), round(3.0 * dpi))
+    width, _ = Image.open(tmp_path / "spills.png").size
+    assert width > 4.0 * dpi * 1.2  # the canvas and the legend beyond it
+
+
 def test_checker_finds_an_empty_panel_and_accepts_a_note():
     figure, (left, right) = plt.subplots(1, 2)
     left.plot([1, 2], [1, 2])

@@ -445,6 +445,7 @@ def analyse_decay(
                 filter_order,
             )
             onset = max(0, 2 * start - int(np.argmax(np.abs(probe[:stop]))))
+            del probe
         bias = startup_bias(
             n,
             fs_hz,

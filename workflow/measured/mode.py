@@ -422,7 +422,10 @@ def _line_track(spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigm
     autocorrelation = np.correlate(banded, banded, mode="full")[banded.size - 1 :]
     squared = np.fft.irfft(autocorrelation, n)
     # |S|^2 = n irfft(C); rounding may leave it a hair below 0 where the band is silent
-    return np.sqrt(np.maximum(squared, 0.0) / n)
+    # (in place: the track is as long as the run)
+    np.maximum(squared, 0.0, out=squared)
+    squared /= n
+    return np.sqrt(squared, out=squared)
 
 
 def forced_line_problem(

@@ -82,12 +82,14 @@ def _line_fits(
     y_centred = y - intercept[:, None]
     # Sums along each row (not einsum, whose order depends on the shape, nor np.dot,
     # a threaded BLAS call that stalls on a loaded machine): a row gives the same
-    # sums, to the last bit, whether fitted alone or beside others. One scratch array
-    # for the products: a fresh one per step costs as much as the arithmetic.
+    # sums, to the last bit, whether fitted alone or beside others. The products go
+    # into the centred values' array when no residual needs them, else into one
+    # scratch array: a fresh one per step costs as much as the arithmetic.
+    if not residual:
+        slope = np.multiply(y_centred, t_centred, out=y_centred).sum(axis=1) / np.sum(t_centred * t_centred)
+        return intercept, slope, None
     scratch = np.multiply(y_centred, t_centred)
     slope = scratch.sum(axis=1) / np.sum(t_centred * t_centred)
-    if not residual:
-        return intercept, slope, None
     y_centred -= np.multiply(slope[:, None], t_centred, out=scratch)
     return intercept, slope, np.sqrt(np.mean(np.square(y_centred, out=y_centred), axis=1))
 

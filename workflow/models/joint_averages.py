@@ -282,8 +282,13 @@ def iwan_cells_averages(y: ArrayLike, shares: ArrayLike) -> JointAverages:
     m = np.clip(x, low, high)
     d = np.sum(4.0 * c * (x * (m - low) - 0.5 * (m**2 - low**2)), axis=-1)
     safe_x = np.where(x > 0, x, 1.0)
-    h_top = jenkins_log_integral(np.minimum(m / safe_x, 1.0))
-    h_low = jenkins_log_integral(np.minimum(low / safe_x, 1.0))
+    # H at every edge over x, once: a cell's top edge is the next one's bottom edge, and
+    # H(m / x) is H(t_(k+1) / x) where x passes the cell (m = t_(k+1)) and H(1) where it
+    # does not (m / x = 1, or t_k / x >= 1 and t_(k+1) / x > 1): the same values as from
+    # m / x itself. At x = 0 (x taken as 1, m = t_k) it is H(t_k) instead.
+    h_edges = jenkins_log_integral(np.minimum(edges / safe_x, 1.0))
+    h_low = h_edges[..., :-1]
+    h_top = np.where(x > 0, h_edges[..., 1:], h_low)
     stuck = c * np.log(high / m)
     g = np.sum(c * (h_top - h_low) + stuck, axis=-1)
     slope = x[..., 0] * np.sum(stuck, axis=-1)

@@ -56,7 +56,7 @@ from matplotlib.backend_bases import DrawEvent  # noqa: E402
 
 from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
-from workflow.outputs.readability import readability_problems  # noqa: E402
+from workflow.outputs.readability import reaches_past_edge, readability_problems  # noqa: E402
 
 if TYPE_CHECKING:  # tables come in as DataFrames; figures 7-8 are drawn without pandas
     import pandas as pd
@@ -92,27 +92,34 @@ def save(figure: plt.Figure, path: Path | str) -> None:
     log a warning naming every readability problem found
     (:func:`workflow.outputs.readability.readability_problems`).
 
-    The problems are those of the figure as saved: saving lays the figure out once
-    without rendering it (for the tight bounding box, at the PNG's resolution) before
-    it renders it, and the texts' extents are taken from that first draw, not from a
-    layout of their own (a fifth of a figure's work)."""
+    The figure is saved as laid out (:func:`lay_out` keeps what it draws inside it) and
+    its problems are those of the draw that renders it: no layout of its own (a fifth of
+    a figure's work). Only a figure with a text or a legend reaching past its edge
+    (:func:`workflow.outputs.readability.reaches_past_edge`) is saved again, cropped to
+    all it draws (``bbox_inches="tight"``, whose bounding box takes a layout more: a
+    tenth of a figure's work)."""
     target = Path(path)
-    problems: list[list[str]] = []
+    checked: list[tuple[list[str], bool]] = []
 
     def check_first_draw(event: DrawEvent) -> None:
-        if not problems:
-            problems.append(readability_problems(figure, event.renderer))
+        if not checked:
+            checked.append(
+                (readability_problems(figure, event.renderer), reaches_past_edge(figure, event.renderer))
+            )
 
     target.parent.mkdir(parents=True, exist_ok=True)
     temporary = target.with_name(f".{target.stem}.tmp.png")
     connection = figure.canvas.mpl_connect("draw_event", check_first_draw)
     try:
-        figure.savefig(temporary, bbox_inches="tight")
+        figure.savefig(temporary)
+        problems, past_edge = checked[0]
+        if past_edge:
+            figure.savefig(temporary, bbox_inches="tight")
     finally:
         figure.canvas.mpl_disconnect(connection)
     plt.close(figure)
     temporary.replace(target)
-    for problem in problems[0]:
+    for problem in problems:
         log.warning("figure %s is hard to read: %s", target.name, problem)
 
 

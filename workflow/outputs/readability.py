@@ -20,6 +20,7 @@ __all__ = [
     "drawn_texts",
     "overlapping_texts",
     "notation_problems",
+    "reaches_past_edge",
     "readability_problems",
 ]
 
@@ -87,6 +88,25 @@ def overlapping_texts(figure: plt.Figure, renderer: RendererBase | None = None) 
         )
         boxes.append((text.get_text(), shrunk))
     return [(a, b) for (a, box_a), (b, box_b) in itertools.combinations(boxes, 2) if box_a.overlaps(box_b)]
+
+
+def reaches_past_edge(figure: plt.Figure, renderer: RendererBase) -> bool:
+    """Whether a drawn text or a legend reaches past the figure's edge, in the draw of
+    ``figure`` that ``renderer`` has just made (more than half a pixel out)."""
+    edge = figure.bbox
+    legends = [legend for legend in (*figure.legends, *(axes.get_legend() for axes in figure.axes)) if legend]
+    for artist in (*drawn_texts(figure), *legends):
+        extent = artist.get_window_extent(renderer)
+        if extent.width <= 0 or extent.height <= 0:
+            continue
+        if (
+            extent.x0 < edge.x0 - 0.5
+            or extent.y0 < edge.y0 - 0.5
+            or extent.x1 > edge.x1 + 0.5
+            or extent.y1 > edge.y1 + 0.5
+        ):
+            return True
+    return False
 
 
 def _shows_data(axes: plt.Axes) -> bool:
