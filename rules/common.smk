@@ -10,6 +10,7 @@ from pathlib import Path
 
 from workflow.config import ConfigError, validate_config
 from workflow.runtime.resources import analyse_runs_mem_mb, identify_mode_mem_mb
+from workflow.runtime.scheduler import largest_area_first
 from workflow.io.escape import terminal_lines, terminal_text, visible_controls
 
 # Rules pass each settings section (or the keys of it their step reads) as a plain dict,
@@ -179,8 +180,28 @@ def channels_and_modes():
     return campaign.response.channel_names(), campaign.auto_modes or len(campaign.mode_requests()) > 1
 
 
+def configuration_areas_in2():
+    """Configuration -> bearing area (in^2) as campaign.yaml states it (the demo's from its
+    plan), None where it states none."""
+    from workflow.io.campaign import load_campaign
+
+    if USES_DEMO:
+        from workflow.lab.layout import PAPER_CONFIGURATIONS
+
+        return dict(PAPER_CONFIGURATIONS)
+    campaign = load_campaign(CAMPAIGN)
+    return {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
+
+
 RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
 RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes()
+DIAGNOSIS_PRIORITY = largest_area_first(configuration_areas_in2())
+
+
+def diagnosis_priority(wildcards):
+    """A configuration's diagnosis before the figures of the measured data, the largest
+    bearing area first (workflow.runtime.scheduler.largest_area_first)."""
+    return DIAGNOSIS_PRIORITY.get(wildcards.configuration, 1)
 
 
 def channel_index(channel_key):

@@ -21,8 +21,9 @@ rule diagnose_configuration:
     benchmark:
         "results/benchmarks/diagnose_configuration/{configuration}.tsv"
     # The study's longest chain is a configuration's diagnosis and fits, then figures
-    # 14-15 (rules/models.smk): they go before the figures of the measured data.
-    priority: 1
+    # 14-15 (rules/models.smk): they go before the figures of the measured data, the
+    # largest bearing area (the most models to fit) first.
+    priority: diagnosis_priority
     conda:
         LAPJOINT_ENV
     threads: 1
