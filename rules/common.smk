@@ -169,33 +169,39 @@ def campaign_inventory():
     return runs, excluded
 
 
-def channels_and_modes():
+def channels_and_modes(campaign):
     """The response channels' names in the tables (campaign.yaml's ``response``), and
-    whether the campaign may have several modes (``modes_hz`` listing several, or auto)."""
-    from workflow.io.campaign import SINGLE_CHANNEL_NAME, load_campaign
+    whether the campaign may have several modes (``modes_hz`` listing several, or auto);
+    ``campaign`` is the loaded campaign.yaml, None for the demo."""
+    from workflow.io.campaign import SINGLE_CHANNEL_NAME
 
-    if USES_DEMO:
+    if campaign is None:
         return (SINGLE_CHANNEL_NAME,), False
-    campaign = load_campaign(CAMPAIGN)
     return campaign.response.channel_names(), campaign.auto_modes or len(campaign.mode_requests()) > 1
 
 
-def configuration_areas_in2():
-    """Configuration -> bearing area (in^2) as campaign.yaml states it (the demo's from its
-    plan), None where it states none."""
-    from workflow.io.campaign import load_campaign
-
-    if USES_DEMO:
+def configuration_areas_in2(campaign):
+    """Configuration -> bearing area (in^2) as campaign.yaml states it, None where it
+    states none; the demo's from its plan (``campaign`` None)."""
+    if campaign is None:
         from workflow.lab.layout import PAPER_CONFIGURATIONS
 
         return dict(PAPER_CONFIGURATIONS)
-    campaign = load_campaign(CAMPAIGN)
     return {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
 
 
+def campaign_spec():
+    """The validated campaign.yaml, read once the inventory has checked it; None for the
+    demo (a rule generates it)."""
+    from workflow.io.campaign import load_campaign
+
+    return None if USES_DEMO else load_campaign(CAMPAIGN)
+
+
 RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
-RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes()
-DIAGNOSIS_PRIORITY = largest_area_first(configuration_areas_in2())
+CAMPAIGN_SPEC = campaign_spec()
+RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes(CAMPAIGN_SPEC)
+DIAGNOSIS_PRIORITY = largest_area_first(configuration_areas_in2(CAMPAIGN_SPEC))
 
 
 def diagnosis_priority(wildcards):
