@@ -756,30 +756,6 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
     assert report_wording.explains_sentences({"extended_model": {"model": "iwan"}}) == []
 
 
-def test_the_verdict_says_which_half_decades_stand_within_the_models_accuracy():
-    """A clean hit: a half decade 4.8 scatters off that is 4.8e-5 of the frequency, within the
-    averaged models' 1e-4: the model explains the data, and the sentence says where the
-    figure's mean stands beyond the scatter band and why it is not a misfit."""
-    close = {
-        "curve": "frequency",
-        "v_low_in_s": 0.5,
-        "v_high_in_s": 1.58,
-        "mean_over_scatter": 4.76,
-        "mean": 4.8e-5,
-        "tolerance": 1e-4,
-    }
-    entry = {
-        "explains_data": True,
-        "extended_model": {"model": "iwan_cells_5_quadratic"},
-        "evidence": {"explains_data": {"limit": 2.0, "failing_bins": [], "within_accuracy": [close]}},
-    }
-    (sentence,) = report_wording.explains_sentences(entry)
-    assert "explains the data" in sentence and "within the averaged models' accuracy" in sentence
-    assert (
-        "frequency at 0.5–1.58 in/s (4.76 scatters, +0.0048 % of the frequency, accuracy 0.01 %)" in sentence
-    )
-
-
 def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
     cells = [
         {

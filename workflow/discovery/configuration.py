@@ -322,13 +322,11 @@ def needs_threshold_cells(
     data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
 ) -> bool:
     """Whether micro-slip may be represented by the Iwan joint with the slip thresholds
-    from the data: the power law leaves a half decade beyond 2 scatters (within the models'
-    accuracy or not: the thresholds are only tried, and adopted where they predict held-out
-    data better), and micro-slip is the verdict or, where the baseline's misfit is
-    significant, an eligible candidate (its held-out error and BIC below the baseline's). A
-    patch joint's micro-slip is not one power law over the measured decades: at the edge
-    of its visible range the power law can lose to a candidate of another cause, or to
-    none, that the thresholds from the data beat."""
+    from the data: the power law does not explain the data, and micro-slip is the verdict
+    or, where the baseline's misfit is significant, an eligible candidate (its held-out
+    error and BIC below the baseline's). A patch joint's micro-slip is not one power law
+    over the measured decades: at the edge of its visible range the power law can lose to
+    a candidate of another cause, or to none, that the thresholds from the data beat."""
     candidate = result["candidates"]["microslip_power_law"]
     base = result["baseline"]
     eligible = (
@@ -336,11 +334,9 @@ def needs_threshold_cells(
         and candidate["bic"] < result["bic"][base]
         and candidate["shows_signature"]
     )
-    power_law = explains_data(data, evidence["iwan"].residuals)
-    beyond_scatter = bool(power_law["failing_bins"] or power_law["within_accuracy"])
-    return (
-        result["cause"] == "microslip_power_law" or (result["baseline_fails"] and eligible)
-    ) and beyond_scatter
+    return (result["cause"] == "microslip_power_law" or (result["baseline_fails"] and eligible)) and not (
+        explains_data(data, evidence["iwan"].residuals)["explains_data"]
+    )
 
 
 def conclude(

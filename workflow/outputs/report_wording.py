@@ -34,7 +34,6 @@ __all__ = [
     "candidate_margin",
     "signature_sentences",
     "explains_sentences",
-    "accuracy_words",
     "threshold_sentences",
     "margin_words",
     "gain_words",
@@ -196,21 +195,9 @@ def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str
     model = model_name((entry.get("extended_model") or {}).get("model"))
     limit = fmt(explained.get("limit", 2))
     if entry["explains_data"]:
-        close = explained.get("within_accuracy") or []
-        if not close:
-            return [
-                f"{model} explains the data: every half decade of amplitude with 3 runs or more (one run: "
-                f"4 segments) is within {limit} scatters."
-            ]
-        where = "; ".join(
-            f"{b['curve']} at {amplitude_range(b['v_low_in_s'], b['v_high_in_s'], units)} "
-            f"({fmt(b['mean_over_scatter'])} scatters, {accuracy_words(b)})"
-            for b in close
-        )
         return [
             f"{model} explains the data: every half decade of amplitude with 3 runs or more (one run: "
-            f"4 segments) is within {limit} scatters or within the averaged models' accuracy, which "
-            f"the scatter of a clean record falls below: {where}."
+            f"4 segments) is within {limit} scatters."
         ]
     failing = explained.get("failing_bins") or []
     where = "; ".join(
@@ -222,20 +209,6 @@ def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str
     return [
         f"{model} does not explain all the data: it misses by more than {limit} scatters in {where}{more}."
     ]
-
-
-def accuracy_words(binned: Mapping) -> str:
-    """A binned mean beside the models' accuracy on its curve, as percentages of the damping
-    (``ln zeta``) or of the frequency.
-
-    >>> accuracy_words({"curve": "frequency", "mean": 4.8e-5, "tolerance": 1e-4})
-    '+0.0048 % of the frequency, accuracy 0.01 %'
-    >>> accuracy_words({"curve": "damping", "mean": -0.012, "tolerance": 0.02})
-    '-1.2 % of the damping, accuracy 2 %'
-    """
-    return (
-        f"{100 * binned['mean']:+.2g} % of the {binned['curve']}, accuracy {100 * binned['tolerance']:.2g} %"
-    )
 
 
 def threshold_sentences(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list[str]:
