@@ -104,8 +104,9 @@ def nothing_analysed_this_run():
 
 
 def campaign_inventory():
-    """Run files of the campaign, in campaign.yaml order, and the paths its globs lead to
-    that are not read (docs/input-safety.md), as runs-table rows.
+    """Run files of the campaign, in campaign.yaml order, the paths its globs lead to that
+    are not read (docs/input-safety.md), as runs-table rows, and the validated
+    campaign.yaml (None for the demo).
 
     The demo campaign is planned from its settings (it may not exist yet: a rule
     generates it); any other campaign is listed from its campaign.yaml, and its band
@@ -120,7 +121,7 @@ def campaign_inventory():
     if USES_DEMO:
         from workflow.lab.layout import planned_run_files
 
-        return planned_run_files(SETTINGS.demo.runs_per_configuration), []
+        return planned_run_files(SETTINGS.demo.runs_per_configuration), [], None
     if not CAMPAIGN.is_dir():
         raise WorkflowError(
             f"campaign folder {terminal_text(CAMPAIGN)} does not exist (working directory {Path.cwd()}); "
@@ -166,7 +167,7 @@ def campaign_inventory():
         problem = frequency_problem(campaign, known_hz[fastest], f"declared by {fastest}")
         if problem is not None:
             raise WorkflowError(f"invalid campaign {CAMPAIGN}: {CAMPAIGN / CAMPAIGN_FILE}: {problem}")
-    return runs, excluded
+    return runs, excluded, campaign
 
 
 def channels_and_modes(campaign):
@@ -190,16 +191,7 @@ def configuration_areas_in2(campaign):
     return {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
 
 
-def campaign_spec():
-    """The validated campaign.yaml, read once the inventory has checked it; None for the
-    demo (a rule generates it)."""
-    from workflow.io.campaign import load_campaign
-
-    return None if USES_DEMO else load_campaign(CAMPAIGN)
-
-
-RUN_FILES, EXCLUDED_PATHS = campaign_inventory()
-CAMPAIGN_SPEC = campaign_spec()
+RUN_FILES, EXCLUDED_PATHS, CAMPAIGN_SPEC = campaign_inventory()
 RESPONSE_CHANNELS, SEVERAL_MODES = channels_and_modes(CAMPAIGN_SPEC)
 DIAGNOSIS_PRIORITY = largest_area_first(configuration_areas_in2(CAMPAIGN_SPEC))
 

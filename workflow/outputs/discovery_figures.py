@@ -23,6 +23,7 @@ import pandas as pd  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 
 from workflow.discovery.confidence import verdict_key  # noqa: E402
+from workflow.discovery.misfit import MIN_BIN_RUNS, MIN_BIN_SEGMENTS_ONE_RUN  # noqa: E402
 from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, UnitSystem  # noqa: E402
 from workflow.outputs.figures import STYLE, lay_out, plain_log_axis, velocity, velocity_label  # noqa: E402
@@ -69,8 +70,8 @@ BINNED_MEAN_NOTE = (
     "Lines with markers: each model's mean residual per half decade of amplitude (the mean "
     "over runs of each run's mean), the numbers the verdict quotes. Baseline: filled where "
     "the misfit is significant (statistically clear after correction and larger than the "
-    "models' accuracy), open where not; half decades with fewer than 3 runs (one run: 4 "
-    "segments) are not judged and have no mean."
+    "models' accuracy), open where not; half decades with fewer than "
+    f"{MIN_BIN_RUNS} runs (one run: {MIN_BIN_SEGMENTS_ONE_RUN} segments) are not judged and have no mean."
 )
 
 

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 
 from workflow.discovery.confidence import verdict_key
+from workflow.discovery.misfit import MIN_BIN_RUNS, MIN_BIN_SEGMENTS_ONE_RUN
 from workflow.discovery.wording import discrepancy_sentence, runs_words
 from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import unidentified_parameters
@@ -196,8 +197,8 @@ def explains_sentences(entry: dict, units: UnitSystem = INCH_SECOND) -> list[str
     limit = fmt(explained.get("limit", 2))
     if entry["explains_data"]:
         return [
-            f"{model} explains the data: every half decade of amplitude with 3 runs or more (one run: "
-            f"4 segments) is within {limit} scatters."
+            f"{model} explains the data: every half decade of amplitude with {MIN_BIN_RUNS} runs or more "
+            f"(one run: {MIN_BIN_SEGMENTS_ONE_RUN} segments) is within {limit} scatters."
         ]
     failing = explained.get("failing_bins") or []
     where = "; ".join(
