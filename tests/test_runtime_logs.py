@@ -99,3 +99,32 @@ def test_peak_memory_is_the_scripts_own_not_its_parents(tmp_path):
     subprocess.run([sys.executable, "-c", parent], check=True)
     peak_mb = float(COST.search(log.read_text().splitlines()[-1]).group(3))
     assert 80 <= peak_mb < 300
+
+
+GARBAGE_COLLECTION = """
+import gc, sys
+sys.path.insert(0, {repo!r})
+{preamble}
+import workflow
+print(gc.isenabled())
+from workflow.runtime.logs import setup_script_logging
+setup_script_logging(None, "demo")
+print(gc.isenabled())
+"""
+
+
+def garbage_collection_states(preamble: str) -> list[str]:
+    source = GARBAGE_COLLECTION.format(repo=str(REPO), preamble=preamble)
+    result = subprocess.run([sys.executable, "-c", source], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return result.stdout.split()
+
+
+def test_a_job_script_collects_no_garbage_while_it_imports():
+    # Snakemake's script preamble puts its Snakemake object in __main__ before the script runs
+    preamble = "from snakemake.iocontainers import Snakemake\nsnakemake = Snakemake.__new__(Snakemake)"
+    assert garbage_collection_states(preamble) == ["False", "True"]
+
+
+def test_importing_the_library_elsewhere_leaves_garbage_collection_on():
+    assert garbage_collection_states("") == ["True", "True"]

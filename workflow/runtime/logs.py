@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import atexit
+import gc
 import logging
 import os
 import resource
@@ -104,6 +105,10 @@ def setup_script_logging(log_path: str | Path | None, name: str) -> logging.Logg
             logger.error("stopped: %s", value, exc_info=(kind, value, trace))
 
     sys.excepthook = log_uncaught
+    # the imports' objects out of the collector's sweeps, and collection on again (a job's
+    # script collects nothing while it imports: workflow/__init__.py)
+    gc.freeze()
+    gc.enable()
     start_up_cpu_s = time.process_time()
 
     def log_cost_and_exit() -> None:
