@@ -77,6 +77,39 @@ def test_save_keeps_the_canvas_of_a_laid_out_figure_and_crops_one_that_spills(tm
     assert width > 4.0 * dpi * 1.2  # the canvas and the legend beyond it
 
 
+def test_a_layout_with_notes_measures_each_panel_once_and_places_it_as_matplotlib_does():
+    def two_panels_with_labels():
+        figure, axes = plt.subplots(1, 2, figsize=(6.0, 3.0))
+        for axis in axes:
+            axis.semilogx([0.1, 10.0], [1.0, 2.0])
+            figures.amplitude_axis(axis)
+            axis.set_ylabel("damping ratio (%)")
+            axis.set_title("a panel")
+        return figure
+
+    with plt.rc_context(figures.STYLE):
+        reference = two_panels_with_labels()
+        reference.tight_layout(rect=(0.0, 0.2, 1.0, 1.0))
+        figure = two_panels_with_labels()
+        calls = []
+        measure = type(figure.axes[0]).get_tightbbox
+        for axis in figure.axes:
+            axis.get_tightbbox = functools.partial(
+                lambda axis, *args, **kwargs: calls.append(axis) or measure(axis, *args, **kwargs), axis
+            )
+        with figures.bounding_boxes_measured_once(figure):
+            figure.tight_layout(rect=(0.0, 0.2, 1.0, 1.0))
+    # matplotlib's two passes into the rectangle measured each panel once
+    assert calls == figure.axes
+    # the panels land where matplotlib puts them, to the bit
+    assert [axis.get_position().bounds for axis in figure.axes] == [
+        axis.get_position().bounds for axis in reference.axes
+    ]
+    # and measure themselves afterwards as before the block (here: through the counter)
+    figure.axes[0].get_tightbbox()
+    assert calls[-1] is figure.axes[0] and len(calls) == 3
+
+
 def test_checker_finds_an_empty_panel_and_accepts_a_note():
     figure, (left, right) = plt.subplots(1, 2)
     left.plot([1, 2], [1, 2])
