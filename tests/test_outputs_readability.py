@@ -110,6 +110,31 @@ def test_a_layout_with_notes_measures_each_panel_once_and_places_it_as_matplotli
     assert calls[-1] is figure.axes[0] and len(calls) == 3
 
 
+@pytest.mark.parametrize("notes", [(), ("a note under the panels",)])
+def test_a_laid_out_figure_is_placed_as_tight_layout_places_it_and_drawn_once_when_saved(tmp_path, notes):
+    def panel():
+        figure, axis = plt.subplots(figsize=(5.0, 3.0))
+        axis.semilogx([0.1, 10.0], [1.0, 2.0], label="a line")
+        figures.amplitude_axis(axis)
+        axis.set_ylabel("damping ratio (%)")
+        return figure
+
+    with plt.rc_context(figures.STYLE):
+        reference = panel()
+        bottom = 0.0
+        if notes:  # lay_out's rectangle above one line of notes
+            bottom = (0.2 + 0.16) / reference.get_size_inches()[1]
+        reference.tight_layout(rect=(0.0, bottom, 1.0, 1.0) if notes else None)
+        figure = panel()
+        figures.lay_out(figure, notes)
+        draws = []
+        figure.canvas.mpl_connect("draw_event", draws.append)
+        figures.save(figure, tmp_path / "panel.png")
+    assert figure.axes[0].get_position().bounds == reference.axes[0].get_position().bounds
+    # matplotlib's tight_layout leaves a placeholder engine, and savefig then draws twice
+    assert len(draws) == 1
+
+
 def test_checker_finds_an_empty_panel_and_accepts_a_note():
     figure, (left, right) = plt.subplots(1, 2)
     left.plot([1, 2], [1, 2])

@@ -54,6 +54,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib import ticker  # noqa: E402
 from matplotlib.backend_bases import DrawEvent  # noqa: E402
+from matplotlib.layout_engine import TightLayoutEngine  # noqa: E402
 
 from workflow.io.escape import plot_text  # noqa: E402
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem  # noqa: E402
@@ -181,17 +182,23 @@ def legend_beside(axis: plt.Axes, **options) -> None:
 
 def lay_out(figure: plt.Figure, notes: Sequence[str] = (), width: int = 110) -> None:
     """Lay the panels out tightly, with the sentences of ``notes`` under them (outside
-    the data) when there are any: one layout, each a large share of a figure's work."""
+    the data) when there are any: one layout, each a large share of a figure's work.
+
+    The layout is matplotlib's ``figure.tight_layout``, run by its engine directly:
+    ``tight_layout`` leaves a placeholder layout engine on the figure, for which every
+    ``savefig`` draws the whole figure once more (texts and ticks laid out, nothing
+    rendered) before the draw it saves.
+    """
     notes = [sentence for sentence in notes if sentence]
     if not notes:
-        figure.tight_layout()
+        TightLayoutEngine(rect=None).execute(figure)
         return
     text = "\n".join(textwrap.fill(sentence, width) for sentence in notes)
     lines = text.count("\n") + 1
     height_in = figure.get_size_inches()[1]
     bottom = min(0.4, (0.2 + 0.16 * lines) / height_in)
     with bounding_boxes_measured_once(figure):
-        figure.tight_layout(rect=(0.0, bottom, 1.0, 1.0))
+        TightLayoutEngine(rect=(0.0, bottom, 1.0, 1.0)).execute(figure)
     figure.text(0.01, 0.01, text, fontsize=8, ha="left", va="bottom", color="0.15")
 
 
