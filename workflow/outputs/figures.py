@@ -29,6 +29,7 @@ __all__ = [
     "amplitude_axis",
     "legend_beside",
     "lay_out",
+    "bounding_boxes_measured_once",
     "misfit_ranges",
     "misfit_sentence",
     "curve_at",
