@@ -10,7 +10,7 @@ suspicious), the score (killed over all) and each survivor's diff. A survivor is
 no test notices: kill it with a test, or argue in the test file why it is equivalent.
 
 Each mutant costs one run of the target's tests: ``units`` about 1.5 minutes on one core,
-``decide`` about as long, ``decay`` far longer.
+``decide`` about as long, ``confidence`` too, ``decay`` far longer.
 """
 
 from __future__ import annotations
@@ -50,6 +50,8 @@ TARGETS = {
         ["tests/test_measured_decay.py", "tests/test_measured_decay_truth.py"],
         "segment or overlap",
     ),
+    # The confidence: the runs' reweightings, the accuracy margin, the soft decisions.
+    "confidence": ("workflow/discovery/confidence.py", ["tests/test_discovery_confidence.py"], ""),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
     "decide": (
