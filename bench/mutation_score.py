@@ -52,6 +52,18 @@ TARGETS = {
     ),
     # The confidence: the runs' reweightings, the accuracy margin, the soft decisions.
     "confidence": ("workflow/discovery/confidence.py", ["tests/test_discovery_confidence.py"], ""),
+    # The combination rule (paired tests, what each mechanism removes, a term read off a
+    # residual); the end-to-end lab cases of its test file take seconds each, left out.
+    "combined": (
+        "workflow/discovery/combined.py",
+        [
+            "tests/test_discovery_combined.py",
+            "tests/test_discovery_combined_statistics.py",
+            "tests/test_discovery_confidence.py",
+        ],
+        "not two_hidden and not edge_of_its_range and not clear_velocity and not single_state_joint_with "
+        "and not gate_a_single",
+    ),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
     "decide": (
