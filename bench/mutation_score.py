@@ -64,6 +64,14 @@ TARGETS = {
         "not two_hidden and not edge_of_its_range and not clear_velocity and not single_state_joint_with "
         "and not gate_a_single",
     ),
+    # The baseline's misfit tests and explains_data (the signatures and the envelope test
+    # are the lab cases' and the diagnosis tests', minutes per mutant).
+    "misfit": (
+        "workflow/discovery/misfit.py:misfit_significant,bin_span_in_s,_lag1_effective,bin_observations,"
+        "bin_is_judged,binned_discrepancy,run_order_trend,explains_data",
+        ["tests/test_discovery_misfit.py"],
+        "",
+    ),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
     "decide": (
@@ -72,7 +80,7 @@ TARGETS = {
         "not named_none",
     ),
 }
-"""Target -> (the module mutated, ``:function`` to mutate one function of it only; the tests
+"""Target -> (the module mutated, ``:function[,function...]`` to mutate those functions only; the tests
 run against each mutant; a pytest ``-k`` expression selecting among them, or "")."""
 
 
@@ -113,18 +121,19 @@ def mutmut(folder: Path, *args: str) -> str:
 
 def score(target: str, children: int) -> None:
     where, tests, selection = TARGETS[target]
-    module, _, function = where.partition(":")
+    module, _, listed = where.partition(":")
+    functions = listed.split(",") if listed else []
     with tempfile.TemporaryDirectory(prefix="mutation-") as tmp:
         folder = Path(tmp)
         copy_project(folder)
         (folder / "setup.cfg").write_text(mutmut_config(module, tests, selection))
         # mutmut names a mutant module.x_function__mutmut_N
-        names = [f"{module[:-3].replace('/', '.')}.x_{function}__mutmut_*"] if function else []
+        names = [f"{module[:-3].replace('/', '.')}.x_{function}__mutmut_*" for function in functions]
         mutmut(folder, "run", "--max-children", str(children), *names)
         outcomes: dict[str, list[str]] = {}
         for line in mutmut(folder, "results", "--all", "true").splitlines():
             name, _, outcome = line.strip().rpartition(": ")
-            if name and (not function or f".x_{function}__mutmut_" in name):
+            if name and (not functions or any(f".x_{function}__mutmut_" in name for function in functions)):
                 outcomes.setdefault(outcome, []).append(name)
         killed = len(outcomes.get("killed", []))
         total = sum(len(names) for names in outcomes.values())
