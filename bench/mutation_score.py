@@ -72,6 +72,13 @@ TARGETS = {
         ["tests/test_discovery_misfit.py"],
         "",
     ),
+    # The held-out statistics but the cross-validation itself (fits, the lab cases').
+    "heldout": (
+        "workflow/discovery/heldout.py:heldout_scales,folds_of,amplitude_bin,amplitude_weights,weighted_rms,"
+        "effective_observations,information_criterion,heldout_units,heldout_standard_error",
+        ["tests/test_discovery_heldout.py"],
+        "",
+    ),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
     "decide": (

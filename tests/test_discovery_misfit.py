@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy import stats
+from support.discovery import segments_data
 
 from workflow.discovery.misfit import (
     ALPHA,
@@ -33,18 +34,7 @@ def campaign(n_runs: int, per_bin: int = 5) -> ConfigurationData:
     velocity = np.tile(np.repeat(BIN_VELOCITIES_IN_S, per_bin), n_runs) * np.tile(
         np.linspace(1.0, 1.2, per_bin), 3 * n_runs
     )
-    run_index = np.repeat(np.arange(n_runs), 3 * per_bin)
-    ones = np.ones(velocity.size)
-    return ConfigurationData(
-        "c",
-        velocity,
-        1e-3 * ones,
-        100.0 * ones,
-        run_index,
-        [f"run{r + 1:02d}" for r in range(n_runs)],
-        1.0,
-        anchor_velocity_in_s=ANCHOR_IN_S,
-    )
+    return segments_data(velocity, np.repeat(np.arange(n_runs), 3 * per_bin), ANCHOR_IN_S)
 
 
 def residuals_of(ln_zeta: np.ndarray, rel_f: np.ndarray, scatter=(0.01, 2e-5)) -> dict[str, np.ndarray]:
@@ -107,16 +97,7 @@ def test_a_bin_of_too_few_runs_is_not_judged():
     data = campaign(6)
     low = data.velocity_in_s < 0.8
     reached = ~low | (data.run_index < MIN_BIN_RUNS - 1)
-    data = ConfigurationData(
-        "c",
-        data.velocity_in_s[reached],
-        data.zeta[reached],
-        data.frequency_hz[reached],
-        data.run_index[reached],
-        data.run_names,
-        1.0,
-        anchor_velocity_in_s=ANCHOR_IN_S,
-    )
+    data = segments_data(data.velocity_in_s[reached], data.run_index[reached], ANCHOR_IN_S)
     rng = np.random.default_rng(3)
     residuals = residuals_of(rng.standard_normal(data.n), rng.standard_normal(data.n))
     rows = binned_discrepancy(data, residuals)
