@@ -9,8 +9,9 @@ call), and the bench prints the mutants killed, survived and otherwise (timeouts
 suspicious), the score (killed over all) and each survivor's diff. A survivor is a change
 no test notices: kill it with a test, or argue in the test file why it is equivalent.
 
-Each mutant costs one run of the target's tests: ``units`` about 1.5 minutes on one core,
-``decide`` about as long, ``decay`` far longer.
+Each mutant costs one run of the target's tests. On one core: ``units``, ``decide`` and
+``confidence`` about 1.5 minutes each, ``heldout`` 1, ``misfit`` 2, ``combined`` 3,
+``decay`` far longer.
 """
 
 from __future__ import annotations
@@ -50,6 +51,35 @@ TARGETS = {
         ["tests/test_measured_decay.py", "tests/test_measured_decay_truth.py"],
         "segment or overlap",
     ),
+    # The confidence: the runs' reweightings, the accuracy margin, the soft decisions.
+    "confidence": ("workflow/discovery/confidence.py", ["tests/test_discovery_confidence.py"], ""),
+    # The combination rule (paired tests, what each mechanism removes, a term read off a
+    # residual); the end-to-end lab cases of its test file take seconds each, left out.
+    "combined": (
+        "workflow/discovery/combined.py",
+        [
+            "tests/test_discovery_combined.py",
+            "tests/test_discovery_combined_statistics.py",
+            "tests/test_discovery_confidence.py",
+        ],
+        "not two_hidden and not edge_of_its_range and not clear_velocity and not single_state_joint_with "
+        "and not gate_a_single",
+    ),
+    # The baseline's misfit tests and explains_data (the signatures and the envelope test
+    # are the lab cases' and the diagnosis tests', minutes per mutant).
+    "misfit": (
+        "workflow/discovery/misfit.py:misfit_significant,bin_span_in_s,_lag1_effective,bin_observations,"
+        "bin_is_judged,binned_discrepancy,run_order_trend,explains_data",
+        ["tests/test_discovery_misfit.py"],
+        "",
+    ),
+    # The held-out statistics but the cross-validation itself (fits, the lab cases').
+    "heldout": (
+        "workflow/discovery/heldout.py:heldout_scales,folds_of,amplitude_bin,amplitude_weights,weighted_rms,"
+        "effective_observations,information_criterion,heldout_units,heldout_standard_error",
+        ["tests/test_discovery_heldout.py"],
+        "",
+    ),
     # The decision rule itself; the rest of decision.py (the evidence it is fed) is covered
     # by the diagnosis tests, minutes per mutant.
     "decide": (
@@ -58,7 +88,7 @@ TARGETS = {
         "not named_none",
     ),
 }
-"""Target -> (the module mutated, ``:function`` to mutate one function of it only; the tests
+"""Target -> (the module mutated, ``:function[,function...]`` to mutate those functions only; the tests
 run against each mutant; a pytest ``-k`` expression selecting among them, or "")."""
 
 
@@ -99,18 +129,19 @@ def mutmut(folder: Path, *args: str) -> str:
 
 def score(target: str, children: int) -> None:
     where, tests, selection = TARGETS[target]
-    module, _, function = where.partition(":")
+    module, _, listed = where.partition(":")
+    functions = listed.split(",") if listed else []
     with tempfile.TemporaryDirectory(prefix="mutation-") as tmp:
         folder = Path(tmp)
         copy_project(folder)
         (folder / "setup.cfg").write_text(mutmut_config(module, tests, selection))
         # mutmut names a mutant module.x_function__mutmut_N
-        names = [f"{module[:-3].replace('/', '.')}.x_{function}__mutmut_*"] if function else []
+        names = [f"{module[:-3].replace('/', '.')}.x_{function}__mutmut_*" for function in functions]
         mutmut(folder, "run", "--max-children", str(children), *names)
         outcomes: dict[str, list[str]] = {}
         for line in mutmut(folder, "results", "--all", "true").splitlines():
             name, _, outcome = line.strip().rpartition(": ")
-            if name and (not function or f".x_{function}__mutmut_" in name):
+            if name and (not functions or any(f".x_{function}__mutmut_" in name for function in functions)):
                 outcomes.setdefault(outcome, []).append(name)
         killed = len(outcomes.get("killed", []))
         total = sum(len(names) for names in outcomes.values())

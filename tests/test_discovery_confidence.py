@@ -13,6 +13,7 @@ from workflow.discovery.confidence import (
     log_density,
     mean_probabilities,
     soft_decisions,
+    verdict_causes,
     verdict_key,
 )
 
@@ -173,6 +174,184 @@ def test_verdict_keys_do_not_depend_on_the_order_of_causes():
     assert verdict_key(["stiffness_nonlinearity", "microslip_power_law"]) == verdict_key(
         ["microslip_power_law", "stiffness_nonlinearity"]
     )
+
+
+def test_verdict_keys_follow_the_vocabulary_and_give_their_causes_back():
+    """The contract's key of two causes is the vocabulary's order joined by ``+`` (micro-slip,
+    quadratic, stiffness, run drift), not the alphabet's, and reads back into its causes."""
+    assert verdict_key(["run_drift", "stiffness_nonlinearity"]) == "stiffness_nonlinearity+run_drift"
+    assert (
+        verdict_key(["quadratic_damping", "microslip_power_law"]) == "microslip_power_law+quadratic_damping"
+    )
+    for causes in (["microslip_power_law", "stiffness_nonlinearity"], ["none"], ["unknown"]):
+        assert verdict_causes(verdict_key(causes)) == causes
+
+
+def test_not_single_mode_decays_are_unknown_in_every_reweighting():
+    """Envelopes that are not single-mode decays: ``unknown`` in every draw, whatever the
+    options predict; its gain ratio is the best option's error over the baseline's."""
+    ev = with_squares({"dahl": np.full(N_UNITS, 4.0), "iwan": np.full(N_UNITS, 1.0)}, 100.0)
+    draws = dirichlet_unit_weights(50, N_UNITS, np.random.default_rng(2))
+    rule = {**RULE, "envelope_structure": True}
+    p, ratio = soft_decisions(
+        ev, ["dahl"], [VerdictOption("microslip_power_law", "iwan")], baseline_fails=True, draws=draws, **rule
+    )
+    np.testing.assert_array_equal(p["unknown"], 1.0)
+    np.testing.assert_array_equal(p["none"] + p["microslip_power_law"], 0.0)
+    np.testing.assert_allclose(ratio, 0.5, rtol=1e-12)  # sqrt(1 / 4) in every draw
+
+
+@pytest.mark.parametrize("baseline_fails", [True, False])
+def test_without_an_eligible_option_the_baseline_stands_or_nothing_explains_its_misfit(baseline_fails):
+    """No option the rule lets name: ``none`` where the baseline fits (gain ratio 1),
+    ``unknown`` where it fails (gain ratio of the best model tried, here 0.5)."""
+    ev = with_squares({"dahl": np.full(N_UNITS, 4.0), "iwan": np.full(N_UNITS, 1.0)}, 100.0)
+    draws = dirichlet_unit_weights(50, N_UNITS, np.random.default_rng(4))
+    vetoed = [VerdictOption("microslip_power_law", "iwan", eligible=False)]
+    p, ratio = soft_decisions(ev, ["dahl"], vetoed, baseline_fails=baseline_fails, draws=draws, **RULE)
+    np.testing.assert_array_equal(p["unknown"], 1.0 if baseline_fails else 0.0)
+    np.testing.assert_array_equal(p["none"], 0.0 if baseline_fails else 1.0)
+    np.testing.assert_array_equal(p["microslip_power_law"], 0.0)
+    np.testing.assert_allclose(ratio, 0.5 if baseline_fails else 1.0, rtol=1e-12)
+
+
+@pytest.mark.parametrize("second_error, leaves_misfit", [(0.42, False), (0.8, True)])
+def test_better_options_share_a_departure_by_their_pseudo_bma_weights(second_error, leaves_misfit):
+    """Two options that predict better: on the data (one draw of ones) their shares are
+    ``exp(elpd)`` normalised, ``(E2^2 / E1^2)^(n_eff / 2)`` apart. One that leaves a
+    significant misfit at 0.8 of a failing baseline's error passes its share to
+    ``unknown`` (whose ratio is the best model tried); the gain ratio is the shares' mean
+    of their ratios."""
+    n_eff = 6
+    errors = {"dahl": 1.0, "iwan": 0.40, "dahl_quadratic": second_error}
+    ev = with_squares({m: np.full(N_UNITS, e**2) for m, e in errors.items()}, 1e-6, n_eff)
+    options = [
+        VerdictOption("microslip_power_law", "iwan"),
+        VerdictOption("quadratic_damping", "dahl_quadratic", residual_significant=leaves_misfit),
+    ]
+    p, ratio = soft_decisions(
+        ev, ["dahl"], options, baseline_fails=leaves_misfit, draws=np.ones((1, N_UNITS)), **RULE
+    )
+    odds = (second_error**2 / 0.40**2) ** (n_eff / 2)
+    share = odds / (1.0 + odds)
+    second = "unknown" if leaves_misfit else "quadratic_damping"
+    assert p["microslip_power_law"][0] == pytest.approx(share, rel=1e-12)
+    assert p[second][0] == pytest.approx(1.0 - share, rel=1e-12)
+    assert sum(p[k][0] for k in p if k not in ("microslip_power_law", second)) == 0.0
+    second_ratio = 0.40 if leaves_misfit else second_error
+    assert ratio[0] == pytest.approx(share * 0.40 + (1.0 - share) * second_ratio, rel=1e-12)
+
+
+def test_log_density_does_not_depend_on_the_scale_of_the_unit_weights():
+    """``E^2 = sum S / sum W``: amplitude weights far below 1 (a channel of few segments)
+    give the same error as the same sums scaled up."""
+    ev = channel({"dahl": 2.0, "iwan": 1.0}, 0.1, seed=3)
+    small = HeldoutEvidence(
+        {m: v * 1e-6 for m, v in ev.unit_curve_squares.items()},
+        ev.unit_tolerance * 1e-6,
+        ev.unit_weights * 1e-6,
+        ev.effective_observations,
+    )
+    draws = dirichlet_unit_weights(5, N_UNITS, np.random.default_rng(0))
+    for a, b in zip(log_density(ev, ["dahl", "iwan"], draws), log_density(small, ["dahl", "iwan"], draws)):
+        np.testing.assert_allclose(a, b, rtol=1e-12)
+
+
+def test_one_unit_of_evidence_keeps_its_weight():
+    """One unit (one run of one half decade): every reweighting is the data."""
+    np.testing.assert_array_equal(dirichlet_unit_weights(4, 1, np.random.default_rng(0)), np.ones((4, 1)))
+
+
+def test_mean_probabilities_drop_the_negligible_and_sum_to_one_largest_first():
+    mean = mean_probabilities(
+        {
+            "microslip_power_law": np.array([0.2, 0.3]),
+            "unknown": np.array([0.0, 0.001]),  # mean 5e-4: below the reported thousandth
+            "none": np.array([0.8, 0.699]),
+        }
+    )
+    assert list(mean) == ["none", "microslip_power_law"]
+    total = 0.25 + 0.7495
+    assert mean["none"] == pytest.approx(0.7495 / total, rel=1e-12)
+    assert mean["microslip_power_law"] == pytest.approx(0.25 / total, rel=1e-12)
+
+
+@pytest.mark.parametrize("baseline_fails", [True, False])
+def test_where_an_eligible_option_predicts_worse_the_baseline_stands_or_nothing_explains_it(baseline_fails):
+    """An option the rule lets name but that predicts held-out data worse than the
+    baseline in every reweighting takes nothing: ``none`` where the baseline fits (gain
+    ratio 1), ``unknown`` where it fails (the ratio of the best model tried, per draw)."""
+    ev = channel({"dahl": 1.0, "dahl_stiffness": 1.6}, 0.1, seed=19)
+    draws = dirichlet_unit_weights(50, N_UNITS, np.random.default_rng(6))
+    options = [VerdictOption("stiffness_nonlinearity", "dahl_stiffness")]
+    p, ratio = soft_decisions(ev, ["dahl"], options, baseline_fails=baseline_fails, draws=draws, **RULE)
+    _, error = log_density(ev, ["dahl", "dahl_stiffness"], draws)
+    assert np.all(error[1] > error[0])
+    np.testing.assert_array_equal(p["unknown"], 1.0 if baseline_fails else 0.0)
+    np.testing.assert_array_equal(p["none"], 0.0 if baseline_fails else 1.0)
+    np.testing.assert_array_equal(p["stiffness_nonlinearity"], 0.0)
+    np.testing.assert_allclose(ratio, error[1] / error[0] if baseline_fails else 1.0, rtol=1e-12)
+
+
+def test_without_any_option_a_failing_baseline_is_unknown_at_its_own_error():
+    ev = channel({"dahl": 1.0}, 0.1, seed=23)
+    draws = dirichlet_unit_weights(20, N_UNITS, np.random.default_rng(8))
+    p, ratio = soft_decisions(ev, ["dahl"], [], baseline_fails=True, draws=draws, **RULE)
+    np.testing.assert_array_equal(p["unknown"], 1.0)
+    np.testing.assert_allclose(ratio, 1.0)
+
+
+@pytest.mark.parametrize("baseline_fails", [False, True])
+def test_an_option_better_in_some_reweightings_departs_in_those_only(baseline_fails):
+    """An option that predicts half the runs far better and the other half worse: in each
+    reweighting it takes the departure where its reweighted error is below the
+    baseline's; elsewhere ``none``, or ``unknown`` where the baseline fails; an option
+    worse in every draw never takes a share; at a realistic ``n_eff`` (the elpd in the
+    thousands) the shares stay finite."""
+    runs = np.arange(N_UNITS)
+    squares = {
+        "dahl": np.full(N_UNITS, 1.0),
+        "iwan": np.where(runs < N_UNITS // 2, 0.01, 1.9),
+        "dahl_stiffness": np.full(N_UNITS, 3.0),
+    }
+    ev = with_squares(squares, 1e-6, n_eff=4000)
+    draws = dirichlet_unit_weights(400, N_UNITS, np.random.default_rng(10))
+    options = [
+        VerdictOption("microslip_power_law", "iwan"),
+        VerdictOption("stiffness_nonlinearity", "dahl_stiffness"),
+    ]
+    p, ratio = soft_decisions(ev, ["dahl"], options, baseline_fails=baseline_fails, draws=draws, **RULE)
+    _, error = log_density(ev, ["dahl", "iwan"], draws)
+    better = error[1] < error[0]
+    assert 0.2 < better.mean() < 0.8  # both kinds of draw occur
+    np.testing.assert_array_equal(p["microslip_power_law"], np.where(better, 1.0, 0.0))
+    np.testing.assert_array_equal(p["unknown" if baseline_fails else "none"], np.where(better, 0.0, 1.0))
+    np.testing.assert_array_equal(p["none" if baseline_fails else "unknown"], 0.0)
+    np.testing.assert_array_equal(p["stiffness_nonlinearity"], 0.0)
+    # unknown's ratio is the best model tried (iwan, the stiffness term predicting worse still)
+    expected = np.where(better | baseline_fails, error[1] / error[0], 1.0)
+    np.testing.assert_allclose(ratio, expected, rtol=1e-12)
+
+
+def test_a_combination_worse_than_the_baseline_takes_nothing_even_where_it_beats_its_parts():
+    """A combination whose parts both predict far worse than the baseline passes its own
+    parsimony test against them, yet predicts worse than the baseline: it takes nothing
+    of a failing baseline's misfit (``unknown``)."""
+    squares = {
+        "dahl": np.full(N_UNITS, 1.0),
+        "iwan_cells_5_quadratic": np.full(N_UNITS, 1.2) + 0.01 * np.arange(N_UNITS),
+        "iwan_cells_5": np.full(N_UNITS, 20.0),
+        "dahl_quadratic": np.full(N_UNITS, 30.0),
+    }
+    ev = with_squares(squares, 1e-6)
+    combination = VerdictOption(
+        "microslip_power_law+quadratic_damping",
+        "iwan_cells_5_quadratic",
+        parts={"microslip_power_law": "iwan_cells_5", "quadratic_damping": "dahl_quadratic"},
+    )
+    draws = dirichlet_unit_weights(50, N_UNITS, np.random.default_rng(12))
+    p, _ = soft_decisions(ev, ["dahl"], [combination], baseline_fails=True, draws=draws, **RULE)
+    np.testing.assert_array_equal(p["unknown"], 1.0)
 
 
 def test_combination_named_only_when_both_parts_add_more_than_their_scatter():

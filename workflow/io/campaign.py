@@ -486,7 +486,11 @@ def load_campaign(campaign_dir: str | Path) -> Campaign:
         )
     if not path.is_file():
         raise CampaignFormatError(
-            path, None, "missing: every campaign folder needs a campaign.yaml (campaign-format.md)"
+            path,
+            None,
+            "missing: every campaign folder needs a campaign.yaml naming its configurations and "
+            "what the run files hold (docs/input-format.md; a complete example: "
+            "tests/data/example_campaign/campaign.yaml)",
         )
     try:
         size_bytes = path.stat().st_size

@@ -1,0 +1,136 @@
+"""Held-out statistics (workflow/discovery/heldout.py) on cases whose answer is known: the
+folds, the amplitude bins and weights, the effective observations, the information
+criterion, the units of evidence and the standard error of a ratio estimator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from support.discovery import segments_data
+
+from workflow.discovery.heldout import (
+    MIN_BIN_SEGMENTS,
+    amplitude_bin,
+    amplitude_weights,
+    effective_observations,
+    folds_of,
+    heldout_scales,
+    heldout_standard_error,
+    heldout_units,
+    information_criterion,
+    weighted_rms,
+)
+from workflow.models.configuration_data import ConfigurationData, Scatter
+
+
+def data_of(velocity_in_s, run_index, anchor_in_s=10.0, channel_index=None) -> ConfigurationData:
+    return segments_data(velocity_in_s, run_index, anchor_in_s, channel_index)
+
+
+def test_folds_hold_out_whole_runs_spread_over_the_run_order():
+    data = data_of(np.geomspace(0.1, 10.0, 40), np.repeat(np.arange(8), 5))
+    folds = folds_of(data, 3)
+    assert len(folds) == 3
+    for j, fold in enumerate(folds):
+        assert sorted(set(data.run_index[fold].tolist())) == [r for r in range(8) if r % 3 == j]
+    np.testing.assert_array_equal(np.sum(folds, axis=0), 1)  # every segment held out once
+    assert len(folds_of(data_of(np.ones(6), np.repeat([0, 1, 2], 2)), 5)) == 3  # no more folds than runs
+    two_runs = folds_of(data_of([9.0, 1.0, 5.0, 0.5], np.array([0, 0, 1, 1])), 5)  # two runs: two folds
+    assert [fold.tolist() for fold in two_runs] == [[True, True, False, False], [False, False, True, True]]
+
+
+def test_one_run_is_held_out_in_contiguous_amplitude_blocks_of_six_instants_at_least():
+    rng = np.random.default_rng(1)
+    velocity = rng.permutation(np.geomspace(0.01, 10.0, 40))
+    folds = folds_of(data_of(velocity, np.zeros(40, dtype=int)), 5)
+    assert len(folds) == 5
+    np.testing.assert_array_equal(np.sum(folds, axis=0), 1)
+    ranges = sorted((velocity[f].min(), velocity[f].max()) for f in folds)
+    assert all(high < next_low for (_, high), (next_low, _) in zip(ranges, ranges[1:]))
+    assert all(f.sum() == 8 for f in folds)
+    # 40 segments seen by two channels are 20 instants: three blocks of six or more
+    two = data_of(velocity, np.zeros(40, dtype=int), channel_index=np.arange(40) % 2)
+    assert len(folds_of(two, 5)) == 3
+    # never fewer than two blocks
+    assert len(folds_of(data_of(velocity[:7], np.zeros(7, dtype=int)), 5)) == 2
+
+
+def test_amplitude_bins_count_down_from_the_anchor_which_tops_the_first():
+    anchor = 8.0
+    edges = anchor * 10.0 ** (-np.arange(4) / 2.0)  # 8, 2.53, 0.8, 0.253
+    just_below = edges * (1 - 1e-6)
+    assert amplitude_bin(edges, anchor, 2).tolist() == [-1, -2, -3, -4]  # an edge tops its bin
+    assert amplitude_bin(just_below, anchor, 2).tolist() == [-1, -2, -3, -4]
+    assert amplitude_bin(edges[1:] * (1 + 1e-6), anchor, 2).tolist() == [-1, -2, -3]
+    assert amplitude_bin(np.array([8.0, 6.0, 4.4]), anchor, 4).tolist() == [-1, -1, -2]
+
+
+def test_every_occupied_quarter_decade_has_the_same_say_and_a_sparse_one_less():
+    """Bins of 120 and 60 segments carry equal total weight; one of 10 segments carries
+    10 / MIN_BIN_SEGMENTS of it; pooled channels raise the floor by their number."""
+    velocity = np.concatenate(
+        [np.full(120, 9.0), np.full(60, 4.0), np.full(10, 2.0)]
+    )  # three quarter decades
+    w = amplitude_weights(velocity, 10.0)
+    totals = [w[velocity == v].sum() for v in (9.0, 4.0, 2.0)]
+    assert totals[0] == pytest.approx(1.0) and totals[1] == pytest.approx(1.0)
+    assert totals[2] == pytest.approx(10 / MIN_BIN_SEGMENTS)
+    w2 = amplitude_weights(velocity, 10.0, channels=2)
+    assert w2[velocity == 9.0].sum() == pytest.approx(1.0)
+    assert w2[velocity == 4.0].sum() == pytest.approx(60 / (2 * MIN_BIN_SEGMENTS))
+
+
+def test_weighted_rms():
+    assert weighted_rms(np.array([1.0, 9.0]), np.array([3.0, 1.0])) == pytest.approx(np.sqrt(12.0 / 4.0))
+    assert weighted_rms(np.array([4.0]), np.array([0.0])) == 0.0
+    assert weighted_rms(np.array([1.0, 9.0]), np.array([0.3, 0.1])) == pytest.approx(np.sqrt(12.0 / 4.0))
+
+
+def test_effective_observations_are_two_per_occupied_run_and_half_decade():
+    # run 0 in two half decades (9 and 4 share one), run 1 in one: three cells
+    data = data_of([9.0, 4.0, 2.0, 9.5], [0, 0, 0, 1])
+    assert effective_observations(data) == 6
+    assert effective_observations(data_of([9.0, 8.5], [0, 0])) == 4  # at least two cells
+
+
+def test_information_criterion_is_bic_on_the_normalised_residuals():
+    assert information_criterion(0.5, 3, 20) == pytest.approx(20 * np.log(0.5) + 3 * np.log(20))
+    assert information_criterion(0.0, 1, 10) == pytest.approx(10 * np.log(1e-300) + np.log(10))
+
+
+def test_units_are_runs_or_one_runs_half_decades_from_zero():
+    runs = data_of([9.0, 2.0, 9.0], [0, 0, 1])
+    np.testing.assert_array_equal(heldout_units(runs), [0, 0, 1])
+    one = data_of([9.0, 2.0, 0.5, 5.0], [0, 0, 0, 0])
+    np.testing.assert_array_equal(heldout_units(one), [2, 1, 0, 2])
+
+
+def test_the_standard_error_of_a_ratio_estimator():
+    """``E^2 = sum S / sum W``; to first order its variance is ``n/(n-1) sum (S - E^2
+    W)^2 / W^2`` over the units (the delta method for a ratio of sums); units without
+    weight are no units; fewer than two units give none."""
+    squares = np.array([1.0, 3.0, 2.5, 0.5])
+    weights = np.array([1.0, 2.0, 1.5, 0.5])
+    ratio = squares.sum() / weights.sum()
+    variance = 4 / 3 * np.sum((squares - ratio * weights) ** 2) / weights.sum() ** 2
+    assert heldout_standard_error(squares, weights) == pytest.approx(np.sqrt(variance), rel=1e-12)
+    assert heldout_standard_error(np.append(squares, 99.0), np.append(weights, 0.0)) == pytest.approx(
+        np.sqrt(variance), rel=1e-12
+    )
+    assert heldout_standard_error(squares[:1], weights[:1]) == 0.0
+    two = 2 * np.sum((squares[:2] - squares[:2].sum() / 3.0 * weights[:2]) ** 2) / 3.0**2
+    assert heldout_standard_error(squares[:2], weights[:2]) == pytest.approx(np.sqrt(two), rel=1e-12)
+    # weights in other units (a tenth): the same error, the same standard error
+    assert heldout_standard_error(0.1 * squares, 0.1 * weights) == pytest.approx(np.sqrt(variance), rel=1e-12)
+    assert heldout_standard_error(squares, np.zeros(4)) == 0.0
+
+
+def test_held_out_residuals_are_scored_in_the_scatter_and_the_offsets_uncertainty():
+    scatter = Scatter(np.full(2, 0.1), np.full(2, 1e-4), np.array([0.03, 0.04]), np.array([3e-5, 4e-5]))
+    residuals = {
+        "offset_variance_ln_zeta": np.array([0.04**2, 0.03**2]),
+        "offset_variance_rel_f": np.array([4e-5**2, 0.0]),
+    }
+    ln_zeta, rel_f = heldout_scales(residuals, scatter)
+    np.testing.assert_allclose(ln_zeta, [0.05, 0.05])
+    np.testing.assert_allclose(rel_f, [5e-5, 4e-5])
