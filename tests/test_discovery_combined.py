@@ -9,7 +9,7 @@ import pytest
 from workflow.discovery.campaign import diagnose_campaign
 from workflow.discovery.combined import term_from_residuals
 from workflow.discovery.configuration import add_threshold_cells, curve_led_start
-from workflow.discovery.misfit import microslip_signature, stiffness_signature
+from workflow.discovery.misfit import OWN_SHAPE_SHARE, microslip_signature, stiffness_signature
 from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
 from workflow.lab.hidden_effects import campaign_segments, case_causes, generate_case
 from workflow.lab.settings import LabSettings
@@ -72,6 +72,25 @@ def test_a_hardening_spring_beside_micro_slip_shows_the_stiffness_signature():
     # the frequency turns back up by far more than the models' accuracy
     assert signature["frequency_rise"] > 10 * signature["rise_limit"], signature
     assert microslip_signature(fit, data)["shows_signature"]
+
+
+def test_a_spring_that_only_lessens_the_softening_shows_the_signature_by_its_own_shape():
+    """A weaker cubic spring (0.1 % at 3 in/s) beside the lab's micro-slip joint never
+    turns the frequency up and changes it less than the friction alone: its term still
+    grows as the square of amplitude, half of it not proportional to the joint's softening.
+    A micro-slip joint with a velocity-squared loss fitted by the same combination gets a
+    term that mirrors its own softening instead (its own share a tenth): no second
+    mechanism there."""
+    data, scatter = truth_data(1.25, "cubic_stiffness", 0.001)
+    fit, _ = fit_stiffness_combination(data, scatter)
+    signature = stiffness_signature(fit, data)
+    assert signature["frequency_rise"] <= signature["rise_limit"]
+    assert abs(signature["relative_frequency_change"]) < abs(signature["friction_relative_frequency_change"])
+    assert signature["own_shape_share"] > 2 * OWN_SHAPE_SHARE and signature["shows_signature"], signature
+    data, scatter = truth_data(1.25, "quadratic_damping", 0.002)
+    fit, _ = fit_stiffness_combination(data, scatter)
+    mimic = stiffness_signature(fit, data)
+    assert mimic["own_shape_share"] < 0.6 * OWN_SHAPE_SHARE and not mimic["shows_signature"], mimic
 
 
 def test_a_single_state_joint_beside_a_stiffness_term_is_not_micro_slip():
