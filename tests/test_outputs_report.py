@@ -805,11 +805,13 @@ def test_the_verdict_says_why_a_stiffness_fit_without_the_signature_was_set_asid
     signature = {
         "relative_frequency_change": -3.0e-5,
         "friction_relative_frequency_change": -4.2e-4,
+        "own_shape_share": 0.083,
         "shows_signature": False,
     }
     entry = {"evidence": {"candidates": {"stiffness_nonlinearity": {"signature": signature}}}}
     (sentence,) = report_wording.signature_sentences(entry)
     assert "not eligible" in sentence and "-0.003 %" in sentence and "-0.042 %" in sentence
+    assert "only 0.083 of its term's change is not proportional" in sentence
     assert any(
         "not eligible" in item for item in verdict_page._sureness_items("joint", {**entry, "cause": "none"})
     )

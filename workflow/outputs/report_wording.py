@@ -178,12 +178,18 @@ def signature_sentences(entry: Mapping) -> list[str]:
         return []
     whole = signature.get("relative_frequency_change")
     friction = signature.get("friction_relative_frequency_change")
+    own = signature.get("own_shape_share")
+    own_words = (
+        ""
+        if own is None
+        else f", and only {fmt(own, 2)} of its term's change is not proportional to the friction's softening"
+    )
     return [
         f"{cause_name('stiffness_nonlinearity')} is not eligible: over the measured amplitudes its fit "
         f"changes the frequency by {fmt(100 * whole, 2)} %, less than its friction alone "
-        f"({fmt(100 * friction, 2)} %), and never raises it with amplitude; its stiffness term cancels "
-        "the friction's frequency change instead of showing one the friction cannot explain (the "
-        "contract's signature)."
+        f"({fmt(100 * friction, 2)} %), never raises it with amplitude{own_words}; its stiffness term "
+        "cancels part of the friction's frequency change instead of showing one the friction cannot "
+        "explain (the contract's signature)."
     ]
 
 
