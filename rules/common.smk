@@ -188,7 +188,7 @@ def configuration_areas_in2(campaign):
         from workflow.lab.layout import PAPER_CONFIGURATIONS
 
         return dict(PAPER_CONFIGURATIONS)
-    return {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
+    return campaign.bearing_areas_in2()
 
 
 RUN_FILES, EXCLUDED_PATHS, CAMPAIGN_SPEC = campaign_inventory()

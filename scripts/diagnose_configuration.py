@@ -48,7 +48,7 @@ document = configuration_models_document(
     segments,
     configuration,
     first_mode_rows(read_table(snakemake.input.modes)).set_index("configuration"),
-    {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()},
+    campaign.bearing_areas_in2(),
     response_quantity=campaign.response.quantity,
     analysis=decay,
     settings=ModelSettings(**snakemake.params.models),

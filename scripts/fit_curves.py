@@ -8,7 +8,7 @@ from workflow.runtime.logs import setup_script_logging
 
 log = setup_script_logging(snakemake.log[0], "fit_curves")
 campaign = read_campaign(snakemake.input.campaign_settings)
-areas = {name: spec.bearing_area_in2 for name, spec in campaign.configurations.items()}
+areas = campaign.bearing_areas_in2()
 segments = read_table(snakemake.input.segments)
 tables = fit_damping_curves(segments, areas, DampingFitSettings(**snakemake.params.fits))
 for name in ("fits", "curves", "hypotheses", "area"):

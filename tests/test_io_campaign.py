@@ -79,6 +79,7 @@ def test_campaign_defaults(tmp_path):
     assert campaign.mode_hz is None and campaign.band_hz is None
     assert campaign.configurations["cfg"].files == "cfg/*.txt"
     assert campaign.configurations["cfg"].bearing_area_in2 is None
+    assert campaign.bearing_areas_in2() == {"cfg": None}
     assert campaign.configurations["cfg"].window_s is None
 
 
@@ -103,6 +104,7 @@ configurations:
     assert campaign.configurations["small_washer"].files == "small_washer/*.txt"
     assert campaign.configurations["small_washer"].window_s == (0.5, 3.0)
     assert campaign.force.unit == "lbf"
+    assert campaign.bearing_areas_in2() == {"no_washer": 1.36, "large_washer": 0.66, "small_washer": 0.17}
 
 
 @pytest.mark.parametrize(

@@ -283,6 +283,11 @@ class Campaign:
             return tuple(zip(self.modes_hz, bands))
         return ((self.mode_hz, self.band_hz),)
 
+    def bearing_areas_in2(self) -> dict[str, float | None]:
+        """Configuration -> bearing area (in^2) as campaign.yaml states it, None where it
+        states none, in campaign.yaml's order."""
+        return {name: spec.bearing_area_in2 for name, spec in self.configurations.items()}
+
 
 def _modes_problem(
     mode_hz: float | None,

@@ -1,7 +1,6 @@
 """Scheduling: which configuration's diagnosis starts first, and ending the Snakemake
 process as soon as its last job is done.
 
-
 Snakemake's job scheduler rate-limits submissions (``--max-jobs-per-timespan``,
 100 jobs a second by default) and, after each scheduling round, starts a
 ``threading.Timer`` that wakes the scheduler again one timespan later. The timer of
