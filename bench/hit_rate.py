@@ -45,12 +45,15 @@ from workflow.discovery.confidence import verdict_causes as verdict_causes_of  #
 from workflow.discovery.confidence import verdict_key  # noqa: E402
 from workflow.discovery.configuration import conclude  # noqa: E402
 from workflow.discovery.decision import extended_model_of  # noqa: E402
+from workflow.discovery.joint import joint_segments  # noqa: E402
 from workflow.discovery.misfit import EXPLAINS_LIMIT, envelope_structure  # noqa: E402
 from workflow.lab.hidden_effects import (  # noqa: E402
     CASES,
+    RUNS,
     campaign_segments,
     case_causes,
     draw_mode1_gain,
+    draw_mode1_gains,
     generate_case,
     time_domain_can_hide,
 )
@@ -85,12 +88,28 @@ def verdict_confidence(configuration: dict) -> float | None:
     return float(shares.get(verdict_key(verdict_causes(configuration)), 0.0)) if shares else None
 
 
+def channel_verdicts(segments) -> dict[str, tuple[str, float]]:
+    """Each sensor's own verdict of a several-sensor campaign's configuration: channel ->
+    (verdict key, its confidence), the workflow's ``channels`` consistency check."""
+    verdicts = {}
+    for channel, rows in segments.groupby(segments["channel"].astype(str)):
+        doc = campaign_document("c", *diagnose_configurations(rows))
+        conf = next(iter(doc["configurations"].values()), None)
+        if conf:
+            key = verdict_key(verdict_causes(conf))
+            verdicts[channel] = (key, float(conf["confidence"].get(key, 0.0)))
+    return verdicts
+
+
 def _one(args):
-    cause, seed, work, variability, integrator, placement, keep = args
+    cause, seed, work, variability, integrator, placement, keep, runs, sensors = args
     start, start_cpu = time.perf_counter(), time.process_time()
     record = {"cause": cause, "seed": seed, "verdict": None, "causes": [], "confidence": None, "ratio": None}
     try:
-        gain = draw_mode1_gain(cause, seed) if placement else 1.0
+        if sensors > 1:
+            gain = draw_mode1_gains(cause, seed, sensors) if placement else (1.0,) * sensors
+        else:
+            gain = draw_mode1_gain(cause, seed) if placement else 1.0
         case, out = generate_case(
             cause,
             seed,
@@ -98,9 +117,16 @@ def _one(args):
             settings=lab_settings(variability),
             integrator=integrator,
             mode1_gain=gain,
+            runs=runs,
         )
         generated = time.perf_counter()
         segments = campaign_segments(out)
+        reference = 0
+        if sensors > 1:
+            record["channels"] = channel_verdicts(segments)
+            segments, joint = joint_segments(segments)
+            names = [s["name"] for s in case["sensors"]]
+            reference = names.index(next(iter(joint.values()))["reference_channel"]) if joint else 0
         context, details, skipped = diagnose_configurations(segments)
         doc = campaign_document(out.name, context, details, skipped)
         conf = next(iter(doc["configurations"].values()), None)
@@ -120,8 +146,9 @@ def _one(args):
             v = segments["velocity_amplitude_in_s"].to_numpy(float)
             v = v[np.isfinite(v) & (v > 0)]
             scatter = conf["evidence"]["scatter"]
-            # the truth is against the reference accelerometer's velocity amplitude
-            ratio = case["sensors"][0]["mode1_ratio"]
+            # the truth is against the reference accelerometer's velocity amplitude; with
+            # several sensors the amplitudes are on the joint analysis's reference channel
+            ratio = case["sensors"][reference]["mode1_ratio"]
             measured = (
                 case,
                 (float(v.min()) / ratio, float(v.max()) / ratio),
@@ -344,6 +371,16 @@ def main() -> None:
         action="store_true",
         help="print where the hidden effects are visible (truth curves) and exit",
     )
+    parser.add_argument(
+        "--runs", type=int, default=RUNS, help=f"hits per campaign (default {RUNS}; 1: one hit, no run drift)"
+    )
+    parser.add_argument(
+        "--sensors",
+        type=int,
+        default=1,
+        help="sensors recording each hit (several: the verdict is the joint analysis of every sensor, "
+        "each sensor's own verdict checked against the others)",
+    )
     parser.add_argument("--keep", metavar="DIR", help="store each campaign's decision evidence in DIR")
     parser.add_argument(
         "--redecide",
@@ -367,14 +404,28 @@ def main() -> None:
         report(results, args.causes)
         return
     integrator = "time_domain" if args.time_domain else None
-    hideable = [c for c in CASES if not args.time_domain or time_domain_can_hide(c)]
+    hideable = [
+        c
+        for c in CASES
+        if (not args.time_domain or time_domain_can_hide(c)) and (args.runs > 1 or c != "run_drift")
+    ]
     if args.causes is None:
         args.causes = hideable
     elif set(args.causes) - set(hideable):
-        parser.error(f"the time-domain path cannot hide {sorted(set(args.causes) - set(hideable))}")
+        parser.error(f"this path cannot hide {sorted(set(args.causes) - set(hideable))}")
     with tempfile.TemporaryDirectory() as work:
         tasks = [
-            (c, s, work, not args.no_variability, integrator, args.random_placement, args.keep)
+            (
+                c,
+                s,
+                work,
+                not args.no_variability,
+                integrator,
+                args.random_placement,
+                args.keep,
+                args.runs,
+                args.sensors,
+            )
             for c in args.causes
             for s in range(args.first_seed, args.first_seed + args.seeds)
         ]
@@ -387,7 +438,8 @@ def main() -> None:
     print(
         f"run-to-run variability {'off' if args.no_variability else 'on'}, "
         f"{'time-domain' if args.time_domain else 'averaged (combinations: time-domain)'} integrator, "
-        f"sensor {'placed at random (mode 1 x0.05-x8)' if args.random_placement else 'at the accelerometer'}; "
+        f"{args.sensors} sensor(s) {'placed at random (mode 1 x0.05-x8)' if args.random_placement else 'at the accelerometer'}, "
+        f"{args.runs} hit(s) per campaign; "
         f"{len(results)} campaigns, {args.seeds} seeds per cause, {args.jobs} jobs, wall {wall:.0f} s; "
         f"per campaign (one process): wall median {np.median(seconds):.1f} s, max {seconds.max():.1f} s; "
         f"CPU median {np.median(cpu):.1f} s, max {cpu.max():.1f} s, total {cpu.sum():.0f} s\n"
@@ -523,13 +575,37 @@ def report(results: list[dict], causes: list[str]) -> None:
                 f"  {cause:{width}s} in the data {len(visible)}/{len(rows)} (smallest {smallest:g} scatters), "
                 f"hit rate there {hit:.2f}{gains}"
             )
+    several = [r for r in results if r["cause"] in causes and r.get("channels")]
+    if several:
+        print(
+            "\nsensors (each sensor's own verdict beside the joint one): campaigns where two sensors are "
+            "0.7 sure of different verdicts; where one is 0.7 sure of another verdict than the joint "
+            "verdict (also 0.7 sure); each sensor's verdict right:"
+        )
+        for cause in causes:
+            rows = [r for r in several if r["cause"] == cause]
+            if not rows:
+                continue
+            clash = sum(len({k for k, p in r["channels"].values() if p >= 0.7}) > 1 for r in rows)
+            against = sum(
+                (r["confidence"] or 0.0) >= 0.7
+                and any(p >= 0.7 and k != verdict_label(r) for k, p in r["channels"].values())
+                for r in rows
+            )
+            own = [
+                set(k.split("+")) == set(case_causes(cause)) for r in rows for k, _ in r["channels"].values()
+            ]
+            print(
+                f"  {cause:{width}s} {clash}/{len(rows)} sensors sure of different verdicts, {against}/{len(rows)} "
+                f"a sensor sure against the joint verdict; sensors right {np.mean(own):.2f}"
+            )
     print("\nmisses:")
     for r in results:
         if not is_right(r):
             confidence = "n/a" if r["confidence"] is None else f"{r['confidence']:.2f}"
             print(
                 f"  {r['cause']:{width}s} seed {r['seed']:3d} -> {verdict_label(r)} (confidence {confidence})"
-                f"  case {r['case']}"
+                f"{'  sensors ' + str(r['channels']) if r.get('channels') else ''}  case {r['case']}"
             )
 
 

@@ -11,6 +11,7 @@ from support.discovery import segments_data
 from workflow.discovery.heldout import (
     MIN_BIN_SEGMENTS,
     amplitude_bin,
+    amplitude_blocks,
     amplitude_weights,
     effective_observations,
     folds_of,
@@ -39,20 +40,39 @@ def test_folds_hold_out_whole_runs_spread_over_the_run_order():
     assert [fold.tolist() for fold in two_runs] == [[True, True, False, False], [False, False, True, True]]
 
 
-def test_one_run_is_held_out_in_contiguous_amplitude_blocks_of_six_instants_at_least():
-    rng = np.random.default_rng(1)
-    velocity = rng.permutation(np.geomspace(0.01, 10.0, 40))
-    folds = folds_of(data_of(velocity, np.zeros(40, dtype=int)), 5)
-    assert len(folds) == 5
-    np.testing.assert_array_equal(np.sum(folds, axis=0), 1)
-    ranges = sorted((velocity[f].min(), velocity[f].max()) for f in folds)
-    assert all(high < next_low for (_, high), (next_low, _) in zip(ranges, ranges[1:]))
-    assert all(f.sum() == 8 for f in folds)
-    # 40 segments seen by two channels are 20 instants: three blocks of six or more
-    two = data_of(velocity, np.zeros(40, dtype=int), channel_index=np.arange(40) % 2)
-    assert len(folds_of(two, 5)) == 3
-    # never fewer than two blocks
-    assert len(folds_of(data_of(velocity[:7], np.zeros(7, dtype=int)), 5)) == 2
+QUARTER_DECADES = {9.0: 2, 4.0: 5, 2.5: 8, 1.5: 3, 0.8: 3, 0.4: 1}
+"""Segments of one hit in six quarter decades below a 10 in/s anchor (5.6-10, 3.2-5.6,
+1.8-3.2, 1-1.8, 0.56-1, 0.32-0.56 in/s)."""
+
+
+def one_hit(counts=QUARTER_DECADES, channels=1, seed=1) -> ConfigurationData:
+    velocity = np.repeat(list(counts), [n * channels for n in counts.values()])
+    order = np.random.default_rng(seed).permutation(velocity.size)
+    return data_of(
+        velocity[order], np.zeros(velocity.size, dtype=int), channel_index=np.arange(velocity.size) % channels
+    )
+
+
+def test_one_hit_is_held_out_by_quarter_decades_merged_down_to_six_instants():
+    """The top quarter decade (2 segments) joins the next (7), 8 stand alone, 3 + 3 make
+    six, and the last one joins them: three contiguous blocks, the top one first."""
+    data = one_hit()
+    block = amplitude_blocks(data)
+    expected = {9.0: 0, 4.0: 0, 2.5: 1, 1.5: 2, 0.8: 2, 0.4: 2}
+    np.testing.assert_array_equal(block, [expected[v] for v in data.velocity_in_s])
+    folds = folds_of(data, 5)  # the folds over runs do not set the blocks
+    assert [f.tolist() for f in folds] == [(block == j).tolist() for j in range(3)]
+    np.testing.assert_array_equal(heldout_units(data), block)
+    # two channels: the same instants, the same blocks (twelve segments are six instants)
+    two = one_hit(channels=2)
+    np.testing.assert_array_equal(amplitude_blocks(two), [expected[v] for v in two.velocity_in_s])
+
+
+def test_one_hit_within_one_block_is_split_at_its_median():
+    data = one_hit({9.0: 3, 8.0: 2, 7.0: 2})
+    folds = folds_of(data, 5)
+    assert len(folds) == 2
+    assert data.velocity_in_s[folds[1]].max() < data.velocity_in_s[folds[0]].min()
 
 
 def test_amplitude_bins_count_down_from_the_anchor_which_tops_the_first():
@@ -98,11 +118,9 @@ def test_information_criterion_is_bic_on_the_normalised_residuals():
     assert information_criterion(0.0, 1, 10) == pytest.approx(10 * np.log(1e-300) + np.log(10))
 
 
-def test_units_are_runs_or_one_runs_half_decades_from_zero():
+def test_units_are_runs_with_several_runs():
     runs = data_of([9.0, 2.0, 9.0], [0, 0, 1])
     np.testing.assert_array_equal(heldout_units(runs), [0, 0, 1])
-    one = data_of([9.0, 2.0, 0.5, 5.0], [0, 0, 0, 0])
-    np.testing.assert_array_equal(heldout_units(one), [2, 1, 0, 2])
 
 
 def test_the_standard_error_of_a_ratio_estimator():

@@ -124,7 +124,7 @@ def decide(
         Whether the ring-downs are not single-mode decays (:func:`~workflow.discovery.misfit.envelope_structure`).
     unit_squares, unit_weights : optional
         Per candidate, its held-out weighted squared residuals summed over each
-        independent unit of evidence (a run; with one run, a half decade of amplitude,
+        independent unit of evidence (a run; with one run, a held-out amplitude block,
         :func:`heldout_units`), and the units' weights: they give the standard error of
         the best candidate's held-out error. Without them only equal errors tie.
 

@@ -35,6 +35,8 @@ __all__ = [
     "effective_observations",
     "information_criterion",
     "heldout_units",
+    "amplitude_blocks",
+    "BLOCK_INSTANTS",
     "heldout_standard_error",
 ]
 
@@ -80,21 +82,50 @@ def folds_of(data: ConfigurationData, n_folds: int) -> list[np.ndarray]:
     """Held-out masks: interleaved runs (run r in fold r mod K); one run: amplitude blocks.
 
     With several runs every fold holds out whole runs spread over the run order,
-    so a run-order effect is interpolated, not extrapolated. With one run the
-    segments are split into ``n_folds`` contiguous amplitude ranges (pooled channels: on
-    one amplitude scale, so a block holds out the same instants on every channel).
+    so a run-order effect is interpolated, not extrapolated. With one run each block of
+    :func:`amplitude_blocks` is held out in turn (pooled channels: on one amplitude
+    scale, so a block holds out the same instants on every channel).
     """
     if data.n_runs >= 2:
         k = min(n_folds, data.n_runs)
         return [(data.run_index % k) == j for j in range(k)]
-    order = np.argsort(data.velocity_in_s)
-    k = max(2, min(n_folds, data.n // (6 * data.n_channels)))  # 6 instants of the hit a block
-    masks = []
-    for chunk in np.array_split(order, k):
-        m = np.zeros(data.n, dtype=bool)
-        m[chunk] = True
-        masks.append(m)
-    return masks
+    block = amplitude_blocks(data)
+    return [block == j for j in range(int(block.max()) + 1)]
+
+
+BLOCK_INSTANTS = 6
+"""Fewest instants of the hit in a held-out amplitude block: about two segment lengths,
+so that a held-out block is not predicted from the segments that overlap it."""
+
+
+def amplitude_blocks(data: ConfigurationData) -> np.ndarray:
+    """Held-out block of each segment of one hit, 0 at the top of the range.
+
+    The blocks are the quarter decades of amplitude of the held-out error's weighting
+    (:func:`amplitude_weights`), counted down from the anchor, each merged with the ones
+    below it until it holds ``BLOCK_INSTANTS`` instants of the hit (segments over
+    channels); a short last block joins the one above; a hit within one block is split in
+    two at its median amplitude. Each quarter decade is then
+    predicted from the amplitudes on both sides of it, the top one from below:
+    extrapolated by a quarter decade, not by a fifth of the hit's segments (at the top of
+    a ring-down, where the damping is largest, a fifth of the segments spans up to half a
+    decade, and which model wins there was a matter of how its form extrapolates).
+    """
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, AMPLITUDE_BINS_PER_DECADE)
+    least = BLOCK_INSTANTS * data.n_channels
+    block = np.zeros(data.n, dtype=int)
+    current, filled = 0, 0
+    for c in np.unique(code)[::-1]:
+        inside = code == c
+        block[inside] = current
+        filled += int(inside.sum())
+        if filled >= least:
+            current, filled = current + 1, 0
+    if 0 < filled and current > 0:  # a short last block joins the one above
+        block[block == current] = current - 1
+    if block.max() == 0:
+        block[data.velocity_in_s < np.median(data.velocity_in_s)] = 1
+    return block
 
 
 AMPLITUDE_BINS_PER_DECADE = 4
@@ -245,11 +276,10 @@ def information_criterion(cost: float, n_params: int, n_eff: int) -> float:
 
 def heldout_units(data: ConfigurationData) -> np.ndarray:
     """Independent unit of held-out evidence of each segment: its run, or with one run its
-    half decade of amplitude (counted from the anchor, as the discrepancy bins)."""
+    held-out amplitude block (:func:`amplitude_blocks`)."""
     if data.n_runs >= 2:
         return data.run_index
-    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
-    return code - code.min()
+    return amplitude_blocks(data)
 
 
 def heldout_standard_error(unit_squares: np.ndarray, unit_weights: np.ndarray) -> float:

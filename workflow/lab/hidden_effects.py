@@ -44,6 +44,7 @@ __all__ = [
     "time_domain_can_hide",
     "placed_sensor",
     "draw_mode1_gain",
+    "draw_mode1_gains",
 ]
 
 
@@ -193,6 +194,14 @@ def draw_mode1_gain(cause: str, seed: int) -> float:
     return float(np.exp(rng.uniform(*np.log(PLACEMENT_GAIN_RANGE))))
 
 
+def draw_mode1_gains(cause: str, seed: int, count: int) -> tuple[float, ...]:
+    """``count`` random placements' mode-1 gains, each log-uniform over
+    ``PLACEMENT_GAIN_RANGE``; the first is :func:`draw_mode1_gain`'s."""
+    rest = np.random.default_rng([seed, zlib.crc32(cause.encode()), zlib.crc32(b"more gains")])
+    others = np.exp(rest.uniform(*np.log(PLACEMENT_GAIN_RANGE), size=count - 1))
+    return (draw_mode1_gain(cause, seed), *map(float, others))
+
+
 def generate_case(
     cause: str,
     seed: int,
@@ -202,6 +211,7 @@ def generate_case(
     integrator: str | None = None,
     mode1_gain: float | tuple[float, ...] = 1.0,
     noise_stream: int = 0,
+    runs: int = RUNS,
 ) -> tuple[dict, Path]:
     """Generate one hidden-effect campaign in ``work_dir``; (drawn case, campaign folder).
 
@@ -215,6 +225,7 @@ def generate_case(
     run file (noise streams ``noise_stream``, ``noise_stream + 1``, ...), each the column
     a one-sensor campaign of that gain and stream would hold. The case's ``sensors``
     lists each sensor's position, noise floor and mode-1 shape ratio to the accelerometer.
+    ``runs`` hits are recorded (1: one hit, the shape of a real multi-sensor impact test).
     """
     case = draw_case(cause, seed)
     settings = settings if settings is not None else LabSettings()
@@ -229,7 +240,7 @@ def generate_case(
     truth = generate_campaign(
         out,
         seed=case["seed"],
-        runs_per_configuration=RUNS,
+        runs_per_configuration=runs,
         joint=case["joint"],
         effect=case["effect"],
         effect_size=case["effect_size"],
