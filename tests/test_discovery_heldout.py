@@ -68,6 +68,15 @@ def test_one_hit_is_held_out_by_quarter_decades_merged_down_to_six_instants():
     np.testing.assert_array_equal(amplitude_blocks(two), [expected[v] for v in two.velocity_in_s])
 
 
+def test_a_block_closes_on_the_instants_of_the_channel_that_has_most():
+    """Two channels at the top quarter decade, one with 6 segments, the other with 5 (one
+    lost to its noise): six instants of the hit, a block of its own."""
+    velocity = np.array([9.0] * 11 + [4.0] * 14)
+    channel = np.array([0] * 6 + [1] * 5 + [0, 1] * 7)
+    data = data_of(velocity, np.zeros(velocity.size, dtype=int), channel_index=channel)
+    np.testing.assert_array_equal(amplitude_blocks(data), (velocity < 5.0).astype(int))
+
+
 def test_one_hit_within_one_block_is_split_at_its_median():
     data = one_hit({9.0: 3, 8.0: 2, 7.0: 2})
     folds = folds_of(data, 5)

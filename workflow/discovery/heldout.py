@@ -103,25 +103,30 @@ def amplitude_blocks(data: ConfigurationData) -> np.ndarray:
 
     The blocks are the quarter decades of amplitude of the held-out error's weighting
     (:func:`amplitude_weights`), counted down from the anchor, each merged with the ones
-    below it until it holds ``BLOCK_INSTANTS`` instants of the hit (segments over
-    channels); a short last block joins the one above; a hit within one block is split in
-    two at its median amplitude. Each quarter decade is then
-    predicted from the amplitudes on both sides of it, the top one from below:
-    extrapolated by a quarter decade, not by a fifth of the hit's segments (at the top of
-    a ring-down, where the damping is largest, a fifth of the segments spans up to half a
-    decade, and which model wins there was a matter of how its form extrapolates).
+    below it until it holds ``BLOCK_INSTANTS`` instants of the hit (the segments of the
+    channel that has most there: a channel that lost a segment to its noise does not
+    double a block); a short last block joins the one above; a hit within one block is
+    split in two at its median amplitude. Each quarter decade is then predicted from the
+    amplitudes on both sides of it, the top one from below: extrapolated by a quarter
+    decade, not by a fifth of the hit's segments (at the top of a ring-down, where the
+    damping is largest, a fifth of the segments spans up to half a decade, and which
+    model wins there was a matter of how its form extrapolates).
     """
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, AMPLITUDE_BINS_PER_DECADE)
-    least = BLOCK_INSTANTS * data.n_channels
+    channel = (
+        np.zeros(data.n, dtype=int)
+        if data.channel_index is None
+        else np.unique(data.channel_index, return_inverse=True)[1]
+    )
     block = np.zeros(data.n, dtype=int)
-    current, filled = 0, 0
+    current, filled = 0, np.zeros(int(channel.max()) + 1, dtype=int)
     for c in np.unique(code)[::-1]:
         inside = code == c
         block[inside] = current
-        filled += int(inside.sum())
-        if filled >= least:
-            current, filled = current + 1, 0
-    if 0 < filled and current > 0:  # a short last block joins the one above
+        filled += np.bincount(channel[inside], minlength=filled.size)
+        if filled.max() >= BLOCK_INSTANTS:  # instants of the hit: the channel that has most
+            current, filled = current + 1, np.zeros_like(filled)
+    if filled.any() and current > 0:  # a short last block joins the one above
         block[block == current] = current - 1
     if block.max() == 0:
         block[data.velocity_in_s < np.median(data.velocity_in_s)] = 1
