@@ -23,6 +23,7 @@ from workflow.discovery.combined import (
 from workflow.discovery.confidence import VerdictOption, beyond_accuracy, verdict_causes, verdict_key
 from workflow.discovery.decision import (
     BASELINE_MODELS,
+    BETWEEN_RUN_CAUSES,
     CAUSE_MODELS,
     CLEAR_GAIN,
     RESIDUAL_GAIN,
@@ -509,10 +510,16 @@ def diagnose_configuration(
             cv[name]["error"],
             cv["iwan"]["error"],
         )
+    baseline_error = first["errors"][first["baseline"]]["error"]
+    single_gain = any(
+        v["heldout_error"] < baseline_error and v["beyond_accuracy"]
+        for c, v in first["candidates"].items()
+        if c not in BETWEEN_RUN_CAUSES
+    )
     tried = (
         []
         if envelope_significant
-        else combinations_to_try(first["cause"], f"iwan_cells_{threshold_cells(data)}")
+        else combinations_to_try(first["cause"], f"iwan_cells_{threshold_cells(data)}", single_gain)
     )
     fit_combinations(
         data,
