@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from workflow.discovery.campaign import diagnose_campaign
-from workflow.discovery.combined import term_from_residuals
+from workflow.discovery.combined import combinations_to_try, term_from_residuals
 from workflow.discovery.configuration import add_threshold_cells, curve_led_start
 from workflow.discovery.misfit import OWN_SHAPE_SHARE, microslip_signature, stiffness_signature
 from workflow.lab.configurations import mode_table, setup_configuration, truth_curves
@@ -265,3 +265,15 @@ def test_a_combination_replaces_none_only_through_the_gate_a_single_cause_passes
     assert judged_verdict("none", 0.5, tolerance_square=1e-6) == both
     # after a single cause, the combination's own test and its gain over that cause suffice
     assert judged_verdict("microslip_power_law", 0.5, tolerance_square=1.0) == both
+
+
+def test_combinations_are_fitted_after_none_only_where_a_single_cause_gains_beyond_accuracy():
+    """After ``none`` the combinations are fitted only where a single cause's candidate
+    removes more held-out misfit than the models' accuracy; never after a run drift;
+    after a cause of the joint's physics or ``unknown`` always (on the joint given)."""
+    both = sorted(COMBINED_MODELS[("iwan_cells_5", model)] for model in ("dahl_quadratic", "dahl_stiffness"))
+    assert combinations_to_try("none", "iwan_cells_5", single_gain=False) == []
+    assert sorted(combinations_to_try("none", "iwan_cells_5", single_gain=True)) == both
+    assert combinations_to_try("run_drift", "iwan_cells_5", single_gain=True) == []
+    for cause in ("microslip_power_law", "quadratic_damping", "stiffness_nonlinearity", "unknown"):
+        assert sorted(combinations_to_try(cause, "iwan_cells_5", single_gain=False)) == both
