@@ -15,7 +15,10 @@ model (the causes it can hide: none, microslip_power_law, run_drift, unknown and
 combinations, which are always integrated in time), and ``--random-placement`` records
 each campaign with a sensor placed at random on the beam (mode 1 at x0.05 to x8 of the
 reference accelerometer against the same noise floor, log-uniform; the other modes at
-their own shape values there).
+their own shape values there). ``--runs 1 --sensors 3`` makes each campaign one hit
+recorded by three sensors (placed at random with ``--random-placement``): the verdict is
+the joint analysis of every sensor, and each sensor's own verdict is checked against the
+others and the joint one (how often two are 0.7 sure of different verdicts).
 
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
 
