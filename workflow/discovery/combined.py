@@ -54,8 +54,8 @@ def paired_critical_value(n_units: int, false_alarm: float = PAIRED_FALSE_ALARM)
     """The t a combination's paired test over the units must exceed for each part: Student's
     t quantile ``1 - false_alarm`` with ``n_units - 1`` degrees of freedom.
 
-    The standard error is estimated from the same few units (8 runs, or 5 half decades of
-    one run), so a fixed 2 would let a mechanism that does nothing through 4.3 % of the
+    The standard error is estimated from the same few units (8 runs, or 5-7 amplitude
+    blocks of one run), so a fixed 2 would let a mechanism that does nothing through 4.3 % of the
     time with 8 units, 6 % with 5, instead of 2.5 %.
 
     >>> round(paired_critical_value(8), 2), round(paired_critical_value(5), 2)
@@ -330,7 +330,7 @@ def combination_test(
     ----------
     combined_squares : ndarray, shape (U,)
         The combined model's amplitude-weighted squared held-out residuals summed per
-        unit of evidence (run; with one run, half decade of amplitude).
+        unit of evidence (run; with one run, held-out amplitude block).
     part_squares : mapping
         Each of the two causes -> the same sums of the model of that cause alone.
     baseline_squares : ndarray, shape (U,)

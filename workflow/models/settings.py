@@ -82,5 +82,5 @@ class DiscoverySettings:
     # Each resample repeats the decision; a confidence's Monte Carlo error is at most
     # 0.5 / sqrt(B): 5 % at the default, 1.6 % at 1000, at 10 times the cost.
     resamples: Annotated[int, Ge(10), Le(1000)] = 100
-    """Bayesian-bootstrap reweightings of the runs (of half decades of amplitude with one
-    run) behind each verdict's ``confidence`` (docs/discovery.md, Confidence)."""
+    """Bayesian-bootstrap reweightings of the runs (of the held-out amplitude blocks with
+    one run) behind each verdict's ``confidence`` (docs/discovery.md, Confidence)."""
