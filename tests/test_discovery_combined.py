@@ -267,13 +267,13 @@ def test_a_combination_replaces_none_only_through_the_gate_a_single_cause_passes
     assert judged_verdict("microslip_power_law", 0.5, tolerance_square=1.0) == both
 
 
-def test_combinations_are_fitted_after_none_only_where_a_single_cause_gains_beyond_accuracy():
-    """After ``none`` the combinations are fitted only where a single cause's candidate
-    removes more held-out misfit than the models' accuracy; never after a run drift;
-    after a cause of the joint's physics or ``unknown`` always (on the joint given)."""
+def test_combinations_are_fitted_after_none_only_where_the_data_depart_from_the_baseline():
+    """After ``none`` the combinations are fitted only where the data depart from the
+    baseline; never after a run drift; after a cause of the joint's physics or
+    ``unknown`` always (on the joint given)."""
     both = sorted(COMBINED_MODELS[("iwan_cells_5", model)] for model in ("dahl_quadratic", "dahl_stiffness"))
-    assert combinations_to_try("none", "iwan_cells_5", single_gain=False) == []
-    assert sorted(combinations_to_try("none", "iwan_cells_5", single_gain=True)) == both
-    assert combinations_to_try("run_drift", "iwan_cells_5", single_gain=True) == []
+    assert combinations_to_try("none", "iwan_cells_5", departs=False) == []
+    assert sorted(combinations_to_try("none", "iwan_cells_5", departs=True)) == both
+    assert combinations_to_try("run_drift", "iwan_cells_5", departs=True) == []
     for cause in ("microslip_power_law", "quadratic_damping", "stiffness_nonlinearity", "unknown"):
-        assert sorted(combinations_to_try(cause, "iwan_cells_5", single_gain=False)) == both
+        assert sorted(combinations_to_try(cause, "iwan_cells_5", departs=False)) == both

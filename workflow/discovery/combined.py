@@ -89,17 +89,17 @@ def combination_causes(model: str) -> tuple[str, str]:
     return ("microslip_power_law", EXTENSION_CAUSES[combination_parts(model)[1]])
 
 
-def combinations_to_try(cause: str, joint_model: str, single_gain: bool = True) -> list[str]:
+def combinations_to_try(cause: str, joint_model: str, departs: bool = True) -> list[str]:
     """The combined models worth fitting after a single-cause decision, on the micro-slip
     joint ``joint_model`` (``iwan_cells_<n>``, the slip thresholds from the data): every one
     after a cause of the joint's physics (micro-slip, quadratic damping, stiffness: two
     mechanisms at once are often called by a third, the single candidate that mimics their
-    sum best) or after ``unknown``; after ``none`` where a single cause's candidate
-    removes more held-out misfit than the models' accuracy (``single_gain``) without being
-    named, too few parameters' worth or too small a gain (micro-slip with a hardening
-    spring that cancels its softening: each alone explains part of the curves); none
-    after ``run_drift``."""
-    if cause == "run_drift" or (cause == "none" and not single_gain):
+    sum best) or after ``unknown``; after ``none`` where the data depart from the baseline
+    without a single cause being named (``departs``: the baseline does not explain the
+    data, or a single cause's candidate removes more held-out misfit than the models'
+    accuracy): micro-slip with a hardening spring that cancels its softening leaves each
+    mechanism alone part of the curves; none after ``run_drift``."""
+    if cause == "run_drift" or (cause == "none" and not departs):
         return []
     return [COMBINED_MODELS[(joint_model, extension)] for extension in EXTENSION_CAUSES]
 

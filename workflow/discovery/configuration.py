@@ -511,15 +511,18 @@ def diagnose_configuration(
             cv["iwan"]["error"],
         )
     baseline_error = first["errors"][first["baseline"]]["error"]
-    single_gain = any(
-        v["heldout_error"] < baseline_error and v["beyond_accuracy"]
-        for c, v in first["candidates"].items()
-        if c not in BETWEEN_RUN_CAUSES
+    departs = (
+        any(
+            v["heldout_error"] < baseline_error and v["beyond_accuracy"]
+            for c, v in first["candidates"].items()
+            if c not in BETWEEN_RUN_CAUSES
+        )
+        or not explains_data(data, evidence[first["baseline"]].residuals)["explains_data"]
     )
     tried = (
         []
         if envelope_significant
-        else combinations_to_try(first["cause"], f"iwan_cells_{threshold_cells(data)}", single_gain)
+        else combinations_to_try(first["cause"], f"iwan_cells_{threshold_cells(data)}", departs)
     )
     fit_combinations(
         data,
