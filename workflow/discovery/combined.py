@@ -55,8 +55,8 @@ def paired_critical_value(n_units: int, false_alarm: float = PAIRED_FALSE_ALARM)
     t quantile ``1 - false_alarm`` with ``n_units - 1`` degrees of freedom.
 
     The standard error is estimated from the same few units (8 runs, or 5-7 amplitude
-    blocks of one run), so a fixed 2 would let a mechanism that does nothing through 4.3 % of the
-    time with 8 units, 6 % with 5, instead of 2.5 %.
+    blocks of one run), so a fixed 2 would let a mechanism that does nothing through 4.3 %
+    of the time with 8 units, 6 % with 5, instead of 2.5 %.
 
     >>> round(paired_critical_value(8), 2), round(paired_critical_value(5), 2)
     (2.36, 2.78)

@@ -7,9 +7,9 @@ Its confidence carries the two uncertainties behind it:
   baseline misfit, or a candidate predicting held-out data better than ``CLEAR_GAIN`` of
   the baseline's error or removing more held-out misfit than the models' accuracy,
   :func:`beyond_accuracy`) is re-taken on Bayesian-bootstrap reweightings of the
-  independent units of held-out evidence (runs; with one run, its held-out
-  amplitude blocks): every unit keeps a Dirichlet(1, ..., 1) weight, so no unit is ever left out
-  (a multinomial resample of five amplitude blocks leaves the top one out in a third of
+  independent units of held-out evidence (runs; with one run, its held-out amplitude
+  blocks): every unit keeps a Dirichlet(1, ..., 1) weight, so no unit is ever left out (a
+  multinomial resample of five amplitude blocks leaves the top one out in a third of
   the draws). The accuracy margin carries the data's power: where the scatter is many
   times the models' accuracy, a small gain passes it in the reweightings that show it, so
   a scatter too large to show an effect does not make ``none`` sure.
@@ -79,8 +79,8 @@ def verdict_causes(key: str) -> list[str]:
 @dataclass(frozen=True)
 class HeldoutEvidence:
     """A configuration's held-out evidence, summed over its independent units (runs; with
-    one run, its held-out amplitude blocks). Pooled channels of one hit are one evidence: the
-    units are the hit's runs, every channel's residuals in its own scatter.
+    one run, its held-out amplitude blocks). Pooled channels of one hit are one evidence:
+    the units are the hit's runs, every channel's residuals in its own scatter.
 
     Attributes
     ----------

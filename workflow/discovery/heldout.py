@@ -94,8 +94,9 @@ def folds_of(data: ConfigurationData, n_folds: int) -> list[np.ndarray]:
 
 
 BLOCK_INSTANTS = 6
-"""Fewest instants of the hit in a held-out amplitude block: about two segment lengths,
-so that a held-out block is not predicted from the segments that overlap it."""
+"""Fewest instants of the hit in a held-out amplitude block: 3.5 segment lengths of the
+ring-down (segments overlap by half), so that most of a held-out block's segments share
+no sample with the segments it is predicted from."""
 
 
 def amplitude_blocks(data: ConfigurationData) -> np.ndarray:
