@@ -511,7 +511,7 @@ def diagnose_configuration(
             cv["iwan"]["error"],
         )
     baseline_error = first["errors"][first["baseline"]]["error"]
-    departs = (
+    departs = first["cause"] == "none" and (
         any(
             v["heldout_error"] < baseline_error and v["beyond_accuracy"]
             for c, v in first["candidates"].items()
