@@ -43,7 +43,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
+from workflow.discovery.campaign import campaign_document, diagnose_campaign, diagnose_configurations  # noqa: E402
 from workflow.discovery.confidence import verdict_causes as verdict_causes_of  # noqa: E402
 from workflow.discovery.confidence import verdict_key  # noqa: E402
 from workflow.discovery.configuration import conclude  # noqa: E402
@@ -96,8 +96,7 @@ def channel_verdicts(segments) -> dict[str, tuple[str, float]]:
     (verdict key, its confidence), the workflow's ``channels`` consistency check."""
     verdicts = {}
     for channel, rows in segments.groupby(segments["channel"].astype(str)):
-        doc = campaign_document("c", *diagnose_configurations(rows))
-        conf = next(iter(doc["configurations"].values()), None)
+        conf = next(iter(diagnose_campaign(rows, "c")["configurations"].values()), None)
         if conf:
             key = verdict_key(verdict_causes(conf))
             verdicts[channel] = (key, float(conf["confidence"].get(key, 0.0)))
