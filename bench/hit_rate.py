@@ -23,7 +23,8 @@ others and the joint one (how often two are 0.7 sure of different verdicts).
     .venv/bin/python bench/hit_rate.py --seeds 10 --jobs 2
 
 ``--keep DIR`` stores what each campaign's decision was taken on (the data, every model's
-residuals and held-out residuals); ``--redecide DIR`` takes those decisions and their
+residuals and held-out residuals; with several sensors each sensor's own under
+``DIR/channels/<channel>``); ``--redecide DIR`` takes those decisions and their
 confidence again with today's decision rule in seconds, without refitting: the fits do not
 depend on the rule.
 """
@@ -43,7 +44,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from workflow.discovery.campaign import campaign_document, diagnose_campaign, diagnose_configurations  # noqa: E402
+from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
 from workflow.discovery.confidence import verdict_causes as verdict_causes_of  # noqa: E402
 from workflow.discovery.confidence import verdict_key  # noqa: E402
 from workflow.discovery.configuration import conclude  # noqa: E402
@@ -91,15 +92,24 @@ def verdict_confidence(configuration: dict) -> float | None:
     return float(shares.get(verdict_key(verdict_causes(configuration)), 0.0)) if shares else None
 
 
-def channel_verdicts(segments) -> dict[str, tuple[str, float]]:
+def channel_verdicts(
+    segments, keep: Path | None = None, case: dict | None = None
+) -> dict[str, tuple[str, float]]:
     """Each sensor's own verdict of a several-sensor campaign's configuration: channel ->
-    (verdict key, its confidence), the workflow's ``channels`` consistency check."""
+    (verdict key, its confidence), the workflow's ``channels`` consistency check. With
+    ``keep`` (a path ``DIR/<cause>_<seed>.pkl``), each sensor's decision evidence is stored
+    as ``DIR/channels/<channel>/<cause>_<seed>.pkl``, for ``--redecide``."""
     verdicts = {}
     for channel, rows in segments.groupby(segments["channel"].astype(str)):
-        conf = next(iter(diagnose_campaign(rows, "c")["configurations"].values()), None)
+        context, details, skipped = diagnose_configurations(rows)
+        conf = next(iter(campaign_document("c", context, details, skipped)["configurations"].values()), None)
         if conf:
             key = verdict_key(verdict_causes(conf))
             verdicts[channel] = (key, float(conf["confidence"].get(key, 0.0)))
+        if keep is not None and details:
+            keep_evidence(
+                keep.parent / "channels" / channel / keep.name, case or {}, next(iter(details.values()))
+            )
     return verdicts
 
 
@@ -125,7 +135,9 @@ def _one(args):
         segments = campaign_segments(out)
         reference = 0
         if sensors > 1:
-            record["channels"] = channel_verdicts(segments)
+            record["channels"] = channel_verdicts(
+                segments, Path(keep) / f"{cause}_{seed}.pkl" if keep else None, case
+            )
             segments, joint = joint_segments(segments)
             names = [s["name"] for s in case["sensors"]]
             reference = names.index(next(iter(joint.values()))["reference_channel"]) if joint else 0
@@ -601,6 +613,17 @@ def report(results: list[dict], causes: list[str]) -> None:
                 f"  {cause:{width}s} {clash}/{len(rows)} sensors sure of different verdicts, {against}/{len(rows)} "
                 f"a sensor sure against the joint verdict; sensors right {np.mean(own):.2f}"
             )
+        alone = [
+            {"cause": r["cause"], "causes": k.split("+"), "confidence": p}
+            for r in several
+            for k, p in r["channels"].values()
+        ]
+        rows, brier, _ = reliability(alone)
+        print(f"  each sensor alone ({len(alone)} verdicts): confidence against the fraction right")
+        print("  confidence     n   mean conf   right")
+        for low, high, n, mean, right in rows:
+            print(f"  {low:.2f}-{high:.2f} {n:5d} {mean:11.3f} {right:7.3f}")
+        print(f"  Brier score: {brier:.4f}")
     print("\nmisses:")
     for r in results:
         if not is_right(r):
