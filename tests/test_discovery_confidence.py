@@ -531,3 +531,33 @@ def test_the_reweighted_combination_test_on_the_data_is_the_test():
         assert again["log_ratio_t"][cause][0] == pytest.approx(test["log_ratio_t"][cause], rel=1e-12)
         assert again["removed"][cause][0] == pytest.approx(test["removed"][cause], rel=1e-12)
     assert bool(again["named"][0]) == test["named"]
+
+
+@pytest.mark.parametrize("ruled_out", [1.0, 0.6, 0.0])
+def test_none_is_as_sure_as_the_data_rule_out_a_departure(ruled_out):
+    """A baseline that fits, two options no better: ``none`` in every reweighting where the
+    data rule out a departure (``ruled_out`` 1); otherwise the share they cannot rule out
+    is a mechanism as likely as none or either cause (a third each), and it gains nothing
+    on these data (gain ratio 1). A combination takes none of it."""
+    ev = with_squares({"dahl": np.full(N_UNITS, 1.0), "iwan": np.full(N_UNITS, 1.2)}, 100.0)
+    options = [
+        VerdictOption("microslip_power_law", "iwan"),
+        VerdictOption("quadratic_damping", "iwan", eligible=False),
+        VerdictOption(
+            "microslip_power_law+quadratic_damping",
+            "iwan",
+            eligible=False,
+            parts={"microslip_power_law": "iwan", "quadratic_damping": "iwan"},
+        ),
+    ]
+    draws = dirichlet_unit_weights(50, N_UNITS, np.random.default_rng(5))
+    p, ratio = soft_decisions(
+        ev, ["dahl"], options, baseline_fails=False, draws=draws, ruled_out=ruled_out, **RULE
+    )
+    moved = 1.0 - ruled_out
+    np.testing.assert_allclose(p["none"], ruled_out + moved / 3, rtol=1e-12)
+    np.testing.assert_allclose(p["microslip_power_law"], moved / 3, rtol=1e-12)
+    np.testing.assert_allclose(p["quadratic_damping"], moved / 3, rtol=1e-12)
+    np.testing.assert_array_equal(p["microslip_power_law+quadratic_damping"], 0.0)
+    np.testing.assert_allclose(sum(p.values()), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(ratio, 1.0, rtol=1e-12)

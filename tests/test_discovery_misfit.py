@@ -17,6 +17,7 @@ from workflow.discovery.misfit import (
     bin_is_judged,
     bin_observations,
     binned_discrepancy,
+    departure_ruled_out,
     explains_data,
     run_order_trend,
 )
@@ -346,3 +347,36 @@ def test_a_run_without_scored_segments_is_no_point_of_the_trend_and_the_shape_is
     assert trend["run_ids"] == [0, 1, 2, 4, 5, 6, 7]
     assert trend["run_positions"] == [0.0, 1.0, 2.0, 4.0, 5.0, 6.0, 7.0]
     assert trend["largest_shape"] == pytest.approx(0.08 / data.velocity_in_s[~calibration].min())
+
+
+def test_the_data_rule_out_a_departure_as_far_as_their_standard_errors_allow():
+    """Per bin, the probability that the true mean residual is within the models' accuracy
+    (Student t around the bin's mean): 2 Phi(1) - 1 for a standard error of one accuracy
+    (many degrees of freedom), 1/2 for a mean at the accuracy measured exactly; independent
+    bins multiply; a bin without a standard error says nothing."""
+    row = {"mean": 0.0, "standard_error": TOL_LN_ZETA, "tolerance": TOL_LN_ZETA, "degrees_of_freedom": 1e9}
+    one_sigma = 2.0 * stats.norm.cdf(1.0) - 1.0
+    assert departure_ruled_out([row]) == pytest.approx(one_sigma, rel=1e-9)
+    assert departure_ruled_out([row, row]) == pytest.approx(one_sigma**2, rel=1e-9)
+    at_limit = {**row, "mean": TOL_LN_ZETA, "standard_error": 1e-9 * TOL_LN_ZETA}
+    assert departure_ruled_out([at_limit]) == pytest.approx(0.5, rel=1e-9)
+    assert departure_ruled_out([{**row, "standard_error": float("nan")}]) == 1.0
+    few_runs = {**row, "degrees_of_freedom": 2.0}
+    assert departure_ruled_out([few_runs]) == pytest.approx(
+        stats.t.cdf(1.0, 2) - stats.t.cdf(-1.0, 2), rel=1e-9
+    )
+
+
+def test_a_noisy_sensor_rules_out_less_than_a_quiet_one():
+    """The same campaign without misfit (six runs, five segments per half decade) seen with
+    a scatter of a tenth of the models' accuracy and of five times it: the quiet data rule a
+    departure out (each bin's standard error ~0.02 accuracy), the noisy ones cannot (~0.9
+    accuracy per bin, six bins). The bins carry their degrees of freedom (runs - 1)."""
+    data = campaign(6)
+    rng = np.random.default_rng(7)
+    noise = rng.standard_normal((2, data.n))
+    quiet = binned_discrepancy(data, residuals_of(0.1 * TOL_LN_ZETA * noise[0], 0.1 * TOL_REL_F * noise[1]))
+    noisy = binned_discrepancy(data, residuals_of(5.0 * TOL_LN_ZETA * noise[0], 5.0 * TOL_REL_F * noise[1]))
+    assert all(row["degrees_of_freedom"] == 5.0 for row in quiet + noisy)
+    assert departure_ruled_out(quiet) > 0.999
+    assert departure_ruled_out(noisy) < 0.2

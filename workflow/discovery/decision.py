@@ -30,7 +30,7 @@ from workflow.discovery.heldout import (
     information_criterion,
     weighted_rms,
 )
-from workflow.discovery.misfit import binned_discrepancy, failure_draws, run_order_trend
+from workflow.discovery.misfit import binned_discrepancy, departure_ruled_out, failure_draws, run_order_trend
 from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData
 
 __all__ = [
@@ -478,6 +478,7 @@ def confidence_draws(
         clear_gain=CLEAR_GAIN,
         residual_gain=RESIDUAL_GAIN,
         draws=weights,
+        ruled_out=departure_ruled_out(result["bins"]),
     )
     keys = list(probabilities)
     table = np.array([probabilities[k] for k in keys]).T

@@ -23,6 +23,7 @@ from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, Configura
 
 __all__ = [
     "failure_draws",
+    "departure_ruled_out",
     "ALPHA",
     "misfit_significant",
     "bin_observations",
@@ -213,6 +214,7 @@ def binned_discrepancy(
                     "p": float(2.0 * special.stdtr(dof, -abs(t))),
                     "n_runs": int(runs.size),
                     "n_segments": int(in_bin.sum()),
+                    "degrees_of_freedom": float(dof),
                     "tolerance": tol,
                     "significant": False,
                     **per_run,
@@ -318,6 +320,38 @@ def run_order_trend(
         "run_projections": y.tolist(),
         "largest_shape": largest,
     }
+
+
+def departure_ruled_out(bins: Sequence[Mapping]) -> float:
+    """Probability that the baseline departs from the data by no more than the models'
+    accuracy in every tested bin: how far the data can rule out a mechanism the
+    baseline misses.
+
+    Per bin of :func:`binned_discrepancy`, the true mean residual given its estimate and
+    standard error (Student t, the bin's degrees of freedom) lies within the accuracy
+    (``TOL_LN_ZETA``, ``TOL_REL_F``) with probability
+    ``T((tol - mean) / se) - T((-tol - mean) / se)``; the bins are independent
+    observations, so the probabilities multiply. Where the scatter is small against the
+    accuracy each factor is close to 1; a sensor near a node of the mode, whose standard
+    errors are several accuracies, cannot tell a departure from none.
+
+    Examples
+    --------
+    >>> row = {"mean": 0.0, "standard_error": 0.001, "tolerance": 0.02, "degrees_of_freedom": 9.0}
+    >>> round(departure_ruled_out([row, row]), 6)
+    1.0
+    >>> round(departure_ruled_out([{**row, "standard_error": 0.02}]), 2)
+    0.66
+    """
+    from scipy import special
+
+    probability = 1.0
+    for row in bins:
+        se, dof = float(row["standard_error"]), float(row["degrees_of_freedom"])
+        if np.isfinite(se) and se > 0.0:
+            low, high = (-row["tolerance"] - row["mean"]) / se, (row["tolerance"] - row["mean"]) / se
+            probability *= float(special.stdtr(dof, high) - special.stdtr(dof, low))
+    return probability
 
 
 def failure_draws(bins: Sequence[Mapping], trend: Mapping | None, draws: np.ndarray) -> np.ndarray:
