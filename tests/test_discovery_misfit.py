@@ -18,6 +18,7 @@ from workflow.discovery.misfit import (
     bin_observations,
     binned_discrepancy,
     departure_ruled_out,
+    departure_ruled_out_by_channels,
     explains_data,
     run_order_trend,
 )
@@ -380,3 +381,29 @@ def test_a_noisy_sensor_rules_out_less_than_a_quiet_one():
     assert all(row["degrees_of_freedom"] == 5.0 for row in quiet + noisy)
     assert departure_ruled_out(quiet) > 0.999
     assert departure_ruled_out(noisy) < 0.2
+
+
+def test_pooled_sensors_rule_out_what_their_quietest_sensor_rules_out():
+    """Two sensors of the same runs pooled, one with a tenth of the models' accuracy as
+    scatter and one with five times it: the pooled bins' standard errors are the noisy
+    sensor's, but the damping and frequency are the mode's, so the quiet sensor's power
+    stands for both."""
+    one = campaign(6)
+    rng = np.random.default_rng(9)
+    noise = rng.standard_normal((2, 2, one.n))
+    scales = (0.1, 5.0)
+    pooled = segments_data(
+        np.tile(one.velocity_in_s, 2),
+        np.tile(one.run_index, 2),
+        ANCHOR_IN_S,
+        channel_index=np.repeat([0, 1], one.n),
+    )
+    ln_zeta = np.concatenate([s * TOL_LN_ZETA * noise[i, 0] for i, s in enumerate(scales)])
+    rel_f = np.concatenate([s * TOL_REL_F * noise[i, 1] for i, s in enumerate(scales)])
+    quiet = departure_ruled_out(binned_discrepancy(one, residuals_of(ln_zeta[: one.n], rel_f[: one.n])))
+    assert quiet > 0.999
+    assert departure_ruled_out(binned_discrepancy(pooled, residuals_of(ln_zeta, rel_f))) < 0.9
+    assert departure_ruled_out_by_channels(pooled, residuals_of(ln_zeta, rel_f)) == pytest.approx(
+        quiet, rel=1e-12
+    )
+    assert departure_ruled_out_by_channels(one, residuals_of(ln_zeta[: one.n], rel_f[: one.n])) == quiet

@@ -30,7 +30,12 @@ from workflow.discovery.heldout import (
     information_criterion,
     weighted_rms,
 )
-from workflow.discovery.misfit import binned_discrepancy, departure_ruled_out, failure_draws, run_order_trend
+from workflow.discovery.misfit import (
+    binned_discrepancy,
+    departure_ruled_out_by_channels,
+    failure_draws,
+    run_order_trend,
+)
 from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, ConfigurationData
 
 __all__ = [
@@ -407,6 +412,7 @@ def evaluate_decision(
         "bins": bins,
         "trend": trend,
         "baseline_fails": baseline_fails,
+        "ruled_out": departure_ruled_out_by_channels(view, residuals[base]),
         "candidates": candidates,
         "extended_models": extended_models,
         "unit_squares": unit_squares,
@@ -478,7 +484,7 @@ def confidence_draws(
         clear_gain=CLEAR_GAIN,
         residual_gain=RESIDUAL_GAIN,
         draws=weights,
-        ruled_out=departure_ruled_out(result["bins"]),
+        ruled_out=result["ruled_out"],
     )
     keys = list(probabilities)
     table = np.array([probabilities[k] for k in keys]).T

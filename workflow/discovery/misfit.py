@@ -10,6 +10,7 @@ candidate's signature.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -24,6 +25,7 @@ from workflow.models.configuration_data import TOL_LN_ZETA, TOL_REL_F, Configura
 __all__ = [
     "failure_draws",
     "departure_ruled_out",
+    "departure_ruled_out_by_channels",
     "ALPHA",
     "misfit_significant",
     "bin_observations",
@@ -352,6 +354,36 @@ def departure_ruled_out(bins: Sequence[Mapping]) -> float:
             low, high = (-row["tolerance"] - row["mean"]) / se, (row["tolerance"] - row["mean"]) / se
             probability *= float(special.stdtr(dof, high) - special.stdtr(dof, low))
     return probability
+
+
+def departure_ruled_out_by_channels(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) -> float:
+    """:func:`departure_ruled_out` of the baseline's residuals (:func:`binned_discrepancy`);
+    with pooled channels (sensors of one hit), that of the channel that rules most out.
+
+    The channels share the joint's physics (damping and relative frequency are the mode's,
+    whatever the sensor), so what the quietest sensor rules out is ruled out for all of
+    them; pooling its segments with a noisier sensor's in one bin mean would only widen the
+    bin's standard error. Each channel's bins are counted from the same top amplitude.
+    """
+    channels = data.channel_index
+    if channels is None or np.unique(channels).size < 2:
+        return departure_ruled_out(binned_discrepancy(data, residuals))
+    best = 0.0
+    for channel in np.unique(channels):
+        rows = channels == channel
+        view = replace(
+            data,
+            velocity_in_s=data.velocity_in_s[rows],
+            zeta=data.zeta[rows],
+            frequency_hz=data.frequency_hz[rows],
+            run_index=data.run_index[rows],
+            fit_rms=None,
+            response_amplitude=None,
+            channel_index=None,
+        )
+        own = {key: residuals[key][rows] for key in ("ln_zeta", "rel_f", "z_noise", "f_noise")}
+        best = max(best, departure_ruled_out(binned_discrepancy(view, own)))
+    return best
 
 
 def failure_draws(bins: Sequence[Mapping], trend: Mapping | None, draws: np.ndarray) -> np.ndarray:
