@@ -400,10 +400,12 @@ def test_pooled_sensors_rule_out_what_their_quietest_sensor_rules_out():
     )
     ln_zeta = np.concatenate([s * TOL_LN_ZETA * noise[i, 0] for i, s in enumerate(scales)])
     rel_f = np.concatenate([s * TOL_REL_F * noise[i, 1] for i, s in enumerate(scales)])
-    quiet = departure_ruled_out(binned_discrepancy(one, residuals_of(ln_zeta[: one.n], rel_f[: one.n])))
+    quiet_alone = residuals_of(ln_zeta[: one.n], rel_f[: one.n])
+    quiet = departure_ruled_out(binned_discrepancy(one, quiet_alone))
     assert quiet > 0.999
-    assert departure_ruled_out(binned_discrepancy(pooled, residuals_of(ln_zeta, rel_f))) < 0.9
-    assert departure_ruled_out_by_channels(pooled, residuals_of(ln_zeta, rel_f)) == pytest.approx(
-        quiet, rel=1e-12
-    )
-    assert departure_ruled_out_by_channels(one, residuals_of(ln_zeta[: one.n], rel_f[: one.n])) == quiet
+    pooled_bins = binned_discrepancy(pooled, residuals_of(ln_zeta, rel_f))
+    assert departure_ruled_out(pooled_bins) < 0.9
+    assert departure_ruled_out_by_channels(
+        pooled, residuals_of(ln_zeta, rel_f), pooled_bins
+    ) == pytest.approx(quiet, rel=1e-12)
+    assert departure_ruled_out_by_channels(one, quiet_alone, binned_discrepancy(one, quiet_alone)) == quiet

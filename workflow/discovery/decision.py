@@ -412,7 +412,7 @@ def evaluate_decision(
         "bins": bins,
         "trend": trend,
         "baseline_fails": baseline_fails,
-        "ruled_out": departure_ruled_out_by_channels(view, residuals[base]),
+        "ruled_out": departure_ruled_out_by_channels(view, residuals[base], bins),
         "candidates": candidates,
         "extended_models": extended_models,
         "unit_squares": unit_squares,

@@ -356,9 +356,12 @@ def departure_ruled_out(bins: Sequence[Mapping]) -> float:
     return probability
 
 
-def departure_ruled_out_by_channels(data: ConfigurationData, residuals: Mapping[str, np.ndarray]) -> float:
-    """:func:`departure_ruled_out` of the baseline's residuals (:func:`binned_discrepancy`);
-    with pooled channels (sensors of one hit), that of the channel that rules most out.
+def departure_ruled_out_by_channels(
+    data: ConfigurationData, residuals: Mapping[str, np.ndarray], bins: Sequence[Mapping]
+) -> float:
+    """:func:`departure_ruled_out` of the baseline's residuals, whose
+    :func:`binned_discrepancy` on all the data is ``bins``; with pooled channels (sensors
+    of one hit), that of the channel that rules most out.
 
     The channels share the joint's physics (damping and relative frequency are the mode's,
     whatever the sensor), so what the quietest sensor rules out is ruled out for all of
@@ -367,7 +370,7 @@ def departure_ruled_out_by_channels(data: ConfigurationData, residuals: Mapping[
     """
     channels = data.channel_index
     if channels is None or np.unique(channels).size < 2:
-        return departure_ruled_out(binned_discrepancy(data, residuals))
+        return departure_ruled_out(bins)
     best = 0.0
     for channel in np.unique(channels):
         rows = channels == channel
