@@ -198,8 +198,8 @@ def test_a_sensor_near_a_node_is_never_sure_of_nothing_where_another_sees_the_lo
     """One hit hiding a velocity-squared loss, seen by the accelerometer, a sensor near a
     node of the mode (x0.05: 20 times the scatter) and one at the free end, over six seeds:
     the node's data cannot rule out a departure beyond the models' accuracy, so its
-    ``none`` is never 0.7 sure where another sensor is 0.7 sure of the loss, as on most of
-    these hits."""
+    ``none`` is never 0.7 sure where another sensor is 0.7 sure of the loss (on at least
+    half of these hits)."""
     seen = 0
     for seed in range(BASE_SEED, BASE_SEED + 6):
         _, out = generate_case("quadratic_damping", seed, tmp_path / str(seed), mode1_gain=GAINS, runs=1)
