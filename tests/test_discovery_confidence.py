@@ -13,6 +13,7 @@ from workflow.discovery.confidence import (
     log_density,
     mean_probabilities,
     soft_decisions,
+    unseen,
     verdict_causes,
     verdict_key,
 )
@@ -551,9 +552,8 @@ def test_none_is_as_sure_as_the_data_rule_out_a_departure(ruled_out):
         ),
     ]
     draws = dirichlet_unit_weights(50, N_UNITS, np.random.default_rng(5))
-    p, ratio = soft_decisions(
-        ev, ["dahl"], options, baseline_fails=False, draws=draws, ruled_out=ruled_out, **RULE
-    )
+    p, ratio = soft_decisions(ev, ["dahl"], options, baseline_fails=False, draws=draws, **RULE)
+    unseen(p, options, ruled_out)
     moved = 1.0 - ruled_out
     np.testing.assert_allclose(p["none"], ruled_out + moved / 3, rtol=1e-12)
     np.testing.assert_allclose(p["microslip_power_law"], moved / 3, rtol=1e-12)

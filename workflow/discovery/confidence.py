@@ -228,7 +228,6 @@ def soft_decisions(
     clear_gain: float,
     residual_gain: float,
     draws: np.ndarray,
-    ruled_out: float = 1.0,
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """The decision's probabilities on every reweighting of the units.
 
@@ -244,21 +243,14 @@ def soft_decisions(
     :func:`workflow.discovery.decision.decide`, with the tie-break by BIC replaced by the
     weights.
 
-    ``none`` is the baseline explaining the data within their scatter; it is right only as
-    far as the data rule out a mechanism beyond the models' accuracy (``ruled_out``,
-    :func:`workflow.discovery.misfit.departure_ruled_out`). The rest of its probability is
-    a mechanism the data cannot show, as likely none as any single cause (a sensor near a
-    node may see nothing, never be sure of nothing).
-
     Returns
     -------
     probabilities : dict
         ``none``, ``unknown`` and every option's key -> array (B,), summing to 1 per draw.
     ratio : ndarray, shape (B,)
-        Per draw, the probability-weighted gain ratio: 1 for ``none`` (and for its share
-        moved to a mechanism the data cannot show), an option's error over the
-        baseline's for the option, the lowest of every option's for ``unknown`` (its
-        extended model is the best candidate tried).
+        Per draw, the probability-weighted gain ratio: 1 for ``none``, an option's
+        error over the baseline's for the option, the lowest of every option's for
+        ``unknown`` (its extended model is the best candidate tried).
     """
     n_draws = draws.shape[0]
     keys = ["none", "unknown"] + [o.key for o in options]
@@ -279,9 +271,7 @@ def soft_decisions(
     if not usable:
         p["unknown"] += fails
         p["none"] += ~fails
-        ratio = p["none"] + p["unknown"] * unknown_ratio
-        unseen(p, options, ruled_out)
-        return p, ratio
+        return p, p["none"] + p["unknown"] * unknown_ratio
     opt_error = np.array([error[row[o.model]] for o in usable])  # (K, B)
     better = opt_error < base
     for k, o in enumerate(usable):
@@ -325,15 +315,17 @@ def soft_decisions(
         p["unknown"] += np.where(to_unknown, share, 0.0)
         p[o.key] += np.where(to_unknown, 0.0, share)
         ratio += np.where(to_unknown, 0.0, share * ratio_k)
-    ratio += p["none"] + p["unknown"] * unknown_ratio
-    unseen(p, options, ruled_out)
-    return p, ratio
+    return p, ratio + p["none"] + p["unknown"] * unknown_ratio
 
 
 def unseen(p: dict[str, np.ndarray], options: Sequence[VerdictOption], ruled_out: float) -> None:
-    """Spread the share ``1 - ruled_out`` of ``p["none"]`` evenly over ``none`` and the
-    single causes of ``options`` (in place): a mechanism the data cannot show is as likely
-    any of them. It gains nothing on these data: the draws' gain ratio stays as it was."""
+    """``none`` is the baseline explaining the data within their scatter; it is right only as
+    far as the data rule out a mechanism beyond the models' accuracy (``ruled_out``,
+    :func:`workflow.discovery.misfit.departure_ruled_out`). The share ``1 - ruled_out`` of
+    :func:`soft_decisions`' ``p["none"]`` is spread evenly over ``none`` and the single
+    causes of ``options`` (in place): a mechanism the data cannot show is as likely any of
+    them (a sensor near a node may see nothing, never be sure of nothing). It gains nothing
+    on these data: the draws' gain ratio stays as :func:`soft_decisions` gave it."""
     single = [o.key for o in options if not o.parts]
     if ruled_out >= 1.0 or not single:
         return

@@ -21,6 +21,7 @@ from workflow.discovery.confidence import (
     dirichlet_unit_weights,
     mean_probabilities,
     soft_decisions,
+    unseen,
 )
 from workflow.discovery.heldout import (
     amplitude_weights,
@@ -484,8 +485,8 @@ def confidence_draws(
         clear_gain=CLEAR_GAIN,
         residual_gain=RESIDUAL_GAIN,
         draws=weights,
-        ruled_out=result["ruled_out"],
     )
+    unseen(probabilities, options, result["ruled_out"])
     keys = list(probabilities)
     table = np.array([probabilities[k] for k in keys]).T
     draws = [
