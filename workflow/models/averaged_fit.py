@@ -18,6 +18,7 @@ import numpy as np
 
 from workflow.models.averaged import MODELS, AveragedModel, CurveGrid
 from workflow.models.configuration_data import ConfigurationData, Scatter
+from workflow.models.joint_averages import threshold_cell_edges
 from workflow.models.sampling import scrambled_sobol_points
 from workflow.models.settings import DiscoverySettings
 
@@ -43,6 +44,7 @@ __all__ = [
     "centred_run_offsets",
     "calibration_segments",
     "fixed_params",
+    "unseen_cell_ties",
     "fit_model",
     "fit_jacobian",
     "model_residuals",
@@ -382,6 +384,39 @@ def fixed_params(model: AveragedModel, data: ConfigurationData, context: FitCont
     return {name: known[name] for name in model.fixed}
 
 
+def unseen_cell_ties(
+    model: AveragedModel, velocity_in_s: np.ndarray, fixed: Mapping[str, float]
+) -> list[tuple[int, int]]:
+    """Slip-threshold cells no fitted segment reaches, each tied to the highest cell one does.
+
+    A cell whose lowest threshold lies at or above the largest fitted amplitude holds
+    elements that never slip there: they add stiffness the linear frequency absorbs, and
+    the data say nothing of its share. Held out, the top amplitudes of one hit leave the
+    top cell so (its half decade is the top block's): the fit then puts any share there
+    (the lab's micro-slip + loss hits: 1e-5 instead of 5e-3) and its prediction of the top
+    block is whatever that share makes (thousands of scatters off, where the cells
+    below predict within one). Tied, the density of thresholds per ``ln t`` continues at
+    the highest seen cell's level (the cells are equally wide in ``ln t``), the least a
+    prediction beyond the data may assume of the joint.
+
+    Returns
+    -------
+    list of (int, int)
+        (coordinate of an unseen cell, coordinate of the highest seen cell); empty for a
+        model without cells or where every cell is reached.
+    """
+    names = model.cell_names
+    if not names or velocity_in_s.size == 0:
+        return []
+    lower_edges = threshold_cell_edges(len(names))[:-1] * float(fixed["anchor_velocity_in_s"])
+    seen = np.flatnonzero(lower_edges < float(np.max(velocity_in_s)))
+    if seen.size == 0 or seen[-1] == len(names) - 1:
+        return []
+    index = {p.name: i for i, p in enumerate(model.params)}
+    source = index[names[int(seen[-1])]]
+    return [(index[name], source) for name in names[int(seen[-1]) + 1 :]]
+
+
 class _Problem:
     """Normalised-residual function of one model on a subset of segments."""
 
@@ -412,10 +447,17 @@ class _Problem:
         self.per_run = np.count_nonzero(self.groups.present) >= 2
         self.fixed = fixed_params(model, data, context)
         self.lo, self.hi = parameter_box(model, data)
+        self.unseen_cells = unseen_cell_ties(model, data.velocity_in_s[mask], self.fixed)
+
+    def coordinates(self, unit: np.ndarray) -> np.ndarray:
+        """Fit coordinates of unit-box points (P, k), unseen cells tied (:func:`unseen_cell_ties`)."""
+        coords = self.lo + np.atleast_2d(unit) * (self.hi - self.lo)
+        for cell, source in self.unseen_cells:
+            coords[:, cell] = coords[:, source]
+        return coords
 
     def physical(self, unit: np.ndarray) -> dict[str, np.ndarray]:
-        coords = self.lo + np.atleast_2d(unit) * (self.hi - self.lo)
-        p = to_physical(self.model, coords)
+        p = to_physical(self.model, self.coordinates(unit))
         p.update({k: np.array(v) for k, v in self.fixed.items()})
         return p
 
@@ -571,7 +613,7 @@ def fit_model(
         screened = [_local_fit(problem, start, SCREEN_NFEV) for start in starts]
         u0 = min(screened, key=lambda r: r[1])[0]
         best_u, best_cost = _local_fit(problem, u0, max_nfev)
-    coords = problem.lo + best_u * span
+    coords = problem.coordinates(best_u)[0]
     params = {p.name: float(v[0, 0]) for p, v in zip(model.params, to_physical(model, coords).values())}
     params.update(problem.fixed)
     return FitResult(model.name, coords, params, best_cost)
