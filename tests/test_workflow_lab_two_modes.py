@@ -151,15 +151,6 @@ def test_a_verdict_per_mode_and_channel_matching_the_truth_where_its_effect_is_c
     assert clear_modes >= 1
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known limitation (issue 31, sensor placement): on mode 2, where the truth's micro-slip moves "
-    "ln zeta by 1.2-2.1 standard errors, acc2 alone names quadratic_damping 1.00 sure with these cheap "
-    "settings (0.69 with the discovery's; acc1: none). Its held-out gain (0.89) is one run's: a held-out "
-    "run's linear damping, set by its noisy lowest-amplitude quarter, is uncertain by 6-9 % of zeta0, and "
-    "that error, shared by the run's segments, enters the difference of two models' squared residuals, "
-    "which the accuracy margin scores segment by segment (docs/discovery.md)",
-)
 def test_no_sensor_sure_of_another_cause_where_the_effect_is_weak(lab_run):
     """Where a mode's effect is within a few standard errors of the scatter, a sensor's own
     verdict is the truth's cause or `none`, or it is less than 0.7 sure (output contract:
