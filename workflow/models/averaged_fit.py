@@ -396,8 +396,8 @@ def unseen_cell_ties(
     (the lab's micro-slip + loss hits: 1e-5 instead of 5e-3) and its prediction of the top
     block is whatever that share makes (thousands of scatters off, where the cells
     below predict within one). Tied, the density of thresholds per ``ln t`` continues at
-    the highest seen cell's level (the cells are equally wide in ``ln t``), the least a
-    prediction beyond the data may assume of the joint.
+    the highest seen cell's level (the cells are equally wide in ``ln t``): beyond the
+    data the prediction continues the density they show.
 
     Returns
     -------
