@@ -393,9 +393,9 @@ def unseen_cell_ties(
     elements that never slip there: they add stiffness the linear frequency absorbs, and
     the data say nothing of its share. Held out, the top amplitudes of one hit leave the
     top cell so (its half decade is the top block's): the fit then puts any share there
-    (the lab's micro-slip + loss hits: 1e-5 instead of 5e-3) and its prediction of the top
-    block is whatever that share makes (thousands of scatters off, where the cells
-    below predict within one). Tied, the density of thresholds per ``ln t`` continues at
+    (one of the lab's micro-slip + loss hits, bench seed 1934: 8.8e-6 where every other
+    fold put 5.1e-3) and its prediction of the top block is whatever that share makes
+    (3800 scatters off there, where the folds below predict within one to four). Tied, the density of thresholds per ``ln t`` continues at
     the highest seen cell's level (the cells are equally wide in ``ln t``): beyond the
     data the prediction continues the density they show.
 
