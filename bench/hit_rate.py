@@ -1,3 +1,4 @@
+# ruff: noqa: E402 (the thread settings precede the imports of NumPy)
 """Hit rate and calibration of the model discovery over hidden-effect campaigns and seeds.
 
 For every case of the vocabulary (the six causes and the two combinations: micro-slip
@@ -31,6 +32,14 @@ depend on the rule.
 
 from __future__ import annotations
 
+import os
+
+# One BLAS thread, as every Snakemake job of the workflow has (its `threads: 1`): the fits'
+# linear algebra then rounds as the workflow's does, and a campaign's verdict is the
+# workflow's seed by seed. Set before NumPy is imported; the worker processes inherit it.
+for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_variable] = "1"
+
 import argparse
 import pickle
 import sys
@@ -44,14 +53,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from workflow.discovery.campaign import campaign_document, diagnose_configurations  # noqa: E402
-from workflow.discovery.confidence import verdict_causes as verdict_causes_of  # noqa: E402
-from workflow.discovery.confidence import verdict_key  # noqa: E402
-from workflow.discovery.configuration import conclude  # noqa: E402
-from workflow.discovery.decision import extended_model_of  # noqa: E402
-from workflow.discovery.joint import joint_segments  # noqa: E402
-from workflow.discovery.misfit import EXPLAINS_LIMIT, envelope_structure  # noqa: E402
-from workflow.lab.hidden_effects import (  # noqa: E402
+from workflow.discovery.campaign import campaign_document, diagnose_configurations
+from workflow.discovery.confidence import verdict_causes as verdict_causes_of
+from workflow.discovery.confidence import verdict_key
+from workflow.discovery.configuration import conclude
+from workflow.discovery.decision import extended_model_of
+from workflow.discovery.joint import joint_segments
+from workflow.discovery.misfit import EXPLAINS_LIMIT, envelope_structure
+from workflow.lab.hidden_effects import (
     CASES,
     RUNS,
     campaign_segments,
@@ -61,7 +70,7 @@ from workflow.lab.hidden_effects import (  # noqa: E402
     generate_case,
     time_domain_can_hide,
 )
-from workflow.lab.settings import LabSettings  # noqa: E402
+from workflow.lab.settings import LabSettings
 
 VERDICTS = [
     "none",
