@@ -277,7 +277,7 @@ def soft_decisions(
     for k, o in enumerate(usable):
         if o.parts:
             # a combination is an option only where its parsimony test passes: elsewhere its
-            # weight goes where the rule puts it, to the best of the single causes (its better part)
+            # weight goes where the rule puts it, to the single causes by their predictive density
             better[k] &= combination_passes(evidence, o, draws)
     beyond = np.array(
         [
