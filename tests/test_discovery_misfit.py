@@ -5,6 +5,8 @@ the run-order trend an ordinary least-squares slope over the runs' projections (
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -17,6 +19,7 @@ from workflow.discovery.misfit import (
     bin_is_judged,
     bin_observations,
     binned_discrepancy,
+    channel_weighted_observations,
     departure_ruled_out,
     departure_ruled_out_by_channels,
     explains_data,
@@ -40,12 +43,27 @@ def campaign(n_runs: int, per_bin: int = 5) -> ConfigurationData:
 
 
 def residuals_of(ln_zeta: np.ndarray, rel_f: np.ndarray, scatter=(0.01, 2e-5)) -> dict[str, np.ndarray]:
+    """Residuals with the measured scatter ``scatter`` (of ``ln zeta`` and of the relative
+    frequency: numbers, or arrays of one per segment)."""
+    zeta_scatter, f_scatter = (np.broadcast_to(np.asarray(s, dtype=float), ln_zeta.shape) for s in scatter)
     return {
         "ln_zeta": ln_zeta,
         "rel_f": rel_f,
-        "z_noise": ln_zeta / scatter[0],
-        "f_noise": rel_f / scatter[1],
+        "z_noise": ln_zeta / zeta_scatter,
+        "f_noise": rel_f / f_scatter,
+        "scatter_ln_zeta": zeta_scatter,
+        "scatter_rel_f": f_scatter,
     }
+
+
+def two_sensors(one: ConfigurationData) -> ConfigurationData:
+    """The segments of ``one`` seen by two sensors: the same runs and amplitudes twice."""
+    return segments_data(
+        np.tile(one.velocity_in_s, 2),
+        np.tile(one.run_index, 2),
+        ANCHOR_IN_S,
+        channel_index=np.repeat([0, 1], one.n),
+    )
 
 
 def test_a_bins_misfit_is_the_t_test_of_the_runs_means_at_the_bonferroni_limit():
@@ -385,27 +403,78 @@ def test_a_noisy_sensor_rules_out_less_than_a_quiet_one():
 
 def test_pooled_sensors_rule_out_what_their_quietest_sensor_rules_out():
     """Two sensors of the same runs pooled, one with a tenth of the models' accuracy as
-    scatter and one with five times it: the pooled bins' standard errors are the noisy
-    sensor's, but the damping and frequency are the mode's, so the quiet sensor's power
-    stands for both."""
+    scatter and one with five times it: the damping and frequency are the mode's, so the
+    quiet sensor's power stands for both. The bins' run means weigh each sensor by its
+    inverse variance, so they rule out about as much as the quiet sensor alone; the
+    plain mean of the pooled segments, the noisy sensor's spread in every run's mean,
+    rules out less than 0.9."""
     one = campaign(6)
     rng = np.random.default_rng(9)
     noise = rng.standard_normal((2, 2, one.n))
     scales = (0.1, 5.0)
-    pooled = segments_data(
-        np.tile(one.velocity_in_s, 2),
-        np.tile(one.run_index, 2),
-        ANCHOR_IN_S,
-        channel_index=np.repeat([0, 1], one.n),
-    )
+    pooled = two_sensors(one)
     ln_zeta = np.concatenate([s * TOL_LN_ZETA * noise[i, 0] for i, s in enumerate(scales)])
     rel_f = np.concatenate([s * TOL_REL_F * noise[i, 1] for i, s in enumerate(scales)])
-    quiet_alone = residuals_of(ln_zeta[: one.n], rel_f[: one.n])
+    scatter = (np.repeat(scales, one.n) * TOL_LN_ZETA, np.repeat(scales, one.n) * TOL_REL_F)
+    quiet_alone = residuals_of(
+        ln_zeta[: one.n], rel_f[: one.n], (scales[0] * TOL_LN_ZETA, scales[0] * TOL_REL_F)
+    )
     quiet = departure_ruled_out(binned_discrepancy(one, quiet_alone))
     assert quiet > 0.999
-    pooled_bins = binned_discrepancy(pooled, residuals_of(ln_zeta, rel_f))
-    assert departure_ruled_out(pooled_bins) < 0.9
-    assert departure_ruled_out_by_channels(
-        pooled, residuals_of(ln_zeta, rel_f), pooled_bins
-    ) == pytest.approx(quiet, rel=1e-12)
+    pooled_residuals = residuals_of(ln_zeta, rel_f, scatter)
+    pooled_bins = binned_discrepancy(pooled, pooled_residuals)
+    assert departure_ruled_out(pooled_bins) > 0.99
+    unweighted = binned_discrepancy(replace(pooled, channel_index=None), pooled_residuals)
+    assert departure_ruled_out(unweighted) < 0.9
+    assert departure_ruled_out_by_channels(pooled, pooled_residuals, pooled_bins) == pytest.approx(
+        quiet, rel=1e-12
+    )
     assert departure_ruled_out_by_channels(one, quiet_alone, binned_discrepancy(one, quiet_alone)) == quiet
+
+
+def test_pooled_sensors_bin_means_weigh_each_sensor_by_its_inverse_variance():
+    """Per run, each sensor's plain mean in the bin, weighted by its segments' count squared
+    over their summed variances; one sensor alone gives the run means unchanged."""
+    values = np.array([1.0, 3.0, 10.0, 20.0, 5.0, 7.0])
+    variances = np.array([1.0, 1.0, 4.0, 4.0, 1.0, 9.0])
+    runs = np.array([0, 0, 0, 0, 1, 1])
+    channels = np.array([0, 0, 1, 1, 0, 1])
+    in_bin = np.ones(6, dtype=bool)
+    ids, means = channel_weighted_observations(values, variances, runs, channels, in_bin, 2)
+    # run 0: means 2 and 15, variances 2/4 and 8/4; run 1: 5 and 7, variances 1 and 9
+    assert ids.tolist() == [0, 1]
+    assert means == pytest.approx(
+        [(2.0 / 0.5 + 15.0 / 2.0) / (1 / 0.5 + 1 / 2.0), (5.0 + 7.0 / 9.0) / (1 + 1 / 9.0)]
+    )
+    same = np.zeros(6, dtype=int)
+    ids, alone = channel_weighted_observations(values, variances, runs, same, in_bin, 2)
+    assert alone == pytest.approx(bin_observations(values, runs, in_bin, 2)[1], rel=1e-14)
+
+
+def test_a_node_sensors_noise_floor_skew_is_no_misfit_of_the_pooled_bins():
+    """A sensor near a node of the mode: its log decrements scatter 15 times the models'
+    accuracy and its noise floor shifts their mean by 6 accuracies in every run, while the
+    reference sensor beside it reads the model to a tenth of the accuracy (100 segments of
+    each per run and half decade, as a real hit gives). Pooled, the bins weigh each sensor
+    by what it knows: no misfit, where their plain mean (the node sensor's shift over two,
+    measured to a quarter of an accuracy) is a significant one in every bin; a real
+    departure of 2.5 accuracies in the top half decade, seen by both, is still found."""
+    one = campaign(8, per_bin=100)
+    pooled = two_sensors(one)
+    rng = np.random.default_rng(11)
+    quiet = 0.1 * TOL_LN_ZETA * rng.standard_normal(one.n)
+    node = -6.0 * TOL_LN_ZETA + 15.0 * TOL_LN_ZETA * rng.standard_normal(one.n)
+    scatter = (np.repeat([0.1, 15.0], one.n) * TOL_LN_ZETA, np.full(pooled.n, 2e-5))
+    rel_f = 2e-5 * rng.standard_normal(pooled.n)
+    residuals = residuals_of(np.concatenate([quiet, node]), rel_f, scatter)
+    damping = [row for row in binned_discrepancy(pooled, residuals) if row["curve"] == "damping"]
+    assert not any(row["significant"] for row in damping)
+    assert all(abs(row["mean"]) < TOL_LN_ZETA for row in damping)
+    plain = binned_discrepancy(replace(pooled, channel_index=None), residuals)
+    assert all(row["significant"] for row in plain if row["curve"] == "damping")
+    top = np.tile(one.velocity_in_s > TOP_EDGE_IN_S, 2)
+    departed = residuals_of(
+        np.concatenate([quiet, node]) + np.where(top, 2.5 * TOL_LN_ZETA, 0.0), rel_f, scatter
+    )
+    found = [row for row in binned_discrepancy(pooled, departed) if row["significant"]]
+    assert [(row["curve"], row["v_high_in_s"] > TOP_EDGE_IN_S) for row in found] == [("damping", True)]

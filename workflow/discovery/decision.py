@@ -344,6 +344,7 @@ def evaluate_decision(
                 "ln_zeta_slope",
                 "calibration",
                 "scatter_ln_zeta",
+                "scatter_rel_f",
                 "z_noise",
                 "f_noise",
             )

@@ -29,6 +29,7 @@ __all__ = [
     "ALPHA",
     "misfit_significant",
     "bin_observations",
+    "channel_weighted_observations",
     "MIN_BIN_RUNS",
     "MIN_BIN_SEGMENTS_ONE_RUN",
     "bin_is_judged",
@@ -128,6 +129,52 @@ def bin_observations(
     return np.zeros(1, dtype=int), values[in_bin]
 
 
+def channel_weighted_observations(
+    values: np.ndarray,
+    variances: np.ndarray,
+    run_index: np.ndarray,
+    channel_index: np.ndarray,
+    in_bin: np.ndarray,
+    n_runs: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The observations of one amplitude bin of pooled channels (sensors of the same runs):
+    per run, each channel's mean of ``values`` there, weighted by the inverse of that
+    mean's variance (its segments' ``variances`` summed, over their count squared).
+
+    The channels see one joint: a run's bin mean is one estimate of the same residual from
+    each sensor, and a sensor near a node, whose log decrements scatter tens of times more
+    than the reference's and are skewed by its noise floor, weighs as little as it knows
+    (the weighting of the joint fit and of :func:`run_order_trend`). An unweighted mean of
+    the pooled segments would carry that sensor's noise-floor skew into every bin: on a
+    no-effect campaign seen at x0.06 beside two sensors at x2-3 (bench/hit_rate.py
+    ``--sensors 3``, seed 2044), -0.08 in ``ln zeta`` from it alone made the bin's mean
+    -0.026, beyond the models' accuracy, in all seven runs. With one channel each run's
+    observation is its plain mean, as :func:`bin_observations` gives it.
+
+    Examples
+    --------
+    A quiet channel reading 0 and a noisy one reading -1, both in one run:
+
+    >>> values, variances = np.array([0.0, 0.0, -1.0, -1.0]), np.array([0.01, 0.01, 1.0, 1.0])
+    >>> runs, means = channel_weighted_observations(
+    ...     values, variances, np.zeros(4, dtype=int), np.array([0, 0, 1, 1]), np.ones(4, dtype=bool), 2)
+    >>> runs.tolist(), round(float(means[0]), 4)
+    ([0], -0.0099)
+    """
+    channels = np.unique(channel_index[in_bin])
+    n_channels = int(channel_index.max()) + 1
+    cell = run_index[in_bin] * n_channels + channel_index[in_bin]
+    size = n_runs * n_channels
+    counts = np.bincount(cell, minlength=size).reshape(n_runs, n_channels)
+    sums = np.bincount(cell, weights=values[in_bin], minlength=size).reshape(n_runs, n_channels)
+    spread = np.bincount(cell, weights=variances[in_bin], minlength=size).reshape(n_runs, n_channels)
+    occupied = counts > 0
+    weight = np.where(occupied, counts**2 / np.maximum(spread, np.finfo(float).tiny), 0.0)
+    means = np.where(occupied, sums / np.maximum(counts, 1), 0.0)
+    runs = np.flatnonzero(occupied[:, channels].any(axis=1))
+    return runs, (weight * means).sum(axis=1)[runs] / weight.sum(axis=1)[runs]
+
+
 MIN_BIN_RUNS = 3
 """Fewest runs with segments in an amplitude bin for its mean to be judged (one run: the
 segments, at least :data:`MIN_BIN_SEGMENTS_ONE_RUN`): a mean over fewer is one or two
@@ -156,7 +203,9 @@ def binned_discrepancy(
     """Mean residual per half decade of amplitude and per curve, with its significance.
 
     For each bin and curve, each run's mean residual in the bin is one
-    observation (:func:`bin_observations`); the mean over runs, its standard error over
+    observation (:func:`bin_observations`; with pooled channels, each channel's mean
+    weighted by its inverse variance, :func:`channel_weighted_observations`); the mean
+    over runs, its standard error over
     runs and a t test (``n_runs - 1`` degrees of freedom) follow. With one run, the
     segments are the observations and the standard error uses their AR(1) effective
     number. A bin counts as a real misfit when ``p < p_limit = alpha / (2 n)``, ``n``
@@ -179,15 +228,22 @@ def binned_discrepancy(
     from scipy import special
 
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
+    channels = data.channel_index
+    pooled = data.n_runs >= 2 and channels is not None and np.unique(channels).size > 1
     rows = []
-    for curve, key, scaled, tol in (
-        ("damping", "ln_zeta", "z_noise", TOL_LN_ZETA),
-        ("frequency", "rel_f", "f_noise", TOL_REL_F),
+    for curve, key, scaled, spread, tol in (
+        ("damping", "ln_zeta", "z_noise", "scatter_ln_zeta", TOL_LN_ZETA),
+        ("frequency", "rel_f", "f_noise", "scatter_rel_f", TOL_REL_F),
     ):
         r = residuals[key]
         for b in np.unique(code):
             in_bin = code == b
-            runs, observations = bin_observations(r, data.run_index, in_bin, data.n_runs)
+            if pooled:
+                runs, observations = channel_weighted_observations(
+                    r, residuals[spread] ** 2, data.run_index, channels, in_bin, data.n_runs
+                )
+            else:
+                runs, observations = bin_observations(r, data.run_index, in_bin, data.n_runs)
             if not bin_is_judged(runs.size, observations.size, data.n_runs):
                 continue
             if data.n_runs >= 2:

@@ -657,8 +657,9 @@ def model_residuals(
     ``ln_zeta_calibrated``, the damping residual with each run's offsets set by its own
     lowest-amplitude segments (``calibration``, :func:`calibration_segments`) as a
     held-out run's are, ``ln_zeta_slope``, the shared model's log-log damping slope
-    (:func:`damping_curve_slope`), ``scatter_ln_zeta``, the measured scatter of
-    ``ln zeta`` at each segment, and ``offset_variance_ln_zeta``,
+    (:func:`damping_curve_slope`), ``scatter_ln_zeta`` and ``scatter_rel_f``, the
+    measured scatter of ``ln zeta`` and of the relative frequency at each segment, and
+    ``offset_variance_ln_zeta``,
     ``offset_variance_rel_f``, the variance each segment's residual carries from its
     run's offsets, estimated (before centring) from the noise of the segments they were
     set by (:func:`run_offset_variances`; 0 with one run).
@@ -708,6 +709,7 @@ def model_residuals(
         ),
         "calibration": calibration,
         "scatter_ln_zeta": scatter.noise_ln_zeta,
+        "scatter_rel_f": scatter.noise_rel_f,
         "offset_variance_ln_zeta": offset_variance_ln_zeta,
         "offset_variance_rel_f": offset_variance_rel_f,
     }
