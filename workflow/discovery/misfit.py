@@ -147,8 +147,9 @@ def channel_weighted_observations(
     (the weighting of the joint fit and of :func:`run_order_trend`). An unweighted mean of
     the pooled segments would carry that sensor's noise-floor skew into every bin: on a
     no-effect campaign seen at x0.06 beside two sensors at x2-3 (bench/hit_rate.py
-    ``--sensors 3``, seed 2044), -0.08 in ``ln zeta`` from it alone made the bin's mean
-    -0.026, beyond the models' accuracy, in all seven runs. With one channel each run's
+    ``--sensors 3``, seed 2044), its mean of -0.08 in ``ln zeta`` made the bin's mean
+    -0.026 over the seven runs reaching it (t -7), beyond the models' accuracy, where the
+    other two sensors read 0.0004 and 0.0001. With one channel each run's
     observation is its plain mean, as :func:`bin_observations` gives it.
 
     Examples
