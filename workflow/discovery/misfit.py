@@ -106,8 +106,9 @@ def bin_observations(
 
     With several runs, one observation per run with segments in the bin (its mean);
     with one run, the bin's segments in order of amplitude (its observations are
-    segments). Their mean is the bin's mean, the number every binned verdict and the
-    residual figure's binned means use.
+    segments). Their mean is the bin's mean, the number the binned verdicts and the
+    residual figure's binned means use (the discrepancy test of pooled channels weighs
+    each channel by what it knows, :func:`channel_weighted_observations`).
 
     Returns
     -------
@@ -162,7 +163,6 @@ def channel_weighted_observations(
     >>> runs.tolist(), round(float(means[0]), 4)
     ([0], -0.0099)
     """
-    channels = np.unique(channel_index[in_bin])
     n_channels = int(channel_index.max()) + 1
     cell = run_index[in_bin] * n_channels + channel_index[in_bin]
     size = n_runs * n_channels
@@ -172,7 +172,7 @@ def channel_weighted_observations(
     occupied = counts > 0
     weight = np.where(occupied, counts**2 / np.maximum(spread, np.finfo(float).tiny), 0.0)
     means = np.where(occupied, sums / np.maximum(counts, 1), 0.0)
-    runs = np.flatnonzero(occupied[:, channels].any(axis=1))
+    runs = np.flatnonzero(occupied.any(axis=1))
     return runs, (weight * means).sum(axis=1)[runs] / weight.sum(axis=1)[runs]
 
 
@@ -220,7 +220,7 @@ def binned_discrepancy(
     list of dict
         One per tested (bin, curve): ``curve`` ("damping"/"frequency"), ``v_low_in_s``,
         ``v_high_in_s``, ``mean`` (ln zeta or relative f), ``mean_over_scatter`` (the
-        same mean of the residuals divided by the measured scatter, ``z_noise`` or
+        runs' plain mean of the residuals divided by the measured scatter, ``z_noise`` or
         ``f_noise``: the binned mean the residual figure draws), ``standard_error``,
         ``t``, ``p``, ``p_limit`` (``alpha / n_tests``), ``n_runs``, ``n_segments``,
         ``tolerance``, ``significant``; with several runs also ``run_ids`` and
