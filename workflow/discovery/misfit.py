@@ -230,7 +230,7 @@ def binned_discrepancy(
 
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, 2)
     channels = data.channel_index
-    pooled = data.n_runs >= 2 and channels is not None and np.unique(channels).size > 1
+    pooled = data.n_runs >= 2 and data.n_channels > 1
     rows = []
     for curve, key, scaled, spread, tol in (
         ("damping", "ln_zeta", "z_noise", "scatter_ln_zeta", TOL_LN_ZETA),
@@ -426,7 +426,7 @@ def departure_ruled_out_by_channels(
     bin's standard error. Each channel's bins are counted from the same top amplitude.
     """
     channels = data.channel_index
-    if channels is None or np.unique(channels).size < 2:
+    if data.n_channels < 2:
         return departure_ruled_out(bins)
     best = 0.0
     for channel in np.unique(channels):
