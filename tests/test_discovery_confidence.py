@@ -17,6 +17,7 @@ from workflow.discovery.confidence import (
     verdict_causes,
     verdict_key,
 )
+from workflow.discovery.heldout import heldout_standard_error
 
 N_UNITS = 8
 RULE = {"clear_gain": 0.7, "residual_gain": 0.7, "envelope_structure": False}
@@ -60,6 +61,20 @@ def test_dirichlet_weights_keep_every_unit_and_average_to_the_data():
     np.testing.assert_allclose(w.sum(axis=1), 5.0)
     # the mean reweighting is the data itself; Monte Carlo error of the mean ~ 1/sqrt(2000 * 6)
     np.testing.assert_allclose(w.mean(axis=0), 1.0, atol=0.04)
+
+
+@pytest.mark.parametrize("n_units", [3, 5, 8, 14])
+def test_reweighted_means_spread_by_the_heldout_standard_error(n_units):
+    """Over the reweightings, a weighted mean of the units' values varies as much as the
+    held-out tests' standard error of their mean says (``s^2 / n``, ``s`` the sample
+    standard deviation). Monte Carlo: the variance of 20000 draws is within 2 % (its
+    relative standard error ~ sqrt(2 / 20000) for a near-Gaussian mean, 1 %, widened for
+    the Dirichlet's heavier tails at three units)."""
+    values = np.random.default_rng(n_units).lognormal(0.0, 0.5, n_units)
+    w = dirichlet_unit_weights(20000, n_units, np.random.default_rng(2))
+    means = w @ values / n_units
+    expected = heldout_standard_error(values, np.ones(n_units)) ** 2
+    assert np.var(means) == pytest.approx(expected, rel=0.02 if n_units > 3 else 0.04)
 
 
 def test_log_density_returns_the_heldout_error():

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -384,7 +384,7 @@ def conclude(
         n_draws=settings.resamples,
         seed=settings.seed,
     )
-    verdict = most_probable_verdict(result["verdict"], confidence)
+    verdict = most_probable_verdict(result["verdict"], confidence, resamples)
     if verdict != result["verdict"]:
         result["reason"] = (
             f"{verdict}, the most probable verdict over reweightings of the runs "
@@ -429,13 +429,26 @@ def curve_led_start(
     return [] if term is None else [{**joint.params, **term}]
 
 
-def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
-    """The verdict with the largest confidence (``verdict`` itself on a tie).
+MONTE_CARLO_MARGIN = 2.0
+"""Standard errors of the reweightings' Monte Carlo mean by which another verdict must be
+more probable than the decision on all the data to replace it (a 95 % band)."""
+
+
+def most_probable_verdict(
+    verdict: str, confidence: Mapping[str, float], draws: Sequence[Mapping] = ()
+) -> str:
+    """The verdict with the largest confidence, where it is more probable than ``verdict``
+    (the decision on all the data) beyond the Monte Carlo error of the reweightings.
 
     The confidence re-takes the decision on reweightings of the runs, sharing ties
     between candidates by their held-out evidence: where the decision on all the data
     sits at one of its margins (a gain ratio at ``CLEAR_GAIN``, a near-tie broken by the
-    BIC), the verdict is the one most of the reweightings take.
+    BIC), the verdict is the one most of the reweightings take. With ``draws`` (each
+    draw's ``probabilities``, :func:`~workflow.discovery.decision.confidence_draws`) the
+    difference must exceed :data:`MONTE_CARLO_MARGIN` standard errors of its mean over
+    the draws: a difference the draws' own sampling makes is no evidence, and the
+    decision on all the data stands (a tie among six verdicts at 0.16-0.18 does not
+    turn on the random numbers).
 
     Examples
     --------
@@ -443,9 +456,22 @@ def most_probable_verdict(verdict: str, confidence: Mapping[str, float]) -> str:
     'stiffness_nonlinearity'
     >>> most_probable_verdict("none", {"none": 0.5, "run_drift": 0.5})
     'none'
+    >>> draws = [{"probabilities": {"unknown": 1.0}}, {"probabilities": {"none": 1.0}}] * 5
+    >>> most_probable_verdict("none", {"unknown": 0.52, "none": 0.48}, draws)
+    'none'
+    >>> most_probable_verdict("none", {"unknown": 0.6, "none": 0.4}, [{"probabilities": {"unknown": 0.6, "none": 0.4}}] * 10)
+    'unknown'
     """
     best = max(confidence, key=confidence.get, default=verdict)
-    return best if confidence.get(best, 0.0) > confidence.get(verdict, 0.0) else verdict
+    if confidence.get(best, 0.0) <= confidence.get(verdict, 0.0):
+        return verdict
+    if len(draws) >= 2:
+        difference = np.array(
+            [d["probabilities"].get(best, 0.0) - d["probabilities"].get(verdict, 0.0) for d in draws]
+        )
+        if difference.mean() <= MONTE_CARLO_MARGIN * difference.std(ddof=1) / np.sqrt(difference.size):
+            return verdict
+    return best
 
 
 def diagnose_configuration(
