@@ -385,10 +385,16 @@ def conclude(
         seed=settings.seed,
     )
     verdict = most_probable_verdict(result["verdict"], confidence, resamples)
+    likeliest = max(confidence, key=confidence.get, default=verdict)
     if verdict != result["verdict"]:
         result["reason"] = (
             f"{verdict}, the most probable verdict over reweightings of the runs "
             f"({confidence[verdict]:.2f}; on all the data: {result['verdict']}, {result['reason']})"
+        )
+    elif confidence.get(likeliest, 0.0) > confidence.get(verdict, 0.0):
+        result["reason"] = (
+            f"{result['reason']}; {likeliest} ({confidence[likeliest]:.2f}) is as probable within the "
+            "Monte Carlo error of the reweightings, so the decision on all the data stands"
         )
     result["verdict"] = verdict
     return result, combinations, confidence, resamples
