@@ -323,13 +323,19 @@ def needs_threshold_cells(
     data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
 ) -> bool:
     """Whether micro-slip may be represented by the Iwan joint with the slip thresholds
-    from the data: the power law does not explain the data, and micro-slip is the verdict
-    or the baseline's misfit is significant. A patch joint's micro-slip is not one power
-    law over the measured decades: at the edge of its visible range the power law can lose
-    to a candidate of another cause, to none, or to the baseline itself where the
-    thresholds from the data beat them all; :func:`conclude` adopts them only where they
-    lower both the held-out error and the BIC of the power law and show its signature."""
-    return (result["cause"] == "microslip_power_law" or result["baseline_fails"]) and not (
+    from the data: the power law does not explain the data, and micro-slip is the verdict,
+    the baseline's misfit is significant, or the thresholds from the data, where already
+    fitted (for the combinations), predict held-out data clearly better than the baseline
+    (their error below ``CLEAR_GAIN`` of its: the gate every candidate passes to depart
+    from ``none``). A patch joint's micro-slip is not one power law over the measured
+    decades: at the edge of its visible range the power law can lose to a candidate of
+    another cause, to none, or to the baseline itself where the thresholds from the data
+    beat them all; :func:`conclude` adopts them only where they lower both the held-out
+    error and the BIC of the power law and show its signature."""
+    cells = f"iwan_cells_{threshold_cells(data)}"
+    errors = result["errors"]
+    clear = cells in errors and errors[cells]["error"] < CLEAR_GAIN * errors[result["baseline"]]["error"]
+    return (result["cause"] == "microslip_power_law" or result["baseline_fails"] or clear) and not (
         explains_data(data, evidence["iwan"].residuals)["explains_data"]
     )
 
