@@ -188,6 +188,17 @@ def test_micro_slip_at_the_edge_of_its_range_is_named_by_its_threshold_distribut
     assert configuration["gain"]["extended"] < stiffness
 
 
+def one_sensor_of_a_hit(cause: str, seed: int, channel: str, tmp_path) -> dict:
+    """The diagnosis of one sensor alone of the lab's one-hit, three-sensor campaign of
+    ``cause`` and ``seed`` (the bench's random placement): its configuration's document."""
+    from workflow.lab.hidden_effects import draw_mode1_gains
+
+    _, out = generate_case(cause, seed, tmp_path, mode1_gain=draw_mode1_gains(cause, seed, 3), runs=1)
+    segments = campaign_segments(out)
+    document = diagnose_campaign(segments[segments["channel"].astype(str) == channel], out.name)
+    return document["configurations"]["joint"]
+
+
 def test_micro_slip_whose_power_law_loses_to_the_baseline_is_named_by_its_threshold_distribution(tmp_path):
     """One hit of the lab's patch joint (1.18 in^2) recorded by three sensors (the bench's
     random placement, seed 2047: x2.45, x0.055 and x2.17 of the accelerometer). The third
@@ -197,13 +208,7 @@ def test_micro_slip_whose_power_law_loses_to_the_baseline_is_named_by_its_thresh
     misfit is significant, and the slip thresholds from the data (8) beat every
     candidate with micro-slip's signature: that sensor names micro-slip, as the other
     two do, instead of being 0.93 sure of a stiffness nonlinearity."""
-    from workflow.lab.hidden_effects import draw_mode1_gains
-
-    cause, seed = "microslip_power_law", 2047
-    case, out = generate_case(cause, seed, tmp_path, mode1_gain=draw_mode1_gains(cause, seed, 3), runs=1)
-    segments = campaign_segments(out)
-    third = diagnose_campaign(segments[segments["channel"].astype(str) == "acc3"], out.name)
-    configuration = third["configurations"]["joint"]
+    configuration = one_sensor_of_a_hit("microslip_power_law", 2047, "acc3", tmp_path)
     evidence = configuration["evidence"]
     assert evidence["baseline_misfit_significant"], evidence["decision_rule"]
     assert configuration["causes"] == ["microslip_power_law"], configuration["confidence"]
@@ -224,13 +229,7 @@ def test_micro_slip_whose_thresholds_gain_clearly_where_no_test_fails_the_baseli
     margin, so no cause departs from the baseline on them. The slip thresholds from the
     data, fitted for the combinations, predict held-out blocks 14 times better (3.7), with
     micro-slip's signature: micro-slip is named, sure, where it read `unknown` 0.65."""
-    from workflow.lab.hidden_effects import draw_mode1_gains
-
-    cause, seed = "microslip_power_law", 2049
-    case, out = generate_case(cause, seed, tmp_path, mode1_gain=draw_mode1_gains(cause, seed, 3), runs=1)
-    segments = campaign_segments(out)
-    second = diagnose_campaign(segments[segments["channel"].astype(str) == "acc2"], out.name)
-    configuration = second["configurations"]["joint"]
+    configuration = one_sensor_of_a_hit("microslip_power_law", 2049, "acc2", tmp_path)
     evidence = configuration["evidence"]
     assert not evidence["baseline_misfit_significant"], evidence["binned_residuals"]
     assert configuration["causes"] == ["microslip_power_law"], configuration["confidence"]
