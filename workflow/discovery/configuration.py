@@ -5,7 +5,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -43,6 +43,7 @@ from workflow.discovery.misfit import (
     microslip_signature,
     run_order_trend,
     stiffness_signature,
+    threshold_signature,
 )
 from workflow.discovery.wording import discrepancy_sentence
 from workflow.measured.settings import AnalysisSettings
@@ -176,7 +177,7 @@ def add_threshold_cells(
     name = f"iwan_cells_{threshold_cells(data)}"
     fits[name], cv[name] = refine_microslip(data, scatter, context, fits["iwan"], settings=settings)
     residuals[name] = model_residuals(fits[name], data, scatter, context)
-    signature = microslip_signature(fits[name], data)["shows_signature"]
+    signature = threshold_signature(fits[name], fits["iwan"], data)["shows_signature"]
     evidence[name] = ModelEvidence(residuals[name], cv[name], len(MODELS[name].params), signature)
     return name
 
@@ -323,21 +324,73 @@ def needs_threshold_cells(
     data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
 ) -> bool:
     """Whether micro-slip may be represented by the Iwan joint with the slip thresholds
-    from the data: the power law does not explain the data, and micro-slip is the verdict,
+    from the data: the power law does not explain the data or predicts held-out data no
+    better than the baseline (then it is no candidate, however closely it follows the
+    data it was fitted to), and micro-slip is the verdict,
     the baseline's misfit is significant, or the thresholds from the data, where already
     fitted (for the combinations), predict held-out data clearly better than the baseline
-    (their error below ``CLEAR_GAIN`` of its: the gate every candidate passes to depart
-    from ``none``). A patch joint's micro-slip is not one power law over the measured
+    (the gate every candidate passes to depart from ``none``: their error below
+    ``CLEAR_GAIN`` of its, or what they remove beyond the models' accuracy). A patch joint's micro-slip is not one power law over the measured
     decades: at the edge of its visible range the power law can lose to a candidate of
     another cause, to none, or to the baseline itself where the thresholds from the data
     beat them all; :func:`conclude` adopts them only where they lower both the held-out
     error and the BIC of the power law and show its signature."""
     cells = f"iwan_cells_{threshold_cells(data)}"
     errors = result["errors"]
-    clear = cells in errors and errors[cells]["error"] < CLEAR_GAIN * errors[result["baseline"]]["error"]
-    return (result["cause"] == "microslip_power_law" or result["baseline_fails"] or clear) and not (
-        explains_data(data, evidence["iwan"].residuals)["explains_data"]
+    baseline_error = errors[result["baseline"]]["error"]
+    clear = (
+        cells in errors
+        and errors[cells]["error"] < baseline_error
+        and (
+            errors[cells]["error"] < CLEAR_GAIN * baseline_error
+            or bool(
+                beyond_accuracy(
+                    result["unit_curve_squares"][result["baseline"]],
+                    result["unit_curve_squares"][cells],
+                    result["unit_tolerance"],
+                    np.ones((1, len(result["unit_weights"]))),
+                )[0]
+            )
+        )
     )
+    power_law_falls_short = (
+        errors["iwan"]["error"] >= baseline_error
+        or not (explains_data(data, evidence["iwan"].residuals)["explains_data"])
+    )
+    return (
+        result["cause"] == "microslip_power_law" or result["baseline_fails"] or clear
+    ) and power_law_falls_short
+
+
+def friction_explains_softening(evidence: Mapping[str, ModelEvidence], cells: str) -> bool:
+    """Whether the Iwan joint with the slip thresholds from the data (``cells``, where
+    fitted) predicts held-out data at least as well as the stiffness candidate.
+
+    The contract's signature of a stiffness nonlinearity is a frequency shift far more
+    than the friction that fits the damping can explain. The stiffness candidate's own
+    check (:func:`~workflow.discovery.misfit.stiffness_signature`) measures it against its
+    single-state (Dahl) friction; a joint of Jenkins elements with free thresholds is a
+    friction whose damping and softening follow one backbone (Masing), and where it
+    predicts both curves as well as the spring does, the softening is what the friction
+    that fits the damping explains.
+    """
+    stiffness = CAUSE_MODELS["stiffness_nonlinearity"]
+    return (
+        cells in evidence
+        and stiffness in evidence
+        and evidence[cells].heldout["error"] <= evidence[stiffness].heldout["error"]
+    )
+
+
+def friction_checked_stiffness(
+    evidence: Mapping[str, ModelEvidence], cells: str
+) -> Mapping[str, ModelEvidence]:
+    """``evidence`` with the stiffness candidate's signature withdrawn where
+    :func:`friction_explains_softening`."""
+    stiffness = CAUSE_MODELS["stiffness_nonlinearity"]
+    if not friction_explains_softening(evidence, cells) or not evidence[stiffness].shows_signature:
+        return evidence
+    return {**evidence, stiffness: replace(evidence[stiffness], shows_signature=False)}
 
 
 def conclude(
@@ -363,9 +416,10 @@ def conclude(
         refinement's model id where it was considered, else None), the combinations'
         evidence, the confidence and its per-draw decisions.
     """
+    refined = f"iwan_cells_{threshold_cells(data)}"
+    evidence = friction_checked_stiffness(evidence, refined)
     result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
     errors, bic = result["errors"], result["bic"]
-    refined = f"iwan_cells_{threshold_cells(data)}"
     considered = refined in evidence and needs_threshold_cells(data, result, evidence)
     if (
         considered
@@ -576,12 +630,16 @@ def diagnose_configuration(
         refinement = {
             "model": name,
             "adopted": result["extended_models"]["microslip_power_law"] == name,
-            "rule": "adopted as the extended model when it lowers both the held-out error and the BIC of iwan",
+            "rule": (
+                "adopted as the extended model when it lowers both the held-out error and the BIC of "
+                "iwan and shows micro-slip's signature"
+            ),
             "heldout_error": errors[name]["error"],
             "bic": bic[name],
             "iwan_heldout_error": errors["iwan"]["error"],
             "iwan_bic": bic["iwan"],
             "cells": threshold_distribution(fits[name], data, scatter, context),
+            "signature": threshold_signature(fits[name], fits["iwan"], data),
             "standard_error": "Gauss-Newton, scaled by the fit cost and residuals over effective observations",
         }
     for entry in combinations.values():
@@ -597,6 +655,9 @@ def diagnose_configuration(
     cause, reason, base = result["cause"], result["reason"], result["baseline"]
     errors, bins, trend, candidates = result["errors"], result["bins"], result["trend"], result["candidates"]
     candidates["stiffness_nonlinearity"]["signature"] = signature
+    candidates["stiffness_nonlinearity"]["friction_explains_softening"] = friction_explains_softening(
+        evidence, f"iwan_cells_{threshold_cells(data)}"
+    )
     for entry in candidates.values():
         m = entry["model"]
         entry["in_sample_rms"] = float(np.sqrt(fits[m].cost))

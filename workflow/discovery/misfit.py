@@ -44,6 +44,7 @@ __all__ = [
     "OWN_SHAPE_SHARE",
     "MICROSLIP_ONSET",
     "microslip_signature",
+    "threshold_signature",
     "bin_span_in_s",
 ]
 
@@ -780,4 +781,32 @@ def microslip_signature(fit: FitResult, data: ConfigurationData, *, n_grid: int 
         "damping_exponent": exponent,
         "decades": decades,
         "shows_signature": bool(exponent < 1.0 and decades >= 1.0),
+    }
+
+
+def threshold_signature(cells: FitResult, power_law: FitResult, data: ConfigurationData) -> dict:
+    """Whether the Iwan joint with the slip thresholds from the data (``iwan_cells_<n>``,
+    alone) shows micro-slip's signature, read with the power law it refines.
+
+    The exponent is the thresholds' own (:func:`microslip_signature`): below 1, a spread
+    of thresholds, not a single-state joint. The span is theirs or the power law's: the
+    thresholds' free shape trades ``zeta0`` against the lowest thresholds, so where the
+    damping's rise starts near the bottom of the measured range the start of their rise
+    (from :data:`MICROSLIP_ONSET` of their ``zeta0``) may be put higher and span less
+    than the decade the data show; the power law, one exponent over every measured
+    amplitude, reads that span, and counts where it shows the signature itself.
+
+    Returns
+    -------
+    dict
+        ``damping_exponent`` and ``decades`` (the thresholds'), ``power_law`` (the power
+        law's :func:`microslip_signature`) and ``shows_signature`` (bool).
+    """
+    own, rigid = microslip_signature(cells, data), microslip_signature(power_law, data)
+    spread = own["damping_exponent"] is not None and own["damping_exponent"] < 1.0
+    return {
+        "damping_exponent": own["damping_exponent"],
+        "decades": own["decades"],
+        "power_law": rigid,
+        "shows_signature": bool(spread and (own["decades"] >= 1.0 or rigid["shows_signature"])),
     }
