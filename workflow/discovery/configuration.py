@@ -77,6 +77,9 @@ __all__ = [
     "fit_combinations",
     "judge_combinations",
     "needs_threshold_cells",
+    "passes_departure_gate",
+    "friction_explains_softening",
+    "friction_checked_stiffness",
     "conclude",
     "curve_led_start",
     "most_probable_verdict",
@@ -234,6 +237,21 @@ def fit_combinations(
         )
 
 
+def passes_departure_gate(result: Mapping, model: str) -> bool:
+    """Whether ``model`` passes, on all the data, the gate a candidate passes to depart from
+    the baseline without a significant misfit (:func:`workflow.discovery.decision.decide`):
+    its held-out error below ``CLEAR_GAIN`` of the baseline's, or what it removes beyond the
+    models' accuracy (:func:`~workflow.discovery.confidence.beyond_accuracy`)."""
+    base, errors = result["baseline"], result["errors"]
+    if errors[model]["error"] < CLEAR_GAIN * errors[base]["error"]:
+        return True
+    curve_squares = result["unit_curve_squares"]
+    all_units = np.ones((1, len(result["unit_weights"])))
+    return bool(
+        beyond_accuracy(curve_squares[base], curve_squares[model], result["unit_tolerance"], all_units)[0]
+    )
+
+
 def judge_combinations(
     data: ConfigurationData, result: dict, evidence: Mapping[str, ModelEvidence]
 ) -> tuple[dict[str, dict], list[VerdictOption]]:
@@ -271,19 +289,7 @@ def judge_combinations(
         ratio = errors[model]["error"] / errors[base]["error"]
         # where no single cause departs from the baseline, a combination must pass the same
         # gate as a single cause does (decision.decide): its own clear gain or accuracy margin
-        departs = (
-            verdict != "none"
-            or result["baseline_fails"]
-            or ratio < CLEAR_GAIN
-            or bool(
-                beyond_accuracy(
-                    result["unit_curve_squares"][base],
-                    result["unit_curve_squares"][model],
-                    result["unit_tolerance"],
-                    np.ones((1, len(result["unit_weights"]))),
-                )[0]
-            )
-        )
+        departs = verdict != "none" or result["baseline_fails"] or passes_departure_gate(result, model)
         eligible = test["named"] and departs and bic[model] < bic[base] and evidence[model].shows_signature
         key = verdict_key(causes)
         combinations[key] = {
@@ -326,32 +332,20 @@ def needs_threshold_cells(
     """Whether micro-slip may be represented by the Iwan joint with the slip thresholds
     from the data: the power law does not explain the data or predicts held-out data no
     better than the baseline (then it is no candidate, however closely it follows the
-    data it was fitted to), and micro-slip is the verdict,
-    the baseline's misfit is significant, or the thresholds from the data, where already
-    fitted (for the combinations), predict held-out data clearly better than the baseline
-    (the gate every candidate passes to depart from ``none``: their error below
-    ``CLEAR_GAIN`` of its, or what they remove beyond the models' accuracy). A patch joint's micro-slip is not one power law over the measured
-    decades: at the edge of its visible range the power law can lose to a candidate of
-    another cause, to none, or to the baseline itself where the thresholds from the data
-    beat them all; :func:`conclude` adopts them only where they lower both the held-out
+    data it was fitted to), and micro-slip is the verdict, the baseline's misfit is
+    significant, or the thresholds from the data, where already fitted (for the
+    combinations), predict held-out data better than the baseline and pass
+    :func:`passes_departure_gate`, the gate every candidate passes to depart from
+    ``none``. A patch joint's micro-slip is not one power law over the measured decades:
+    at the edge of its visible range the power law can lose to a candidate of another
+    cause, to none, or to the baseline itself where the thresholds from the data beat them
+    all; :func:`conclude` adopts them only where they lower both the held-out
     error and the BIC of the power law and show its signature."""
     cells = f"iwan_cells_{threshold_cells(data)}"
     errors = result["errors"]
     baseline_error = errors[result["baseline"]]["error"]
     clear = (
-        cells in errors
-        and errors[cells]["error"] < baseline_error
-        and (
-            errors[cells]["error"] < CLEAR_GAIN * baseline_error
-            or bool(
-                beyond_accuracy(
-                    result["unit_curve_squares"][result["baseline"]],
-                    result["unit_curve_squares"][cells],
-                    result["unit_tolerance"],
-                    np.ones((1, len(result["unit_weights"]))),
-                )[0]
-            )
-        )
+        cells in errors and errors[cells]["error"] < baseline_error and passes_departure_gate(result, cells)
     )
     power_law_falls_short = (
         errors["iwan"]["error"] >= baseline_error
