@@ -281,6 +281,34 @@ def test_a_softening_the_friction_with_thresholds_from_the_data_explains_is_no_s
     assert configuration["confidence"]["microslip_power_law"] >= 0.9, configuration["confidence"]
 
 
+def test_a_stiffness_the_thresholds_only_tie_keeps_its_signature_and_shares_the_confidence(tmp_path):
+    """Eight hits of a Dahl joint with a softening spring (0.42 in^2, the bench's random
+    placement, seed 2192: the mode seen at x0.27). No candidate explains the data: the
+    power law predicts held-out runs at 19.6 scatter units, the slip thresholds from the
+    data at 20.5 and the stiffness term at 20.7 (LuGre 37.7), while the stiffness term fits
+    the runs with far fewer parameters (BIC 176 against the thresholds' 295). The
+    thresholds predict no better than the spring as far as eight runs can tell, so they
+    are no evidence that friction explains the softening: the stiffness candidate keeps its
+    signature and, tied with micro-slip, shares the confidence, where the spring's
+    signature was withdrawn on the thresholds' 0.2 lead and micro-slip read 1.00 sure."""
+    from workflow.lab.hidden_effects import draw_mode1_gain
+
+    cause, seed = "stiffness_nonlinearity", 2192
+    _, out = generate_case(cause, seed, tmp_path, mode1_gain=draw_mode1_gain(cause, seed))
+    document = diagnose_campaign(campaign_segments(out), out.name)
+    configuration = next(iter(document["configurations"].values()))
+    evidence = configuration["evidence"]
+    stiffness = evidence["candidates"]["stiffness_nonlinearity"]
+    refinement = evidence["threshold_distribution"]
+    # a tie: each within the other's one-standard-error reach of held-out error
+    assert abs(refinement["heldout_error"] / stiffness["heldout_error"] - 1.0) < 0.05, (refinement, stiffness)
+    assert stiffness["bic"] < refinement["bic"], (stiffness, refinement)
+    assert not stiffness["friction_explains_softening"] and stiffness["shows_signature"], stiffness
+    confidence = configuration["confidence"]
+    assert confidence.get("stiffness_nonlinearity", 0.0) >= 0.3, confidence
+    assert max(confidence.values()) < 0.9, confidence
+
+
 def test_micro_slip_near_a_node_whose_power_law_predicts_no_better_than_the_baseline(tmp_path):
     """One hit of the lab's patch joint (1.21 in^2, the bench's random placement, seed
     2123), the sensor at x0.12 of the accelerometer: no test fails the baseline (LuGre,

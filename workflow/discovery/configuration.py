@@ -32,6 +32,7 @@ from workflow.discovery.decision import (
     confidence_draws,
     evaluate_decision,
     extended_model_of,
+    predicts_as_well,
     verdict_options,
 )
 from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate
@@ -356,9 +357,12 @@ def needs_threshold_cells(
     ) and power_law_falls_short
 
 
-def friction_explains_softening(evidence: Mapping[str, ModelEvidence], cells: str) -> bool:
+def friction_explains_softening(decision: Mapping, cells: str) -> bool:
     """Whether the Iwan joint with the slip thresholds from the data (``cells``, where
-    fitted) predicts held-out data at least as well as the stiffness candidate.
+    fitted) predicts held-out data at least as well as the stiffness candidate, by the
+    rule :func:`~workflow.discovery.decision.decide` chooses between candidates with: the
+    lower held-out error, and where the two predict as well as far as the data can tell
+    (:func:`~workflow.discovery.decision.predicts_as_well`), the lower BIC.
 
     The contract's signature of a stiffness nonlinearity is a frequency shift far more
     than the friction that fits the damping can explain. The stiffness candidate's own
@@ -366,23 +370,39 @@ def friction_explains_softening(evidence: Mapping[str, ModelEvidence], cells: st
     single-state (Dahl) friction; a joint of Jenkins elements with free thresholds is a
     friction whose damping and softening follow one backbone (Masing), and where it
     predicts both curves as well as the spring does, the softening is what the friction
-    that fits the damping explains.
+    that fits the damping explains. A tie in held-out error is no such evidence: there
+    the fewer parameters for the same fit decide, as between any two candidates.
+
+    Parameters
+    ----------
+    decision : mapping
+        :func:`~workflow.discovery.decision.evaluate_decision`'s result (``errors``,
+        ``bic``, ``unit_squares``, ``unit_weights``).
+    cells : str
+        The thresholds' model id.
     """
     stiffness = CAUSE_MODELS["stiffness_nonlinearity"]
-    return (
-        cells in evidence
-        and stiffness in evidence
-        and evidence[cells].heldout["error"] <= evidence[stiffness].heldout["error"]
-    )
+    errors, bic = decision["errors"], decision["bic"]
+    if cells not in errors or stiffness not in errors:
+        return False
+    cells_error, stiffness_error = errors[cells]["error"], errors[stiffness]["error"]
+    best = cells if cells_error <= stiffness_error else stiffness
+    other_error = stiffness_error if best == cells else cells_error
+    squares, weights = decision["unit_squares"][best], decision["unit_weights"]
+    if predicts_as_well(errors[best]["error"], squares, weights, other_error):
+        return bool(bic[cells] <= bic[stiffness])
+    return best == cells
 
 
 def friction_checked_stiffness(
-    evidence: Mapping[str, ModelEvidence], cells: str
+    evidence: Mapping[str, ModelEvidence], decision: Mapping, cells: str
 ) -> Mapping[str, ModelEvidence]:
     """``evidence`` with the stiffness candidate's signature withdrawn where
-    :func:`friction_explains_softening`."""
+    :func:`friction_explains_softening` (``decision``: the decision on ``evidence``)."""
     stiffness = CAUSE_MODELS["stiffness_nonlinearity"]
-    if not friction_explains_softening(evidence, cells) or not evidence[stiffness].shows_signature:
+    if stiffness not in evidence or not evidence[stiffness].shows_signature:
+        return evidence
+    if not friction_explains_softening(decision, cells):
         return evidence
     return {**evidence, stiffness: replace(evidence[stiffness], shows_signature=False)}
 
@@ -411,8 +431,11 @@ def conclude(
         evidence, the confidence and its per-draw decisions.
     """
     refined = f"iwan_cells_{threshold_cells(data)}"
-    evidence = friction_checked_stiffness(evidence, refined)
     result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
+    checked = friction_checked_stiffness(evidence, result, refined)
+    if checked is not evidence:
+        evidence = checked
+        result = evaluate_decision(data, evidence, envelope_significant=envelope_significant)
     errors, bic = result["errors"], result["bic"]
     considered = refined in evidence and needs_threshold_cells(data, result, evidence)
     if (
@@ -650,7 +673,7 @@ def diagnose_configuration(
     errors, bins, trend, candidates = result["errors"], result["bins"], result["trend"], result["candidates"]
     candidates["stiffness_nonlinearity"]["signature"] = signature
     candidates["stiffness_nonlinearity"]["friction_explains_softening"] = friction_explains_softening(
-        evidence, f"iwan_cells_{threshold_cells(data)}"
+        result, f"iwan_cells_{threshold_cells(data)}"
     )
     for entry in candidates.values():
         m = entry["model"]

@@ -44,6 +44,7 @@ __all__ = [
     "BASELINE_MODELS",
     "RUN_ORDER_TESTS",
     "BETWEEN_RUN_CAUSES",
+    "predicts_as_well",
     "heldout_gain_t",
     "parsimonious",
     "CLEAR_GAIN",
@@ -199,10 +200,12 @@ def decide(
             "parameters (BIC, or a run drift's held-out gain across runs) and shows its cause's signature"
         )
     leader = min(eligible, key=lambda c: eligible[c]["heldout_error"])
-    reach = eligible[leader]["heldout_error"] ** 2
-    if unit_squares is not None and unit_weights is not None:
-        reach += heldout_standard_error(unit_squares[leader], unit_weights)
-    near = {c: v for c, v in eligible.items() if v["heldout_error"] ** 2 <= reach}
+    best_squares = None if unit_squares is None else unit_squares[leader]
+    near = {
+        c: v
+        for c, v in eligible.items()
+        if predicts_as_well(eligible[leader]["heldout_error"], best_squares, unit_weights, v["heldout_error"])
+    }
     best = min(near, key=lambda c: near[c]["bic"])
     v = eligible[best]
     if v["residual_significant"] and v["heldout_error"] >= RESIDUAL_GAIN * baseline_error:
@@ -215,6 +218,31 @@ def decide(
     return best, (
         f"{why}; {best} has the lowest held-out error among candidates that also pay for their parameters"
     )
+
+
+def predicts_as_well(
+    best_error: float,
+    best_unit_squares: np.ndarray | None,
+    unit_weights: np.ndarray | None,
+    error: float,
+) -> bool:
+    """Whether a model whose held-out error is ``error`` predicts as well as the best one
+    as far as the data can tell: its squared error within one standard error of the
+    best's squared error (the one-standard-error rule of cross-validation,
+    :func:`heldout_standard_error` over the units of evidence). Without the units only
+    equal errors tie.
+
+    Examples
+    --------
+    >>> predicts_as_well(1.0, np.array([1.0, 1.4, 0.6]), np.ones(3), 1.1)
+    True
+    >>> predicts_as_well(1.0, np.array([1.0, 1.4, 0.6]), np.ones(3), 1.2)
+    False
+    """
+    reach = best_error**2
+    if best_unit_squares is not None and unit_weights is not None:
+        reach += heldout_standard_error(best_unit_squares, unit_weights)
+    return error**2 <= reach
 
 
 def heldout_gain_t(
