@@ -28,6 +28,7 @@ outcome = diagnosed_outcome(
     response_quantity=campaign.response.quantity,
     settings=DiscoverySettings(**snakemake.params.discovery),
     segment_cycles=decay.segment_cycles,
+    segment_overlap=decay.segment_overlap,
 )
 diagnosis = outcome.diagnosis
 if diagnosis is None:

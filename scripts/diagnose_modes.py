@@ -22,6 +22,7 @@ segments = segments[
     segments["channel"].isin(campaign.response.channel_names() if channel is None else [channel])
 ]
 runs = read_table(snakemake.input.runs)
+decay = AnalysisSettings(**snakemake.params.analysis)
 folder = Path(snakemake.output[0])
 folder.mkdir(parents=True, exist_ok=True)
 for index, mode_hz in enumerate(sorted(segments["mode_hz"].dropna().unique())):
@@ -33,7 +34,8 @@ for index, mode_hz in enumerate(sorted(segments["mode_hz"].dropna().unique())):
         configuration,
         response_quantity=campaign.response.quantity,
         settings=DiscoverySettings(**snakemake.params.discovery),
-        segment_cycles=AnalysisSettings(**snakemake.params.analysis).segment_cycles,
+        segment_cycles=decay.segment_cycles,
+        segment_overlap=decay.segment_overlap,
     )
     verdict = outcome.skipped if outcome.diagnosis is None else outcome.diagnosis.document["cause"]
     seen_by = "every channel" if channel is None else f"channel {channel!r}"

@@ -576,3 +576,22 @@ def test_none_is_as_sure_as_the_data_rule_out_a_departure(ruled_out):
     np.testing.assert_array_equal(p["microslip_power_law+quadratic_damping"], 0.0)
     np.testing.assert_allclose(sum(p.values()), 1.0, rtol=1e-12)
     np.testing.assert_allclose(ratio, 1.0, rtol=1e-12)
+
+
+def test_draws_whose_envelopes_are_no_single_mode_decay_are_unknown_and_the_others_decide():
+    """Per-draw envelope verdicts: in the draws where the envelopes are no single-mode
+    decay every probability goes to ``unknown`` at the best tried model's ratio; the other
+    draws are decided as without the envelope test, to the bit."""
+    ev = channel({"dahl": 1.0, "dahl_stiffness": 0.4}, 0.1, seed=31)
+    draws = dirichlet_unit_weights(60, N_UNITS, np.random.default_rng(9))
+    options = [VerdictOption("stiffness_nonlinearity", "dahl_stiffness")]
+    structure = np.arange(60) % 3 == 0
+    rule = {**RULE, "envelope_structure": structure}
+    p, ratio = soft_decisions(ev, ["dahl"], options, baseline_fails=False, draws=draws, **rule)
+    free, free_ratio = soft_decisions(ev, ["dahl"], options, baseline_fails=False, draws=draws, **RULE)
+    _, error = log_density(ev, ["dahl", "dahl_stiffness"], draws)
+    assert free["stiffness_nonlinearity"].min() == 1.0
+    np.testing.assert_array_equal(p["unknown"], np.where(structure, 1.0, free["unknown"]))
+    np.testing.assert_array_equal(p["stiffness_nonlinearity"], np.where(structure, 0.0, 1.0))
+    np.testing.assert_allclose(ratio, np.where(structure, error[1] / error[0], free_ratio), rtol=1e-12)
+    assert mean_probabilities(p)["unknown"] == pytest.approx(structure.mean())

@@ -193,6 +193,7 @@ def diagnose_configurations(
     response_quantity: str | Mapping[str, str] = "acceleration",
     settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
     runs: pd.DataFrame | None = None,
 ) -> tuple[FitContext, dict[str, ConfigurationDiagnosis], dict[str, str]]:
     """Every configuration's diagnosis in one process (the workflow runs one job each).
@@ -208,9 +209,10 @@ def diagnose_configurations(
         configurations or per configuration: the envelope of an acceleration record
         decays differently from a displacement's when the frequency changes.
     settings : DiscoverySettings, optional
-    segment_cycles : float
-        Log-decrement segment length in cycles (config ``analysis.segment_cycles``),
-        for the envelope-structure check.
+    segment_cycles, segment_overlap : float
+        Log-decrement segment length in cycles and overlap (config
+        ``analysis.segment_cycles``, ``analysis.segment_overlap``), for the
+        envelope-structure check.
     runs : DataFrame, optional
         The runs table (results/tables/runs.parquet): its ``record_start`` orders each
         configuration's runs for the run-order tests; without it, file-name order.
@@ -238,6 +240,7 @@ def diagnose_configurations(
             response_quantity=quantity,
             settings=settings,
             segment_cycles=segment_cycles,
+            segment_overlap=segment_overlap,
             record_start=record_starts(runs, name),
         )
         if isinstance(outcome, str):

@@ -18,6 +18,9 @@ Its confidence carries the two uncertainties behind it:
   (:func:`workflow.discovery.misfit.departure_ruled_out`, from the baseline's binned
   residuals); the rest of its probability is spread evenly over ``none`` and the single
   causes (:func:`unseen`): a sensor near a node may see nothing, never be sure of nothing.
+* **Are these single-mode decays?** The envelope test is re-taken on reweightings of each
+  run's segments (:func:`workflow.discovery.misfit.envelope_structure_draws`); the draws
+  in which it fails are ``unknown``.
 * **Which mechanism?** Within each reweighting the candidates share the departure by
   pseudo-BMA+ weights (Yao et al. 2018): the held-out log predictive density of each
   candidate, a Gaussian with the candidate's own discrepancy variance (its squared
@@ -234,7 +237,7 @@ def soft_decisions(
     options: Sequence[VerdictOption],
     *,
     baseline_fails: bool | np.ndarray,
-    envelope_structure: bool,
+    envelope_structure: bool | np.ndarray,
     clear_gain: float,
     residual_gain: float,
     draws: np.ndarray,
@@ -249,7 +252,8 @@ def soft_decisions(
     predicts clearly better: its error below ``clear_gain`` of the baseline's, or what it
     removes beyond the models' accuracy (:func:`beyond_accuracy`). An option that leaves a
     significant misfit and does not reach ``residual_gain`` passes its share to
-    ``unknown``. Not single-mode decays: ``unknown``. The same rule as
+    ``unknown``. Not single-mode decays (``envelope_structure``: one verdict, or one per
+    draw, :func:`~workflow.discovery.misfit.envelope_structure_draws`): ``unknown``. The same rule as
     :func:`workflow.discovery.decision.decide`, with the tie-break by BIC replaced by the
     weights.
 
@@ -275,13 +279,20 @@ def soft_decisions(
     fails = np.broadcast_to(np.asarray(baseline_fails, dtype=bool), (n_draws,))
     all_errors = np.array([error[row[o.model]] for o in options]) if options else base[None, :]
     unknown_ratio = all_errors.min(axis=0) / base
-    if envelope_structure:
+    structure = np.broadcast_to(np.asarray(envelope_structure, dtype=bool), (n_draws,))
+    if structure.all():
         p["unknown"][:] = 1.0
         return p, unknown_ratio
+
+    def no_single_mode(ratio: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        for k in p:
+            p[k] = np.where(structure, 1.0 if k == "unknown" else 0.0, p[k])
+        return p, np.where(structure, unknown_ratio, ratio)
+
     if not usable:
         p["unknown"] += fails
         p["none"] += ~fails
-        return p, p["none"] + p["unknown"] * unknown_ratio
+        return no_single_mode(p["none"] + p["unknown"] * unknown_ratio)
     opt_error = np.array([error[row[o.model]] for o in usable])  # (K, B)
     better = opt_error < base
     for k, o in enumerate(usable):
@@ -325,7 +336,7 @@ def soft_decisions(
         p["unknown"] += np.where(to_unknown, share, 0.0)
         p[o.key] += np.where(to_unknown, 0.0, share)
         ratio += np.where(to_unknown, 0.0, share * ratio_k)
-    return p, ratio + p["none"] + p["unknown"] * unknown_ratio
+    return no_single_mode(ratio + p["none"] + p["unknown"] * unknown_ratio)
 
 
 def unseen(p: dict[str, np.ndarray], options: Sequence[VerdictOption], ruled_out: float) -> None:

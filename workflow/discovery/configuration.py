@@ -40,6 +40,7 @@ from workflow.discovery.microslip import refine_microslip, threshold_cells, thre
 from workflow.discovery.misfit import (
     binned_discrepancy,
     envelope_structure,
+    envelope_structure_draws,
     explains_data,
     microslip_signature,
     run_order_trend,
@@ -407,12 +408,18 @@ def friction_checked_stiffness(
     return {**evidence, stiffness: replace(evidence[stiffness], shows_signature=False)}
 
 
+ENVELOPE_STREAM = 2
+"""Random stream of the envelope test's reweightings, apart from the held-out units'."""
+
+
 def conclude(
     data: ConfigurationData,
     evidence: Mapping[str, ModelEvidence],
     *,
     envelope_significant: bool,
     settings: DiscoverySettings = DiscoverySettings(),
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
 ) -> tuple[dict, dict[str, dict], dict[str, float], list[dict]]:
     """The verdict and its confidence on every model fitted (no fit is made here).
 
@@ -420,8 +427,10 @@ def conclude(
     Iwan joint with the slip thresholds from the data (``iwan_cells_N`` in ``evidence``)
     becomes micro-slip's extended model when it lowers both the held-out error and the BIC
     of ``iwan``; the combinations in ``evidence`` are judged (:func:`judge_combinations`);
-    the confidence (:func:`confidence_draws`); the verdict is the most probable one of the
-    confidence (:func:`most_probable_verdict`).
+    the confidence (:func:`confidence_draws`, the envelope test re-taken on reweightings
+    of each run's segments, :func:`envelope_structure_draws`, with the log decrement's
+    ``segment_cycles`` and ``segment_overlap``); the verdict is the most probable one of
+    the confidence (:func:`most_probable_verdict`).
 
     Returns
     -------
@@ -454,10 +463,17 @@ def conclude(
     result["threshold_cells"] = refined if considered else None
     result["verdict"] = result["cause"]
     combinations, combination_options = judge_combinations(data, result, evidence)
+    structure = envelope_structure_draws(
+        data,
+        settings.resamples,
+        np.random.default_rng([settings.seed, ENVELOPE_STREAM]),
+        segment_cycles=segment_cycles,
+        segment_overlap=segment_overlap,
+    )
     confidence, resamples = confidence_draws(
         result,
         verdict_options(result, combination_options),
-        envelope_significant=envelope_significant,
+        envelope_significant=structure,
         n_draws=settings.resamples,
         seed=settings.seed,
     )
@@ -563,8 +579,11 @@ def diagnose_configuration(
     *,
     settings: DiscoverySettings = DiscoverySettings(),
     segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
 ) -> ConfigurationDiagnosis:
-    """Baselines, discrepancy, candidates, verdict and its confidence for one configuration."""
+    """Baselines, discrepancy, candidates, verdict and its confidence for one configuration
+    (``segment_cycles``, ``segment_overlap``: the log decrement's segments, for the
+    envelope test)."""
     scatter = scatter_of(data)
     fits: dict[str, FitResult] = {}
     cv: dict[str, dict] = {}
@@ -639,7 +658,12 @@ def diagnose_configuration(
         tried=tried,
     )
     result, combinations, confidence, resamples = conclude(
-        data, evidence, envelope_significant=envelope_significant, settings=settings
+        data,
+        evidence,
+        envelope_significant=envelope_significant,
+        settings=settings,
+        segment_cycles=segment_cycles,
+        segment_overlap=segment_overlap,
     )
     refinement = None
     if result["threshold_cells"]:
@@ -785,6 +809,7 @@ def diagnose_configuration_segments(
     response_quantity: str = "acceleration",
     settings: DiscoverySettings | None = None,
     segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
     record_start: Mapping[str, str] | None = None,
 ) -> ConfigurationDiagnosis | str:
     """:func:`diagnose_configuration` of configuration ``name`` of the segments table, or
@@ -800,8 +825,8 @@ def diagnose_configuration_segments(
     response_quantity : str
         The configuration's recorded quantity (campaign.yaml ``response.quantity``).
     settings : DiscoverySettings, optional
-    segment_cycles : float
-        Log-decrement segment length, cycles.
+    segment_cycles, segment_overlap : float
+        Log-decrement segment length (cycles) and overlap (fraction).
     record_start : mapping, optional
         Run name -> recording start (:func:`record_starts`): the run order.
     """
@@ -809,5 +834,9 @@ def diagnose_configuration_segments(
     if data.n < 12 or np.unique(np.round(np.log10(data.velocity_in_s), 2)).size < 4:
         return f"only {data.n} usable segments: too few to fit and validate models"
     return diagnose_configuration(
-        data, context, settings=settings or DiscoverySettings(), segment_cycles=segment_cycles
+        data,
+        context,
+        settings=settings or DiscoverySettings(),
+        segment_cycles=segment_cycles,
+        segment_overlap=segment_overlap,
     )

@@ -474,7 +474,7 @@ def confidence_draws(
     result: Mapping,
     options: Sequence[VerdictOption],
     *,
-    envelope_significant: bool,
+    envelope_significant: bool | np.ndarray,
     n_draws: int,
     seed: int,
 ) -> tuple[dict[str, float], list[dict]]:
@@ -487,7 +487,9 @@ def confidence_draws(
         ``n_eff``, ``baseline_fails``).
     options : sequence of VerdictOption
         :func:`verdict_options`.
-    envelope_significant : bool
+    envelope_significant : bool or ndarray of bool, shape (n_draws,)
+        :func:`~workflow.discovery.misfit.envelope_structure`'s verdict, or its verdict per
+        draw (:func:`~workflow.discovery.misfit.envelope_structure_draws`).
     n_draws, seed : int
         Bayesian-bootstrap reweightings of the units, and their random seed.
 

@@ -38,6 +38,8 @@ __all__ = [
     "ENVELOPE_DEPARTURE_LIMIT",
     "proportional_departure",
     "envelope_structure",
+    "weighted_nonnegative_line",
+    "envelope_structure_draws",
     "EXPLAINS_LIMIT",
     "explains_data",
     "stiffness_signature",
@@ -549,6 +551,28 @@ def proportional_departure(amplitude: np.ndarray, departure: np.ndarray) -> floa
     return float(np.sqrt(d2))
 
 
+def _upper_halves(data: ConfigurationData, segment_cycles: float) -> list[tuple[np.ndarray, float]]:
+    """Each run of each channel with 3 segments or more: the indices of its upper half of
+    amplitudes (3 at least) and the median decay of ln-envelope across a segment there."""
+    x = np.log10(data.velocity_in_s)
+    fall = 2.0 * np.pi * segment_cycles * np.exp(robust_trend(x, np.log(data.zeta), 3))
+    channel = np.zeros(data.n, dtype=int) if data.channel_index is None else data.channel_index
+    halves = []
+    # each run of each channel: pooled sensors see one decay, each through its own noise
+    for group in np.unique(np.column_stack([data.run_index, channel]), axis=0):
+        m = np.flatnonzero((data.run_index == group[0]) & (channel == group[1]))
+        if m.size < 3:
+            continue
+        top = m[np.argsort(data.velocity_in_s[m])[::-1][: max(3, m.size // 2)]]
+        halves.append((top, float(np.median(fall[top]))))
+    return halves
+
+
+def _majority(over: np.ndarray) -> np.ndarray:
+    """Whether the runs over the limit are at least half of those tested (axis 0)."""
+    return over.sum(axis=0) >= max(1, int(np.ceil(over.shape[0] / 2)))
+
+
 def envelope_structure(
     data: ConfigurationData, *, segment_cycles: float = AnalysisSettings.segment_cycles
 ) -> dict | None:
@@ -565,7 +589,8 @@ def envelope_structure(
     then the segments' damping and frequency are dominated by that disturbance and no
     single-mode model applies. A sensor near a node of the mode sees it through noise even
     at its highest amplitudes (there the departure of a plain decay grew from 0.01 to 0.3
-    of the fall over the upper half): noise, not structure.
+    of the fall over the upper half): noise, not structure. How sure that verdict is:
+    :func:`envelope_structure_draws`.
 
     Parameters
     ----------
@@ -583,31 +608,103 @@ def envelope_structure(
     """
     if data.fit_rms is None:
         return None
-    x = np.log10(data.velocity_in_s)
-    fall = 2.0 * np.pi * segment_cycles * np.exp(robust_trend(x, np.log(data.zeta), 3))
-    channel = np.zeros(data.n, dtype=int) if data.channel_index is None else data.channel_index
-    per_run = []
-    # each run of each channel: pooled sensors see one decay, each through its own noise
-    for group in np.unique(np.column_stack([data.run_index, channel]), axis=0):
-        m = np.flatnonzero((data.run_index == group[0]) & (channel == group[1]))
-        if m.size < 3:
-            continue
-        top = m[np.argsort(data.velocity_in_s[m])[::-1][: max(3, m.size // 2)]]
-        departure = proportional_departure(data.velocity_in_s[top], data.fit_rms[top])
-        per_run.append(departure / float(np.median(fall[top])))
-    if not per_run:
+    halves = _upper_halves(data, segment_cycles)
+    if not halves:
         return None
-    per_run = np.array(per_run)
-    over = int(np.sum(per_run > ENVELOPE_DEPARTURE_LIMIT))
+    per_run = np.array(
+        [proportional_departure(data.velocity_in_s[top], data.fit_rms[top]) / fall for top, fall in halves]
+    )
+    over = per_run > ENVELOPE_DEPARTURE_LIMIT
     return {
         "departure_ratio": float(np.median(per_run)),
-        "runs_over_limit": over,
+        "runs_over_limit": int(np.sum(over)),
         "runs_tested": int(per_run.size),
         "limit": ENVELOPE_DEPARTURE_LIMIT,
         "segment_cycles": float(segment_cycles),
         "median_fit_rms": float(np.median(data.fit_rms)),
-        "significant": bool(over >= max(1, int(np.ceil(per_run.size / 2)))),
+        "significant": bool(_majority(over[:, None])[0]),
     }
+
+
+def weighted_nonnegative_line(s: np.ndarray, y: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Intercepts of the non-negative weighted least-squares lines ``y = a + b s``
+    (``a, b >= 0``), one per row of ``weights``.
+
+    The two-coefficient problem solved in closed form for many weightings at once: the
+    unconstrained solution where both coefficients are non-negative, else the better of
+    the two one-coefficient fits (each clipped at 0).
+
+    Parameters
+    ----------
+    s, y : ndarray, shape (n,)
+    weights : ndarray, shape (B, n)
+        Non-negative weights, each row with a positive sum.
+
+    Returns
+    -------
+    ndarray, shape (B,)
+        ``a`` per row.
+
+    Examples
+    --------
+    >>> s = np.array([1.0, 2.0, 4.0])
+    >>> weighted_nonnegative_line(s, 0.5 + 0.25 * s, np.ones((1, 3))).round(12).tolist()
+    [0.5]
+    >>> weighted_nonnegative_line(s, 3.0 - s, np.ones((1, 3))).round(12).tolist()  # b < 0: a alone
+    [0.666666666667]
+    """
+    w_sum, ws, wss = weights.sum(axis=1), weights @ s, weights @ (s * s)
+    wy, wsy, wyy = weights @ y, weights @ (s * y), weights @ (y * y)
+    det = w_sum * wss - ws * ws
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (wss * wy - ws * wsy) / det
+        b = (w_sum * wsy - ws * wy) / det
+    a_alone = np.maximum(wy / w_sum, 0.0)
+    b_alone = np.maximum(wsy / wss, 0.0)
+    # weighted squared residuals of the two one-coefficient fits
+    sse_a = wyy - 2.0 * a_alone * wy + a_alone**2 * w_sum
+    sse_b = wyy - 2.0 * b_alone * wsy + b_alone**2 * wss
+    both = (det > 0) & (a >= 0.0) & (b >= 0.0)
+    return np.where(both, a, np.where(sse_a <= sse_b, a_alone, 0.0))
+
+
+def envelope_structure_draws(
+    data: ConfigurationData,
+    n_draws: int,
+    rng: np.random.Generator,
+    *,
+    segment_cycles: float = AnalysisSettings.segment_cycles,
+    segment_overlap: float = AnalysisSettings.segment_overlap,
+) -> np.ndarray:
+    """:func:`envelope_structure`'s verdict on Bayesian-bootstrap reweightings of each
+    run's segments, shape (n_draws,) of bool.
+
+    The proportional departure of a run's upper half is estimated from a few tens of
+    segments whose line-fit residuals, under noise, scatter by a factor of several from
+    one segment to the next: at a sensor near a node, whose upper half lies only some
+    tens of times above its noise floor, that estimate alone can reach the limit. Each
+    draw refits it (:func:`weighted_nonnegative_line` on ``fit_rms^2`` against
+    ``(A_max / A)^2``) with Dirichlet weights on the segments of concentration
+    ``1 - segment_overlap``: segments overlapping by that fraction carry ``n (1 -
+    overlap)`` segments' worth of independent samples, and a reweighted mean then varies
+    as one of that many. The verdict (at least half the runs over the limit) is re-taken
+    per draw: its share of the draws is how sure the data are of the structure.
+    """
+    if data.fit_rms is None:
+        return np.zeros(n_draws, dtype=bool)
+    halves = _upper_halves(data, segment_cycles)
+    if not halves:
+        return np.zeros(n_draws, dtype=bool)
+    concentration = max(1.0 - segment_overlap, 0.05)
+    over = []
+    for top, fall in halves:
+        amplitude = data.velocity_in_s[top]
+        weights = rng.dirichlet(np.full(top.size, concentration), size=n_draws)
+        square = weighted_nonnegative_line(
+            (amplitude.max() / amplitude) ** 2, data.fit_rms[top] ** 2, weights
+        )
+        over.append(np.sqrt(square) / fall > ENVELOPE_DEPARTURE_LIMIT)
+    return _majority(np.array(over))
 
 
 EXPLAINS_LIMIT = 2.0

@@ -30,7 +30,7 @@ def diagnosed_outcome(segments, runs, configuration: str, **options) -> Diagnose
     configuration (their fit context is the campaign's), or why it was not diagnosed.
 
     ``options`` go to :func:`~workflow.discovery.configuration.diagnose_configuration_segments`
-    (``response_quantity``, ``settings``, ``segment_cycles``).
+    (``response_quantity``, ``settings``, ``segment_cycles``, ``segment_overlap``).
     """
     context = campaign_fit_context(segments)
     rows = (segments["configuration"].astype(str) == configuration).to_numpy().nonzero()[0]
