@@ -161,3 +161,25 @@ def test_held_out_residuals_are_scored_in_the_scatter_and_the_offsets_uncertaint
     ln_zeta, rel_f = heldout_scales(residuals, scatter)
     np.testing.assert_allclose(ln_zeta, [0.05, 0.05])
     np.testing.assert_allclose(rel_f, [5e-5, 4e-5])
+
+
+def test_a_held_out_run_is_scored_up_to_a_quarter_decade_above_the_runs_it_is_predicted_from():
+    """Three runs to 1, 2 and 8 in/s: held out, the third is predicted from runs that reach
+    2 in/s, so its segments above 2 x 10^(1/4) = 3.56 in/s measure an extrapolation and are
+    not scored; the others reach below the rest's top. Each channel on its own scale: a
+    second channel seeing the same run at a tenth is judged against its own runs."""
+    from workflow.discovery.heldout import beyond_reach
+
+    velocity = np.concatenate(
+        [np.geomspace(1.0, 0.1, 10), np.geomspace(2.0, 0.1, 10), np.geomspace(8.0, 0.1, 10)]
+    )
+    run = np.repeat([0, 1, 2], 10)
+    data = data_of(velocity, run)
+    held = run == 2
+    expected = held & (velocity > 2.0 * 10**0.25)
+    np.testing.assert_array_equal(beyond_reach(data, held), expected)
+    assert not beyond_reach(data, run == 1).any() and not beyond_reach(data, run == 0).any()
+    pooled = data_of(
+        np.concatenate([velocity, 0.1 * velocity]), np.tile(run, 2), channel_index=np.repeat([0, 1], 30)
+    )
+    np.testing.assert_array_equal(beyond_reach(pooled, np.tile(held, 2)), np.tile(expected, 2))
