@@ -281,32 +281,39 @@ def test_a_softening_the_friction_with_thresholds_from_the_data_explains_is_no_s
     assert configuration["confidence"]["microslip_power_law"] >= 0.9, configuration["confidence"]
 
 
-def test_a_stiffness_the_thresholds_only_tie_keeps_its_signature_and_shares_the_confidence(tmp_path):
-    """Eight hits of a Dahl joint with a softening spring (0.42 in^2, the bench's random
-    placement, seed 2192: the mode seen at x0.27). No candidate explains the data: the
-    power law predicts held-out runs at 19.6 scatter units, the slip thresholds from the
-    data at 20.5 and the stiffness term at 20.7 (LuGre 37.7), while the stiffness term fits
-    the runs with far fewer parameters (BIC 176 against the thresholds' 295). The
-    thresholds predict no better than the spring as far as eight runs can tell, so they
-    are no evidence that friction explains the softening: the stiffness candidate keeps its
-    signature and, tied with micro-slip, shares the confidence, where the spring's
-    signature was withdrawn on the thresholds' 0.2 lead and micro-slip read 1.00 sure."""
-    from workflow.lab.hidden_effects import draw_mode1_gain
+def softening_decision(
+    cells_error: float, stiffness_error: float, cells_bic: float, stiffness_bic: float
+) -> dict:
+    """A decision's held-out errors, BIC and units for the thresholds (``iwan_cells_5``)
+    and the stiffness term: eight runs of unit weight, each model's per-run squared
+    errors its squared error times factors 0.6-1.4 (the same for both)."""
+    spread = np.linspace(0.6, 1.4, 8)
+    errors = {"iwan_cells_5": cells_error, "dahl_stiffness": stiffness_error}
+    return {
+        "errors": {m: {"error": e} for m, e in errors.items()},
+        "bic": {"iwan_cells_5": cells_bic, "dahl_stiffness": stiffness_bic},
+        "unit_squares": {m: e**2 * spread for m, e in errors.items()},
+        "unit_weights": np.ones(8),
+    }
 
-    cause, seed = "stiffness_nonlinearity", 2192
-    _, out = generate_case(cause, seed, tmp_path, mode1_gain=draw_mode1_gain(cause, seed))
-    document = diagnose_campaign(campaign_segments(out), out.name)
-    configuration = next(iter(document["configurations"].values()))
-    evidence = configuration["evidence"]
-    stiffness = evidence["candidates"]["stiffness_nonlinearity"]
-    refinement = evidence["threshold_distribution"]
-    # a tie: each within the other's one-standard-error reach of held-out error
-    assert abs(refinement["heldout_error"] / stiffness["heldout_error"] - 1.0) < 0.05, (refinement, stiffness)
-    assert stiffness["bic"] < refinement["bic"], (stiffness, refinement)
-    assert not stiffness["friction_explains_softening"] and stiffness["shows_signature"], stiffness
-    confidence = configuration["confidence"]
-    assert confidence.get("stiffness_nonlinearity", 0.0) >= 0.3, confidence
-    assert max(confidence.values()) < 0.9, confidence
+
+def test_the_friction_explains_a_softening_only_where_it_predicts_as_well_by_the_decisions_rule():
+    """The thresholds from the data explain a softening where they predict held-out data
+    better than the stiffness term beyond one standard error, or within it with a lower
+    BIC, as the decision chooses between candidates. The stiffness seed 2192 of the lab
+    (8 runs, before a harder-hit run was scored only within reach): thresholds 20.5, the
+    spring 20.7 held-out scatter units, BIC 295 against 176; one standard error of 20.5^2
+    over eight runs spread 0.6-1.4 is 42 against a difference of 8: a tie, the spring's
+    fewer parameters for the same fit decide, the softening is no friction's."""
+    from workflow.discovery.configuration import friction_explains_softening
+
+    cells = "iwan_cells_5"
+    assert not friction_explains_softening(softening_decision(20.5, 20.7, 295.0, 176.0), cells)
+    assert friction_explains_softening(softening_decision(20.5, 20.7, 170.0, 176.0), cells)
+    assert friction_explains_softening(softening_decision(20.7, 20.5, 170.0, 176.0), cells)
+    assert friction_explains_softening(softening_decision(1.1, 8.1, 295.0, 176.0), cells)
+    assert not friction_explains_softening(softening_decision(8.1, 1.1, 170.0, 176.0), cells)
+    assert not friction_explains_softening(softening_decision(1.1, 8.1, 1.0, 1.0), "iwan_cells_4")
 
 
 def test_micro_slip_near_a_node_whose_power_law_predicts_no_better_than_the_baseline(tmp_path):

@@ -265,7 +265,10 @@ def judge_combinations(
     the baseline where the single verdict is ``none``, shows, where it has a stiffness term,
     the stiffness signature and micro-slip's on its joint, predicts held-out data better
     than the single verdict's model, and does not leave a significant misfit with less than
-    ``RESIDUAL_GAIN`` of the baseline's error; among several, the lower held-out error.
+    ``RESIDUAL_GAIN`` of the baseline's error; among several, the lower held-out error, and
+    among those within one standard error of the best's
+    (:func:`~workflow.discovery.decision.predicts_as_well`), the lower BIC, as between
+    single causes.
 
     Returns
     -------
@@ -319,7 +322,21 @@ def judge_combinations(
         and not (v["residual_significant"] and v["ratio_to_baseline"] >= RESIDUAL_GAIN)
     ]
     if named:
-        best = min(named, key=lambda k: combinations[k]["heldout_error"])
+        # the rule decide() chooses among candidates by: the lowest held-out error, and among
+        # those that predict as well as far as the data can tell, the lowest BIC
+        leader = min(named, key=lambda k: combinations[k]["heldout_error"])
+        squares = result["unit_squares"][combinations[leader]["model"]]
+        near = [
+            k
+            for k in named
+            if predicts_as_well(
+                combinations[leader]["heldout_error"],
+                squares,
+                result["unit_weights"],
+                combinations[k]["heldout_error"],
+            )
+        ]
+        best = min(near, key=lambda k: combinations[k]["bic"])
         result["verdict"] = best
         result["reason"] = (
             f"{result['reason']}; two mechanisms, {combinations[best]['model']}, predict better still "
