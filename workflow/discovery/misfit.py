@@ -544,11 +544,8 @@ def proportional_departure(amplitude: np.ndarray, departure: np.ndarray) -> floa
     >>> round(proportional_departure(a, 0.02 / a), 6), round(proportional_departure(a, np.full(20, 0.2)), 6)
     (0.0, 0.2)
     """
-    from scipy import optimize
-
     scale = (amplitude.max() / amplitude) ** 2
-    (d2, _), _ = optimize.nnls(np.column_stack([np.ones_like(scale), scale]), departure**2)
-    return float(np.sqrt(d2))
+    return float(np.sqrt(weighted_nonnegative_line(scale, departure**2, np.ones((1, scale.size)))[0]))
 
 
 def _upper_halves(data: ConfigurationData, segment_cycles: float) -> list[tuple[np.ndarray, float]]:
