@@ -29,6 +29,12 @@ CHEAP = [
 ]
 """--config values that make the friction and candidate fits quick (tests of outputs, not of fits)."""
 
+CHEAP_BUT_DISCOVERY = [value for value in CHEAP if not value.startswith("discovery=")]
+""":data:`CHEAP` with the discovery's candidates fitted as the workflow fits them (tests of
+verdicts and their confidence: with one local start a baseline can stop short of its
+optimum, and what an extension then "removes" is the baseline's fit, not the data's
+physics)."""
+
 
 def checksums(folder: Path) -> dict[str, str]:
     """SHA-256 of every file below ``folder``, by relative path."""

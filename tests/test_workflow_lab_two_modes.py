@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from helpers import CHEAP, run_snakemake
+from helpers import CHEAP_BUT_DISCOVERY, run_snakemake
 
 from workflow.lab.campaign_files import truth_path
 from workflow.lab.campaigns import generate_campaign
@@ -43,7 +43,9 @@ def lab_run(tmp_path_factory):
         nonlinear_modes=2,
     )
     work = root / "work"
-    done = run_snakemake(work, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP, timeout=900)
+    done = run_snakemake(
+        work, "-c2", "all", "--config", f"campaign={campaign}", *CHEAP_BUT_DISCOVERY, timeout=900
+    )
     assert done.returncode == 0, done.stderr[-4000:]
     truths = [json.loads(truth_path(campaign, mode).read_text()) for mode in (1, 2)]
     listed_hz = yaml.safe_load((campaign / "campaign.yaml").read_text())["modes_hz"]
