@@ -101,7 +101,8 @@ def mutmut_config(module: str, tests: list[str], selection: str) -> str:
         "pytest_add_cli_args_test_selection =",
     ]
     lines += [f"    {test}" for test in tests]
-    lines += ["pytest_add_cli_args =", "    -p", "    no:cacheprovider"]
+    # mutmut runs its own children: each runs the tests in one process (no xdist workers)
+    lines += ["pytest_add_cli_args =", "    -p", "    no:cacheprovider", "    -n", "    0"]
     lines += ["    -k", f"    {selection}"] if selection else []
     return "\n".join(lines + [""])
 
