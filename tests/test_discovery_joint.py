@@ -210,3 +210,25 @@ def test_a_sensor_near_a_node_is_never_sure_of_nothing_where_another_sees_the_lo
             seen += 1
             assert not (node_key == "none" and node_confidence >= 0.7), (seed, entries)
     assert seen >= 3
+
+
+def test_a_drift_the_sensor_that_sees_the_mode_shows_is_the_joint_verdict(tmp_path):
+    """Eight runs of the lab's run-drift case recorded by three sensors (the bench's random
+    placement, seed 2167: two near a node of mode 1, x0.10 and x0.08, and one at x1.35).
+    The x1.35 sensor alone names the drift; the node sensors, 15 times noisier in
+    frequency than the models' accuracy, cannot see it. Pooled, the models' accuracy is
+    one error of the modal curve that every channel shares, so the node sensors weigh
+    by their scatter against the x1.35 sensor's and do not pull the shared fit: the joint
+    names the drift too (with the accuracy counted per segment, each node sensor's
+    frequencies weighed nearly as much as the x1.35 sensor's, and the joint read
+    ``unknown`` 1.00)."""
+    from workflow.lab.hidden_effects import draw_mode1_gains
+
+    _, out = generate_case("run_drift", 2167, tmp_path, mode1_gain=draw_mode1_gains("run_drift", 2167, 3))
+    segments = campaign_segments(out)
+    seeing = segments[segments["channel"] == "acc3"]
+    alone = diagnose_campaign(seeing, "c")["configurations"]["joint"]
+    assert verdict_key(alone["causes"]) == "run_drift", alone["confidence"]
+    key, confidence = joint_entry(segments)
+    assert key == "run_drift", confidence
+    assert confidence["run_drift"] >= 0.9, confidence

@@ -45,6 +45,7 @@ from workflow.models.configuration_data import (
     ConfigurationData,
     Scatter,
     estimate_scatter,
+    pooled_total_uncertainty,
     prepare_configuration,
     scatter_of,
 )
@@ -285,6 +286,47 @@ def test_scatter_within_runs_excludes_differences_between_runs():
     pooled = estimate_scatter(v, values)
     assert np.median(within) == pytest.approx(0.03, rel=0.15)
     assert np.median(pooled) > 1.5 * 0.03
+
+
+def test_one_channel_total_uncertainty_is_its_scatter_and_the_accuracy_in_quadrature():
+    rng = np.random.default_rng(7)
+    v = np.geomspace(0.1, 3.0, 50)
+    noise = 0.01 * (1 + rng.random(v.size))
+    total = pooled_total_uncertainty(v, np.zeros(v.size, dtype=int), noise, MODEL_ACCURACY_LN_ZETA)
+    np.testing.assert_allclose(total, np.hypot(noise, MODEL_ACCURACY_LN_ZETA), rtol=1e-12)
+
+
+def test_pooled_channels_carry_one_model_error_and_weigh_by_their_scatter():
+    """Three channels at the same amplitudes, frequency scatters of the lab's run-drift
+    campaign seen near two nodes and at x1.35 (1.2e-4, 1.4e-4, 7.6e-6) against the
+    models' accuracy of 1e-4: at each amplitude the segments together carry the
+    information of their precision-weighted mean with the accuracy counted once,
+    ``1 / (accuracy^2 + 1 / sum_c 1/s_c^2)``, and between channels they weigh as their
+    scatters do (exactly: the common factor cancels)."""
+    v = np.tile(np.geomspace(0.1, 4.0, 20), 3)
+    channels = np.repeat([0, 1, 2], 20)
+    scatter = np.array([1.2e-4, 1.4e-4, 7.6e-6])
+    total = pooled_total_uncertainty(v, channels, scatter[channels], MODEL_ACCURACY_REL_F)
+    information = np.bincount(np.tile(np.arange(20), 3), weights=1.0 / total**2)
+    np.testing.assert_allclose(
+        information, 1.0 / (MODEL_ACCURACY_REL_F**2 + 1.0 / np.sum(scatter**-2.0)), rtol=1e-12
+    )
+    np.testing.assert_allclose((total[:20] / total[40:]) ** 2, (scatter[0] / scatter[2]) ** 2, rtol=1e-12)
+
+
+def test_a_channel_counts_in_anothers_weight_only_at_the_amplitudes_it_reaches():
+    """Channel 1 measures 1-2 in/s only: below 1 in/s channel 0 is alone, its total the
+    one-channel quadrature; inside, the other channel's precision (interpolated in
+    ``ln V`` between its segments) adds."""
+    v = np.concatenate([np.geomspace(0.3, 3.0, 30), np.geomspace(1.0, 2.0, 10)])
+    channels = np.repeat([0, 1], [30, 10])
+    noise = np.where(channels == 0, 0.01, 0.02)
+    total = pooled_total_uncertainty(v, channels, noise, MODEL_ACCURACY_LN_ZETA)
+    alone = (channels == 0) & ((v < 1.0) | (v > 2.0))
+    np.testing.assert_allclose(total[alone], np.hypot(0.01, MODEL_ACCURACY_LN_ZETA), rtol=1e-12)
+    shared = (channels == 0) & ~alone
+    expected = 0.01 * np.sqrt(1 + MODEL_ACCURACY_LN_ZETA**2 * (0.01**-2 + 0.02**-2))
+    np.testing.assert_allclose(total[shared], expected, rtol=1e-12)
 
 
 TOP_BIN_LOW_IN_S = 3.0 / np.sqrt(10.0)

@@ -5,7 +5,8 @@ Input: the rows of ``results/tables/segments.parquet`` of one configuration
 (``configuration``, ``run``, ``velocity_amplitude_in_s``, ``zeta``, ``frequency_hz``,
 ``bearing_area_in2``). The scatter is a smooth trend (robust cubic in ``log10 V``) through
 each curve and the robust spread of the segments around it, per amplitude bin, combined
-in quadrature with the averaged models' accuracy (:data:`TOL_LN_ZETA`, :data:`TOL_REL_F`).
+in quadrature with the averaged models' accuracy (:data:`TOL_LN_ZETA`, :data:`TOL_REL_F`),
+which pooled channels share (:func:`pooled_total_uncertainty`).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ __all__ = [
     "robust_trend",
     "estimate_scatter",
     "scatter_of",
+    "pooled_total_uncertainty",
 ]
 
 
@@ -185,8 +187,9 @@ class Scatter:
     Attributes
     ----------
     ln_zeta, rel_f : ndarray
-        Total standard uncertainty (scatter and model accuracy in quadrature) of
-        ``ln zeta`` and of ``f / f_model - 1``.
+        Total standard uncertainty (scatter and model accuracy in quadrature; with
+        pooled channels the accuracy counted once per amplitude,
+        :func:`pooled_total_uncertainty`) of ``ln zeta`` and of ``f / f_model - 1``.
     noise_ln_zeta, noise_rel_f : ndarray
         The scatter part alone (robust, around the smooth trend).
     """
@@ -268,7 +271,8 @@ def estimate_scatter(
 
 def scatter_of(data: ConfigurationData) -> Scatter:
     """:class:`Scatter` of a configuration's two curves; with pooled channels, each
-    channel's own (a sensor near a node of the mode measures noisier curves)."""
+    channel's own (a sensor near a node of the mode measures noisier curves), and the
+    models' accuracy shared by the channels (:func:`pooled_total_uncertainty`)."""
     channels = np.zeros(data.n, dtype=int) if data.channel_index is None else data.channel_index
     noise_z, noise_f = np.empty(data.n), np.empty(data.n)
     rel_f = data.frequency_hz / data.f_ref - 1.0
@@ -277,4 +281,67 @@ def scatter_of(data: ConfigurationData) -> Scatter:
         v, runs = data.velocity_in_s[rows], data.run_index[rows]
         noise_z[rows] = estimate_scatter(v, np.log(data.zeta[rows]), runs=runs)
         noise_f[rows] = estimate_scatter(v, rel_f[rows], runs=runs)
-    return Scatter(np.hypot(noise_z, TOL_LN_ZETA), np.hypot(noise_f, TOL_REL_F), noise_z, noise_f)
+    if np.unique(channels).size < 2:
+        return Scatter(np.hypot(noise_z, TOL_LN_ZETA), np.hypot(noise_f, TOL_REL_F), noise_z, noise_f)
+    return Scatter(
+        pooled_total_uncertainty(data.velocity_in_s, channels, noise_z, TOL_LN_ZETA),
+        pooled_total_uncertainty(data.velocity_in_s, channels, noise_f, TOL_REL_F),
+        noise_z,
+        noise_f,
+    )
+
+
+def pooled_total_uncertainty(
+    velocity_in_s: np.ndarray, channels: np.ndarray, noise: np.ndarray, accuracy: float
+) -> np.ndarray:
+    """Per segment of pooled channels, the uncertainty its fit weight is taken from: its
+    channel's scatter, scaled so that the models' accuracy counts once for every channel.
+
+    Every channel measures the same modal curve, so the averaged models' error at an
+    amplitude (``accuracy``) is common to the channels, while their scatter is their own.
+    The measurements at amplitude ``V`` then weigh as their precision-weighted mean does,
+    whose uncertainty is ``accuracy^2 + 1 / P(V)`` with ``P(V)`` the channels' summed
+    precision ``sum_c 1 / noise_c(V)^2``: each segment's total variance is
+    ``noise^2 (1 + accuracy^2 P(V))``. With one channel this is ``noise^2 + accuracy^2``;
+    with the accuracy counted per segment instead, a channel 15 times noisier than the
+    reference in frequency (a sensor near a node of the mode) weighed nearly as much as
+    the reference, its distortions pulling the shared fit by more than the scatter of
+    the channel that sees the mode.
+
+    Parameters
+    ----------
+    velocity_in_s : ndarray
+        Amplitudes on one scale (the pooled channels'), in/s.
+    channels : ndarray of int
+        Channel of each segment.
+    noise : ndarray
+        Each segment's scatter (:func:`estimate_scatter`, per channel), in the curve's unit.
+    accuracy : float
+        The models' accuracy in that unit (:data:`TOL_LN_ZETA`, :data:`TOL_REL_F`).
+
+    Returns
+    -------
+    ndarray
+        The total standard uncertainty of each segment.
+
+    Examples
+    --------
+    Two channels at the same amplitudes, scatters 1 and 10 times the accuracy: the
+    noisy one counts by its scatter against the clean one's, not by the accuracy.
+
+    >>> v = np.tile([1.0, 2.0, 3.0], 2)
+    >>> s = pooled_total_uncertainty(v, np.repeat([0, 1], 3), np.repeat([0.01, 0.1], 3), 0.01)
+    >>> np.round(s, 4).tolist()
+    [0.0142, 0.0142, 0.0142, 0.1418, 0.1418, 0.1418]
+    """
+    log_v = np.log(velocity_in_s)
+    precision = 1.0 / noise**2
+    pooled = precision.copy()
+    for channel in np.unique(channels):
+        rows = channels == channel
+        x, order = np.unique(log_v[rows], return_inverse=True)
+        p = np.bincount(order, weights=precision[rows]) / np.bincount(order)
+        # the other channels at each segment's amplitude, where that channel reaches it
+        others = ~rows & (log_v >= x[0]) & (log_v <= x[-1])
+        pooled[others] += np.interp(log_v[others], x, p)
+    return noise * np.sqrt(1.0 + accuracy**2 * pooled)
