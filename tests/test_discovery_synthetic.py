@@ -12,7 +12,15 @@ from tests.support.discovery import diagnose_with_details
 from workflow.discovery.campaign import campaign_verdict, diagnose_campaign
 from workflow.discovery.configuration import bound_flags
 from workflow.discovery.decision import CAUSE_MODELS, decide
-from workflow.discovery.heldout import HELD_OUT_METRIC, cross_validate, folds_of, heldout_standard_error
+from workflow.discovery.heldout import (
+    HELD_OUT_METRIC,
+    amplitude_weights,
+    cross_validate,
+    folds_of,
+    heldout_standard_error,
+    heldout_weights,
+    weighted_rms,
+)
 from workflow.discovery.microslip import iwan_as_cells
 from workflow.discovery.misfit import (
     binned_discrepancy,
@@ -327,6 +335,66 @@ def test_a_channel_counts_in_anothers_weight_only_at_the_amplitudes_it_reaches()
     shared = (channels == 0) & ~alone
     expected = 0.01 * np.sqrt(1 + MODEL_ACCURACY_LN_ZETA**2 * (0.01**-2 + 0.02**-2))
     np.testing.assert_allclose(total[shared], expected, rtol=1e-12)
+
+
+def _pooled_hit(noise_by_channel, n=40):
+    v = np.tile(np.geomspace(0.1, 3.0, n), len(noise_by_channel))
+    channel = np.repeat(np.arange(len(noise_by_channel)), n)
+    data = ConfigurationData(
+        "c",
+        v,
+        np.full(v.size, 1e-3),
+        np.full(v.size, 100.0),
+        np.zeros(v.size, dtype=int),
+        ["r"],
+        None,
+        channel_index=channel,
+    )
+    return data, np.asarray(noise_by_channel, dtype=float)[channel]
+
+
+def test_one_channels_heldout_weights_are_the_amplitude_weights():
+    v = np.geomspace(0.1, 3.0, 60)
+    data = ConfigurationData(
+        "c", v, np.full(60, 1e-3), np.full(60, 100.0), np.zeros(60, dtype=int), ["r"], None
+    )
+    noise = np.linspace(0.01, 0.05, 60)
+    np.testing.assert_array_equal(
+        heldout_weights(data, noise, noise * 1e-2), amplitude_weights(v, data.anchor_velocity_in_s)
+    )
+
+
+def test_a_sensor_that_cannot_see_a_gain_does_not_dilute_it():
+    """The reference sees the baseline 3 scatters off at every amplitude (a squared held-out
+    residual of 10 against the extended model's 1): the ratio is 0.32. A sensor near a
+    node, 15 times noisier in both curves, sees the same misfit as 0.2 of its scatter (1.04
+    against 1). Counted per segment it pulls the ratio to 0.43; weighed by its share of the
+    precision (1/226) the pooled ratio is the reference's to within that share."""
+    data, noise = _pooled_hit([0.01, 0.15])
+    reference = data.channel_index == 0
+    misfit = 3.0 * 0.01
+    baseline = 1.0 + (misfit / noise) ** 2
+    extended = np.ones(data.n)
+    w = heldout_weights(data, noise, noise * 1e-3)
+    ratio = np.sqrt(weighted_rms(extended, w) ** 2 / weighted_rms(baseline, w) ** 2)
+    per_segment = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, 2)
+    diluted = np.sqrt(weighted_rms(extended, per_segment) ** 2 / weighted_rms(baseline, per_segment) ** 2)
+    assert diluted > 0.42
+    np.testing.assert_allclose(ratio, np.sqrt(1.0 / baseline[reference][0]), rtol=1.0 / 226)
+    # every quarter decade keeps its say: the bins' totals are the amplitude weights'
+    np.testing.assert_allclose(w.sum(), per_segment.sum(), rtol=1e-12)
+
+
+def test_a_duplicated_sensor_changes_no_heldout_error():
+    """Two identical sensors share each amplitude half and half: any model's weighted held-out
+    error is the one sensor's."""
+    rng = np.random.default_rng(3)
+    one, noise_one = _pooled_hit([0.02])
+    two, noise_two = _pooled_hit([0.02, 0.02])
+    squares = rng.chisquare(1, one.n) * np.linspace(1.0, 4.0, one.n)
+    alone = weighted_rms(squares, heldout_weights(one, noise_one, noise_one))
+    pooled = weighted_rms(np.tile(squares, 2), heldout_weights(two, noise_two, noise_two))
+    np.testing.assert_allclose(pooled, alone, rtol=1e-12)
 
 
 TOP_BIN_LOW_IN_S = 3.0 / np.sqrt(10.0)

@@ -16,7 +16,7 @@ from workflow.discovery.configuration import (
     record_starts,
 )
 from workflow.discovery.decision import CAUSE_MODELS, cause_fractions
-from workflow.discovery.heldout import HELD_OUT_METRIC, HELD_OUT_SCALE, amplitude_weights, weighted_rms
+from workflow.discovery.heldout import HELD_OUT_METRIC, HELD_OUT_SCALE, heldout_weights, weighted_rms
 from workflow.measured.settings import AnalysisSettings
 from workflow.models.averaged import MODELS
 from workflow.models.averaged_fit import (
@@ -102,7 +102,7 @@ def across_configurations(
             res = model_residuals(fit, d.data, d.scatter, context)
             err = weighted_rms(
                 0.5 * (res[f"z_{HELD_OUT_SCALE}"] ** 2 + res[f"f_{HELD_OUT_SCALE}"] ** 2),
-                amplitude_weights(d.data.velocity_in_s, d.data.anchor_velocity_in_s, d.data.n_channels),
+                heldout_weights(d.data, d.scatter.noise_ln_zeta, d.scatter.noise_rel_f),
             )
             entry = out["configurations"].setdefault(n, {"bearing_area_in2": d.data.bearing_area_in2})
             entry[f"{role}_error"] = err

@@ -24,10 +24,10 @@ from workflow.discovery.confidence import (
     unseen,
 )
 from workflow.discovery.heldout import (
-    amplitude_weights,
     effective_observations,
     heldout_standard_error,
     heldout_units,
+    heldout_weights,
     information_criterion,
     weighted_rms,
 )
@@ -339,7 +339,8 @@ def evaluate_decision(
     """
     view = data
     n_runs_view = view.n_runs
-    weights = amplitude_weights(view.velocity_in_s, view.anchor_velocity_in_s, view.n_channels)
+    any_residuals = next(iter(evidence.values())).residuals
+    weights = heldout_weights(view, any_residuals["scatter_ln_zeta"], any_residuals["scatter_rel_f"])
     n_eff = effective_observations(view)
     units = heldout_units(view)
     n_units = int(units.max()) + 1 if units.size else 0

@@ -18,7 +18,7 @@ from workflow.models.averaged_fit import (
     fit_model,
     model_residuals,
 )
-from workflow.models.configuration_data import ConfigurationData, Scatter
+from workflow.models.configuration_data import ConfigurationData, Scatter, pooled_precision
 from workflow.models.settings import DiscoverySettings
 
 __all__ = [
@@ -30,6 +30,8 @@ __all__ = [
     "MIN_BIN_SEGMENTS",
     "amplitude_bin",
     "amplitude_weights",
+    "channel_shares",
+    "heldout_weights",
     "weighted_rms",
     "cross_validate",
     "beyond_reach",
@@ -188,6 +190,68 @@ def amplitude_weights(
     return 1.0 / np.maximum(counts[inverse], MIN_BIN_SEGMENTS * channels)
 
 
+def channel_shares(data: ConfigurationData, noise_ln_zeta: np.ndarray, noise_rel_f: np.ndarray) -> np.ndarray:
+    """Per segment, its channel's share of the precision of every channel at its amplitude:
+    ``(1 / noise^2) / P(V)`` (:func:`~workflow.models.configuration_data.pooled_precision`),
+    the mean of the two curves' shares; 1 with one channel.
+
+    The channels of one hit measure one decay: at an amplitude, their residuals from a
+    model are so many measurements of its one error there, which their precision-weighted
+    mean estimates. A sensor near a node of the mode, 15 times noisier than the
+    reference, adds a squared residual near 1 for every model, which held-out errors
+    counted per segment would mix in at the reference's weight, pulling every ratio of
+    errors towards 1: a gain seen by the reference reads diluted by the sensor that
+    cannot see it.
+    """
+    if data.channel_index is None or np.unique(data.channel_index).size < 2:
+        return np.ones(data.n)
+    shares = [
+        1.0 / noise**2 / pooled_precision(data.velocity_in_s, data.channel_index, noise)
+        for noise in (noise_ln_zeta, noise_rel_f)
+    ]
+    return 0.5 * (shares[0] + shares[1])
+
+
+def heldout_weights(
+    data: ConfigurationData, noise_ln_zeta: np.ndarray, noise_rel_f: np.ndarray
+) -> np.ndarray:
+    """Weights of the segments in a held-out error: every quarter decade of amplitude
+    weighs as :func:`amplitude_weights` gives it, and within it each segment of pooled
+    channels as its channel's share of the precision (:func:`channel_shares`). One
+    channel: :func:`amplitude_weights`.
+
+    Parameters
+    ----------
+    data : ConfigurationData
+    noise_ln_zeta, noise_rel_f : ndarray
+        Each segment's scatter (:class:`~workflow.models.configuration_data.Scatter`'s
+        ``noise_ln_zeta``, ``noise_rel_f``).
+
+    Examples
+    --------
+    Two channels over one quarter decade, the second ten times noisier in both curves:
+    the bin weighs as it does without shares, the second channel's segments 1/100 of the
+    first's.
+
+    >>> v = np.tile(np.linspace(0.6, 1.0, 50), 2)
+    >>> data = ConfigurationData("c", v, np.ones(100), np.ones(100), np.zeros(100, dtype=int), ["a"], None,
+    ...                          channel_index=np.repeat([0, 1], 50))
+    >>> noise = np.repeat([0.01, 0.1], 50)
+    >>> w = heldout_weights(data, noise, noise)
+    >>> round(float(w.sum()), 6), round(float(w[50] / w[0]), 6)
+    (1.0, 0.01)
+    """
+    weights = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
+    shares = channel_shares(data, noise_ln_zeta, noise_rel_f)
+    if np.all(shares == 1.0):
+        return weights
+    # renormalised within each bin: the quarter decades keep their say, the channels share it
+    code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, AMPLITUDE_BINS_PER_DECADE)
+    _, inverse = np.unique(code, return_inverse=True)
+    mean_share = np.bincount(inverse, weights=shares) / np.bincount(inverse)
+    return weights * shares / mean_share[inverse]
+
+
 def weighted_rms(squares: np.ndarray, weights: np.ndarray) -> float:
     """``sqrt(sum w r^2 / sum w)``."""
     return float(np.sqrt(np.sum(weights * squares) / max(np.sum(weights), 1e-300)))
@@ -228,7 +292,7 @@ def cross_validate(
     sq_z, sq_f, fold_errors = np.zeros(data.n), np.zeros(data.n), []
     scale_z, scale_f = scatter.noise_ln_zeta.copy(), scatter.noise_rel_f.copy()
     scored = np.ones(data.n, dtype=bool)
-    w = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
+    w = heldout_weights(data, scatter.noise_ln_zeta, scatter.noise_rel_f)
     for held in folds_of(data, settings.folds):
         fit = fit_model(
             model, data, scatter, context, settings=settings, mask=~held, warm_start=full_fit.coords

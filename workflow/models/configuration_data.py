@@ -28,6 +28,7 @@ __all__ = [
     "robust_trend",
     "estimate_scatter",
     "scatter_of",
+    "pooled_precision",
     "pooled_total_uncertainty",
 ]
 
@@ -334,6 +335,29 @@ def pooled_total_uncertainty(
     >>> np.round(s, 4).tolist()
     [0.0142, 0.0142, 0.0142, 0.1418, 0.1418, 0.1418]
     """
+    return noise * np.sqrt(1.0 + accuracy**2 * pooled_precision(velocity_in_s, channels, noise))
+
+
+def pooled_precision(velocity_in_s: np.ndarray, channels: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """Per segment of pooled channels, ``P(V)``: the summed precision ``sum_c 1 / noise_c^2``
+    of every channel at its amplitude, the other channels' interpolated in ``ln V`` where
+    their segments reach it.
+
+    ``velocity_in_s``, ``channels`` and ``noise`` as for :func:`pooled_total_uncertainty`.
+
+    Returns
+    -------
+    ndarray
+        ``P(V)`` of each segment, in the inverse square of the curve's unit.
+
+    Examples
+    --------
+    The second channel reaches only the first two amplitudes:
+
+    >>> v = np.array([1.0, 2.0, 4.0, 1.0, 2.0])
+    >>> pooled_precision(v, np.array([0, 0, 0, 1, 1]), np.array([1.0, 1.0, 1.0, 0.5, 0.5])).tolist()
+    [5.0, 5.0, 1.0, 5.0, 5.0]
+    """
     log_v = np.log(velocity_in_s)
     precision = 1.0 / noise**2
     pooled = precision.copy()
@@ -344,4 +368,4 @@ def pooled_total_uncertainty(
         # the other channels at each segment's amplitude, where that channel reaches it
         others = ~rows & (log_v >= x[0]) & (log_v <= x[-1])
         pooled[others] += np.interp(log_v[others], x, p)
-    return noise * np.sqrt(1.0 + accuracy**2 * pooled)
+    return pooled
