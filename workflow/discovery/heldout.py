@@ -243,8 +243,6 @@ def heldout_weights(
     """
     weights = amplitude_weights(data.velocity_in_s, data.anchor_velocity_in_s, data.n_channels)
     shares = channel_shares(data, noise_ln_zeta, noise_rel_f)
-    if np.all(shares == 1.0):
-        return weights
     # renormalised within each bin: the quarter decades keep their say, the channels share it
     code = amplitude_bin(data.velocity_in_s, data.anchor_velocity_in_s, AMPLITUDE_BINS_PER_DECADE)
     _, inverse = np.unique(code, return_inverse=True)
