@@ -219,7 +219,12 @@ def redecide(path: Path) -> dict:
     )
     verdict = result["verdict"]
     causes = combinations[verdict]["causes"] if verdict in combinations else verdict_causes_of(verdict)
-    model = combinations[verdict]["model"] if verdict in combinations else extended_model_of(result)
+    # the document's extended model: that of the verdict, which the reweightings may have moved
+    model = (
+        combinations[verdict]["model"]
+        if verdict in combinations
+        else extended_model_of({**result, "cause": causes[0]})
+    )
     base = result["baseline"]
     return {
         "cause": cause,
