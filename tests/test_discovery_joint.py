@@ -71,9 +71,14 @@ def drift_segments(tmp_path_factory) -> pd.DataFrame:
     return campaign_segments(out)
 
 
+def joint_configuration(segments: pd.DataFrame) -> dict:
+    """The joint analysis's entry of the campaign's configuration in the diagnosis."""
+    return diagnose_campaign(joint_segments(segments)[0], "joint")["configurations"]["joint"]
+
+
 def joint_entry(segments: pd.DataFrame) -> tuple[str, dict[str, float]]:
     """The joint analysis's verdict key and confidence of the campaign's configuration."""
-    configuration = diagnose_campaign(joint_segments(segments)[0], "joint")["configurations"]["joint"]
+    configuration = joint_configuration(segments)
     return verdict_key(configuration["causes"]), configuration["confidence"]
 
 
@@ -233,7 +238,7 @@ def test_a_drift_the_sensor_that_sees_the_mode_shows_is_the_joint_verdict(tmp_pa
     seeing = segments[segments["channel"] == "acc3"]
     alone = diagnose_campaign(seeing, "c")["configurations"]["joint"]
     assert verdict_key(alone["causes"]) == "run_drift", alone["confidence"]
-    joint = diagnose_campaign(joint_segments(segments)[0], "joint")["configurations"]["joint"]
+    joint = joint_configuration(segments)
     assert verdict_key(joint["causes"]) == "run_drift", joint["confidence"]
     assert joint["confidence"]["run_drift"] >= 0.9, joint["confidence"]
     assert joint["gain"]["ratio"] < 0.7, (joint["gain"], alone["gain"])
