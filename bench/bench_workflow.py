@@ -2,7 +2,7 @@
 
     python bench/bench_workflow.py [--repeats 3] [--target all] [--scale]
     python bench/bench_workflow.py --only high_rate runs300 [--repeats 3]
-    python bench/bench_workflow.py --versus REVISION [--repeats 5]
+    python bench/bench_workflow.py --versus REVISION [--repeats 5] [--only mat_hit ...]
 
 For each repeat, in a fresh working directory: the demo campaign is generated
 first (its own rule, timed apart), then a cold ``snakemake -c2 TARGET``, a run with
@@ -29,6 +29,9 @@ kernels. It prints each version's median wall and CPU time (Snakemake and its jo
 the median and range of the pairs' ratios, which stay meaningful when the machine's
 speed drifts; a run with nothing to do follows each cold run and is paired the same way,
 and is also set against Snakemake's own floor, a workflow of no jobs timed in the same round.
+With ``--only`` the pairs run on each named campaign instead of the demo, generated once by
+this checkout's virtual lab so that both versions read the same files, each cold run in an
+empty directory (``--config campaign=...``).
 
 Every mode ends with the CPU time of a fixed pure-Python loop before and after its runs:
 the interpreter's speed on the machine that day, printed beside the figures.
@@ -290,8 +293,10 @@ def spread(values: list[float], digits: int) -> str:
     return f"{statistics.median(values):.{digits}f} ({min(values):.{digits}f}-{max(values):.{digits}f})"
 
 
-def run_versus(revision: str, target: str, repeats: int) -> None:
-    """This checkout against ``revision`` in pairs (see the module's docstring)."""
+def run_versus(revision: str, target: str, repeats: int, campaigns: list[str] | None = None) -> None:
+    """This checkout against ``revision`` in pairs (see the module's docstring): on the demo,
+    or on each of the named :data:`SCALE_CAMPAIGNS`, generated once by this checkout so that
+    both versions read the same files."""
     root = Path(tempfile.mkdtemp(prefix="lapjoint-versus-"))
     other = root / "checkout"
     checkout = subprocess.run(
@@ -303,31 +308,60 @@ def run_versus(revision: str, target: str, repeats: int) -> None:
         sys.exit(f"--versus: cannot check {revision!r} out (git says why above)")
     versions = {"this checkout": REPO, revision: other}
     try:
-        for index, repo in enumerate(versions.values()):
-            snakemake(root / f"template{index}", "demo_campaign", repo=repo)
-        kinds = (f"cold {target}", "nothing to do")
-        times = {(version, kind): [] for version in versions for kind in kinds}
+        if campaigns:
+            cases = {
+                SCALE_CAMPAIGNS[name]: ("--config", f"campaign={folder}")
+                for name, folder in scale_campaigns(root / "campaigns", campaigns).items()
+            }
+        else:
+            for index, repo in enumerate(versions.values()):
+                snakemake(root / f"template{index}", "demo_campaign", repo=repo)
+            cases = {"the demo": ()}
         empty = root / "empty"
         empty.mkdir()
         (empty / "Snakefile").write_text(EMPTY_SNAKEFILE)
-        floor = []
-        for repeat in range(repeats + 1):
-            for index, (version, repo) in enumerate(versions.items()):
-                workdir = root / f"run{index}"
-                shutil.rmtree(workdir, ignore_errors=True)
-                shutil.copytree(root / f"template{index}", workdir, symlinks=True)
-                # the copy's results/ is for the campaign copied with it, not the template's
-                (workdir / "results" / "interim" / "campaign_folder.txt").unlink(missing_ok=True)
-                for kind in kinds:
-                    wall_and_cpu_s = timed_run(workdir, target, repo=repo)
-                    if repeat:  # the first pair is the warm-up
-                        times[version, kind].append(wall_and_cpu_s)
-            floor_s = timed_run(empty, "all", snakefile=empty / "Snakefile")
-            if repeat:
-                floor.append(floor_s)
+        for case, config in cases.items():
+            times, floor = versus_pairs(root, versions, target, repeats, config, empty)
+            print(f"\n{case}:")
+            print_versus(times, floor, versions, target, repeats)
     finally:
         subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(other)], check=True)
         shutil.rmtree(root, ignore_errors=True)
+
+
+def versus_pairs(
+    root: Path, versions: dict[str, Path], target: str, repeats: int, config: tuple[str, ...], empty: Path
+) -> tuple[dict, list]:
+    """Wall and CPU seconds of each version's cold ``target`` and run with nothing to do,
+    in turn, ``repeats`` pairs after a warm-up pair, and Snakemake's empty workflow after
+    each pair. Without ``config`` each cold run starts from a copy of the version's own
+    demo directory (``root/template<index>``), with it from an empty directory."""
+    kinds = (f"cold {target}", "nothing to do")
+    times = {(version, kind): [] for version in versions for kind in kinds}
+    floor = []
+    for repeat in range(repeats + 1):
+        for index, (version, repo) in enumerate(versions.items()):
+            workdir = root / f"run{index}"
+            shutil.rmtree(workdir, ignore_errors=True)
+            if config:
+                workdir.mkdir()
+            else:
+                shutil.copytree(root / f"template{index}", workdir, symlinks=True)
+                # the copy's results/ is for the campaign copied with it, not the template's
+                (workdir / "results" / "interim" / "campaign_folder.txt").unlink(missing_ok=True)
+            for kind in kinds:
+                wall_and_cpu_s = timed_run(workdir, target, *config, repo=repo)
+                if repeat:  # the first pair is the warm-up
+                    times[version, kind].append(wall_and_cpu_s)
+        floor_s = timed_run(empty, "all", snakefile=empty / "Snakefile")
+        if repeat:
+            floor.append(floor_s)
+    return times, floor
+
+
+def print_versus(times: dict, floor: list, versions: dict[str, Path], target: str, repeats: int) -> None:
+    """The pairs' table of :func:`versus_pairs`."""
+    kinds = (f"cold {target}", "nothing to do")
     this, base = versions
     print(f"| {repeats} pairs, 2 cores | {this} | {base} | ratio of the pairs |")
     print("|---|---|---|---|")
@@ -387,7 +421,7 @@ def main() -> None:
     args = parser.parse_args()
     before_s = reference_loop_s()
     if args.versus:
-        run_versus(args.versus, args.target, args.repeats)
+        run_versus(args.versus, args.target, args.repeats, args.only)
     elif args.only:
         run_scale(args.only, args.target, args.repeats, None)
     else:

@@ -13,7 +13,7 @@ from workflow.measured.settings import AnalysisSettings
 from workflow.models.settings import DiscoverySettings
 from workflow.runtime.logs import setup_script_logging
 
-log = setup_script_logging(snakemake.log[0], "diagnose_modes")
+log = setup_script_logging(snakemake.log[0], snakemake.rule)
 configuration = snakemake.wildcards.configuration
 channel = snakemake.params.channel
 campaign = read_campaign(snakemake.input.campaign_settings)

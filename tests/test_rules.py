@@ -45,6 +45,18 @@ def test_rule_script_logs_to_the_rule_log(name):
     assert "setup_script_logging(snakemake.log[0]" in (REPO / script.group(1)).read_text(), name
 
 
+@pytest.mark.parametrize("name", sorted(RULES))
+def test_rule_script_logs_its_cost_under_the_rule_name(name):
+    """bench_workflow.py adds each job's cost line to the rule its logger names: a script
+    that serves several rules names the one it runs for (``snakemake.rule``)."""
+    script = re.search(r'^\s+script:\n\s+"\.\./(scripts/\w+\.py)"', RULES[name], flags=re.M)
+    text = (REPO / script.group(1)).read_text()
+    assert (
+        f'setup_script_logging(snakemake.log[0], "{name}")' in text
+        or "setup_script_logging(snakemake.log[0], snakemake.rule)" in text
+    ), name
+
+
 SMK_FILES = sorted([REPO / "Snakefile", *(REPO / "rules").glob("*.smk")])
 # Statements that would rebind Snakemake's `workflow` object inside a Snakefile.
 BINDS_WORKFLOW = re.compile(
