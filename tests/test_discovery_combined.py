@@ -264,19 +264,17 @@ def test_micro_slip_whose_thresholds_rise_over_less_than_a_decade_is_not_a_stiff
 
 def test_a_softening_the_friction_with_thresholds_from_the_data_explains_is_no_stiffness(tmp_path):
     """One hit of the lab's patch joint (1.30 in^2, the bench's random placement, seed
-    2157), the sensor at x0.35 of the accelerometer: the stiffness term (held-out 8.1
-    scatter units) predicts a little better than the power law (8.9; LuGre 15) and showed
-    the stiffness signature against its Dahl friction, so that sensor read a stiffness
-    nonlinearity (0.54) where the other two read micro-slip. The joint with the slip
-    thresholds from the data, a friction alone, predicts held-out blocks at 1.1: the
-    softening is what the friction that fits the damping explains, not the contract's
-    stiffness signature, and micro-slip is named."""
+    2157), the sensor at x0.35 of the accelerometer: the stiffness term (held-out 8.0
+    scatter units) shows the stiffness signature against its Dahl friction, but the joint
+    with the slip thresholds from the data, a friction alone, explains that softening,
+    and the power law predicts the held-out blocks far better (2.5): micro-slip is named,
+    no stiffness nonlinearity."""
     configuration = one_sensor_of_a_hit("microslip_power_law", 2157, "acc3", tmp_path)
     stiffness = configuration["evidence"]["candidates"]["stiffness_nonlinearity"]
     assert stiffness["signature"]["shows_signature"], stiffness["signature"]
     assert stiffness["friction_explains_softening"] and not stiffness["shows_signature"], stiffness
     micro_slip = configuration["evidence"]["candidates"]["microslip_power_law"]
-    assert micro_slip["heldout_error"] > stiffness["heldout_error"], (micro_slip, stiffness)
+    assert micro_slip["heldout_error"] < 0.5 * stiffness["heldout_error"], (micro_slip, stiffness)
     assert configuration["causes"] == ["microslip_power_law"], configuration["confidence"]
     assert configuration["confidence"]["microslip_power_law"] >= 0.9, configuration["confidence"]
 
@@ -316,23 +314,22 @@ def test_the_friction_explains_a_softening_only_where_it_predicts_as_well_by_the
     assert not friction_explains_softening(softening_decision(1.1, 8.1, 1.0, 1.0), "iwan_cells_4")
 
 
-def test_micro_slip_near_a_node_whose_power_law_predicts_no_better_than_the_baseline(tmp_path):
+def test_micro_slip_near_a_node_is_named_by_its_power_law(tmp_path):
     """One hit of the lab's patch joint (1.21 in^2, the bench's random placement, seed
-    2123), the sensor at x0.12 of the accelerometer: no test fails the baseline (LuGre,
-    held-out 1.7 scatter units) and the power law follows the data it was fitted to but
-    predicts held-out blocks no better (1.8). The slip thresholds from the data, fitted for
-    the combinations, predict them at 1.3, more than the models' accuracy better than the
-    baseline (the gate every candidate passes): they represent micro-slip, which is named,
-    where that sensor read a stiffness nonlinearity (0.81)."""
+    2123), the sensor at x0.12 of the accelerometer, where the noise is a fifth to a third
+    of each segment's damping at the lowest amplitudes: no test fails the baseline (LuGre,
+    held-out 1.7 scatter units), and the power law, fitted to damping whose logarithm is
+    unbiased in the mean (configuration_data.log_damping_bias), predicts the held-out
+    blocks better (1.6): micro-slip is named and sure by the placement property's measure,
+    0.7 (averaging the logarithms as measured, this sensor read a stiffness nonlinearity,
+    0.81)."""
     configuration = one_sensor_of_a_hit("microslip_power_law", 2123, "acc3", tmp_path)
     evidence = configuration["evidence"]
     assert not evidence["baseline_misfit_significant"], evidence["binned_residuals"]
     base = min(b["heldout_error"] for b in evidence["baselines"].values())
-    refinement = evidence["threshold_distribution"]
-    assert refinement["iwan_heldout_error"] >= base, (refinement, base)
-    assert refinement["adopted"] and refinement["heldout_error"] < base, (refinement, base)
+    assert evidence["candidates"]["microslip_power_law"]["heldout_error"] < base, evidence["candidates"]
     assert configuration["causes"] == ["microslip_power_law"], configuration["confidence"]
-    assert configuration["confidence"]["microslip_power_law"] >= 0.9, configuration["confidence"]
+    assert configuration["confidence"]["microslip_power_law"] >= 0.7, configuration["confidence"]
 
 
 def test_micro_slip_beside_a_clear_velocity_squared_loss_needs_no_sub_linear_joint(tmp_path):

@@ -70,9 +70,13 @@ limit, not a contradiction (docs/discovery.md)."""
 @pytest.mark.parametrize("cause", SINGLE_CAUSES)
 def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
     """The same ring-downs recorded by a second sensor (amplitudes scaled by the mode
-    shape, its own noise), through the whole measured chain: the same cause, and each
-    sensor's gain ratio inside the 5-95 % range of the other's 100 resampled ratios,
-    widened by 0.05 (the Monte Carlo error of those quantiles is a few hundredths)."""
+    shape, its own noise), through the whole measured chain: the same cause, and for a
+    named cause each sensor's gain ratio inside the 5-95 % range of the other's 100
+    resampled ratios, widened by 0.05 (the Monte Carlo error of those quantiles is a few
+    hundredths). An ``unknown`` verdict's ratio is that of the model tried that comes
+    closest to records that are no single-mode decay: the second mode beats in them as
+    strongly as its shape at each sensor's point makes it, so which model comes closest,
+    and how close, is the sensor's own."""
     verdicts = []
     for noise_stream, gain in enumerate((1.0, SENSOR_GAIN)):
         _, out = generate_case(cause, BASE_SEED, tmp_path, mode1_gain=gain, noise_stream=noise_stream)
@@ -81,6 +85,8 @@ def test_two_sensors_on_one_hidden_effect_give_one_verdict(cause, tmp_path):
         verdicts.append((document["configurations"]["joint"], np.quantile(ratios, [0.05, 0.95])))
     (a, band_a), (b, band_b) = verdicts
     assert a["cause"] == b["cause"] == cause, (a["confidence"], b["confidence"])
+    if cause == "unknown":
+        return
     margin = 0.05
     assert band_a[0] - margin <= b["gain"]["ratio"] <= band_a[1] + margin, (a["gain"], b["gain"], band_a)
     assert band_b[0] - margin <= a["gain"]["ratio"] <= band_b[1] + margin, (a["gain"], b["gain"], band_b)

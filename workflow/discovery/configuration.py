@@ -62,6 +62,7 @@ from workflow.models.configuration_data import (
     TOL_REL_F,
     ConfigurationData,
     Scatter,
+    mean_unbiased_damping,
     prepare_configuration,
     scatter_of,
 )
@@ -602,6 +603,9 @@ def diagnose_configuration(
     (``segment_cycles``, ``segment_overlap``: the log decrement's segments, for the
     envelope test)."""
     scatter = scatter_of(data)
+    # every model is fitted and judged on mean-unbiased ln zeta (noisy segments' logarithms
+    # average low: log_damping_bias)
+    data = mean_unbiased_damping(data, scatter)
     fits: dict[str, FitResult] = {}
     cv: dict[str, dict] = {}
     for name in BASELINE_MODELS + tuple(CAUSE_MODELS.values()):

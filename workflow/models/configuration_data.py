@@ -11,8 +11,9 @@ which pooled channels share (:func:`pooled_total_uncertainty`).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
@@ -28,6 +29,8 @@ __all__ = [
     "robust_trend",
     "estimate_scatter",
     "scatter_of",
+    "log_damping_bias",
+    "mean_unbiased_damping",
     "pooled_precision",
     "pooled_total_uncertainty",
 ]
@@ -290,6 +293,77 @@ def scatter_of(data: ConfigurationData) -> Scatter:
         noise_z,
         noise_f,
     )
+
+
+RELATIVE_NOISE_GRID = np.linspace(0.0, 1.0, 101)
+"""Relative standard deviations ``r`` of a segment's damping estimate at which
+:func:`log_damping_bias` is tabulated."""
+
+
+def _log_noise_spread_and_mean(r: float) -> tuple[float, float]:
+    """Robust spread (1.4826 x median absolute deviation) and mean of ``ln(1 + r z)``,
+    ``z`` standard normal with ``1 + r z > 0``."""
+    from scipy import integrate, optimize, special
+
+    lowest = -1.0 / r
+    kept = special.ndtr(-lowest)  # P(1 + r z > 0)
+    median = np.log1p(r * special.ndtri(special.ndtr(lowest) + 0.5 * kept))
+
+    def within(m: float) -> float:
+        """P(|ln(1 + r z) - median| < m | kept) - 1/2."""
+        inside = special.ndtr(np.expm1(median + m) / r) - special.ndtr(np.expm1(median - m) / r)
+        return inside / kept - 0.5
+
+    def weighted_log(z: float) -> float:
+        return np.log1p(r * z) * np.exp(-0.5 * z * z) / np.sqrt(2.0 * np.pi)
+
+    mad = optimize.brentq(within, 1e-12, 50.0, xtol=1e-14)
+    mean = integrate.quad(weighted_log, max(lowest, -40.0), 40.0, limit=200, epsabs=1e-13)[0] / kept
+    return 1.4826 * mad, mean
+
+
+@functools.lru_cache(maxsize=1)
+def _log_damping_bias_table() -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_log_noise_spread_and_mean` at each ``r`` of :data:`RELATIVE_NOISE_GRID`
+    (spreads, means; 0 and 0 at ``r = 0``)."""
+    rows = [(0.0, 0.0)] + [_log_noise_spread_and_mean(float(r)) for r in RELATIVE_NOISE_GRID[1:]]
+    spreads, means = np.array(rows).T
+    return spreads, means
+
+
+def log_damping_bias(noise_ln_zeta: np.ndarray) -> np.ndarray:
+    """Mean of ``ln zeta_hat - ln zeta`` for segments whose ``ln zeta`` scatters by
+    ``noise_ln_zeta`` (the robust spread around the trend, :func:`estimate_scatter`).
+
+    A segment's damping is the slope of a line fitted to its log envelope: the estimate
+    is the true damping plus a Gaussian error of relative standard deviation ``r``, kept
+    only where positive (:func:`prepare_configuration`). Its logarithm is then unbiased
+    in the median but not in the mean: ``E[ln(1 + r z)]`` is about ``-r^2 / 2``, and the
+    fits and bin tests average ``ln zeta``. Near a node of the mode, where the noise is a
+    large part of the signal, ``r`` reaches 0.3-0.4 at the lowest amplitudes, the mean
+    falls by 0.05-0.1 there and less above: a mean-based analysis reads that as damping
+    rising with amplitude. ``r`` is found from the robust spread of ``ln(1 + r z)``,
+    which is what the scatter measures, and the mean of that distribution returned
+    (tabulated for ``r`` up to 1 and interpolated in the variance, held beyond).
+
+    Examples
+    --------
+    >>> bias = log_damping_bias(np.array([0.0, 0.01, 0.3]))
+    >>> [round(float(b), 4) for b in bias]
+    [0.0, -0.0001, -0.0539]
+    """
+    spreads, means = _log_damping_bias_table()
+    # interpolated in the variance, in which the bias is linear for small noise
+    return np.interp(np.asarray(noise_ln_zeta, float) ** 2, spreads**2, means)
+
+
+def mean_unbiased_damping(data: ConfigurationData, scatter: Scatter) -> ConfigurationData:
+    """``data`` with each segment's damping divided by ``exp`` of its
+    :func:`log_damping_bias` (from its channel's scatter of ``ln zeta`` at its amplitude,
+    ``scatter.noise_ln_zeta``): curves whose ``ln zeta`` the fits, held-out errors and
+    bin tests may average. The relative change is ``r^2 / 2``: 1e-4 at a scatter of 1.4 %,
+    5 % at 30 %."""
+    return replace(data, zeta=data.zeta * np.exp(-log_damping_bias(scatter.noise_ln_zeta)))
 
 
 def pooled_total_uncertainty(

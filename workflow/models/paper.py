@@ -106,14 +106,17 @@ def averaged_fit_params(
     diagnosis did not fit (too few distinct amplitudes to validate models)."""
     from workflow.models.averaged import RESPONSE_ORDER
     from workflow.models.averaged_fit import FitContext, fit_model
-    from workflow.models.configuration_data import prepare_configuration, scatter_of
+    from workflow.models.configuration_data import mean_unbiased_damping, prepare_configuration, scatter_of
 
     data = prepare_configuration(
         segments, str(segments["configuration"].iloc[0]), RESPONSE_ORDER[response_quantity]
     )
     velocity = segments["velocity_amplitude_in_s"].to_numpy(float)
     context = FitContext(float(np.quantile(velocity, 0.9)))
-    fit = fit_model(model, data, scatter_of(data), context, settings=DiscoverySettings(seed=seed))
+    scatter = scatter_of(data)
+    fit = fit_model(
+        model, mean_unbiased_damping(data, scatter), scatter, context, settings=DiscoverySettings(seed=seed)
+    )
     return fit.params
 
 
