@@ -329,6 +329,11 @@ def run_versus(revision: str, target: str, repeats: int, campaigns: list[str] | 
         shutil.rmtree(root, ignore_errors=True)
 
 
+def versus_kinds(target: str) -> tuple[str, str]:
+    """The two runs :func:`versus_pairs` times for each version."""
+    return (f"cold {target}", "nothing to do")
+
+
 def versus_pairs(
     root: Path, versions: dict[str, Path], target: str, repeats: int, config: tuple[str, ...], empty: Path
 ) -> tuple[dict, list]:
@@ -336,7 +341,7 @@ def versus_pairs(
     in turn, ``repeats`` pairs after a warm-up pair, and Snakemake's empty workflow after
     each pair. Without ``config`` each cold run starts from a copy of the version's own
     demo directory (``root/template<index>``), with it from an empty directory."""
-    kinds = (f"cold {target}", "nothing to do")
+    kinds = versus_kinds(target)
     times = {(version, kind): [] for version in versions for kind in kinds}
     floor = []
     for repeat in range(repeats + 1):
@@ -361,7 +366,7 @@ def versus_pairs(
 
 def print_versus(times: dict, floor: list, versions: dict[str, Path], target: str, repeats: int) -> None:
     """The pairs' table of :func:`versus_pairs`."""
-    kinds = (f"cold {target}", "nothing to do")
+    kinds = versus_kinds(target)
     this, base = versions
     print(f"| {repeats} pairs, 2 cores | {this} | {base} | ratio of the pairs |")
     print("|---|---|---|---|")

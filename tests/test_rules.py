@@ -38,19 +38,24 @@ def test_rule_declares_threads_resources_log_and_benchmark(name):
     assert re.search(r'^\s+benchmark:\n\s+"results/benchmarks/', block, flags=re.M), name
 
 
+def rule_script(name: str) -> Path | None:
+    """The script a rule runs (its ``script:`` directive), or None."""
+    script = re.search(r'^\s+script:\n\s+"\.\./(scripts/\w+\.py)"', RULES[name], flags=re.M)
+    return REPO / script.group(1) if script else None
+
+
 @pytest.mark.parametrize("name", sorted(RULES))
 def test_rule_script_logs_to_the_rule_log(name):
-    script = re.search(r'^\s+script:\n\s+"\.\./(scripts/\w+\.py)"', RULES[name], flags=re.M)
+    script = rule_script(name)
     assert script, f"{name} runs no script"
-    assert "setup_script_logging(snakemake.log[0]" in (REPO / script.group(1)).read_text(), name
+    assert "setup_script_logging(snakemake.log[0]" in script.read_text(), name
 
 
 @pytest.mark.parametrize("name", sorted(RULES))
 def test_rule_script_logs_its_cost_under_the_rule_name(name):
     """bench_workflow.py adds each job's cost line to the rule its logger names: a script
     that serves several rules names the one it runs for (``snakemake.rule``)."""
-    script = re.search(r'^\s+script:\n\s+"\.\./(scripts/\w+\.py)"', RULES[name], flags=re.M)
-    text = (REPO / script.group(1)).read_text()
+    text = rule_script(name).read_text()
     assert (
         f'setup_script_logging(snakemake.log[0], "{name}")' in text
         or "setup_script_logging(snakemake.log[0], snakemake.rule)" in text
