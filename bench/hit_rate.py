@@ -57,7 +57,7 @@ from workflow.discovery.campaign import campaign_document, diagnose_configuratio
 from workflow.discovery.confidence import verdict_causes as verdict_causes_of
 from workflow.discovery.confidence import verdict_key
 from workflow.discovery.configuration import conclude
-from workflow.discovery.decision import extended_model_of
+from workflow.discovery.decision import CLEAR_GAIN, extended_model_of
 from workflow.discovery.joint import joint_segments
 from workflow.discovery.misfit import EXPLAINS_LIMIT, envelope_structure
 from workflow.lab.hidden_effects import (
@@ -125,7 +125,15 @@ def channel_verdicts(
 def _one(args):
     cause, seed, work, variability, integrator, placement, keep, runs, sensors = args
     start, start_cpu = time.perf_counter(), time.process_time()
-    record = {"cause": cause, "seed": seed, "verdict": None, "causes": [], "confidence": None, "ratio": None}
+    record = {
+        "cause": cause,
+        "seed": seed,
+        "verdict": None,
+        "causes": [],
+        "confidence": None,
+        "ratio": None,
+        "extended_error": None,
+    }
     try:
         if sensors > 1:
             gain = draw_mode1_gains(cause, seed, sensors) if placement else (1.0,) * sensors
@@ -156,7 +164,10 @@ def _one(args):
         record["verdict"] = doc["cause"] if conf else "no data"
         if conf:  # the hidden cause's own candidate, whatever the verdict
             record.update(
-                causes=verdict_causes(conf), confidence=verdict_confidence(conf), ratio=conf["gain"]["ratio"]
+                causes=verdict_causes(conf),
+                confidence=verdict_confidence(conf),
+                ratio=conf["gain"]["ratio"],
+                extended_error=conf["gain"]["extended"],
             )
             own = conf["evidence"]["candidates"].get(case_causes(cause)[-1], {}).get("ratio_to_baseline")
             case = {
@@ -233,6 +244,7 @@ def redecide(path: Path) -> dict:
         "causes": list(causes),
         "confidence": float(confidence.get(verdict, 0.0)),
         "ratio": result["errors"][model]["error"] / result["errors"][base]["error"],
+        "extended_error": result["errors"][model]["error"],
         "case": stored["case"],
         "seconds": time.perf_counter() - start,
     }
@@ -531,6 +543,19 @@ def reliability(results: list[dict]) -> tuple[list[tuple], float, int]:
     return rows, brier, len(rated)
 
 
+def visibility_key(cause: str) -> str:
+    """The case's figure that says whether its effect is in the data (:func:`report`)."""
+    if "+" in cause:
+        return "truth_added_term"
+    return "truth_drift_change" if cause == "run_drift" else "truth_baseline_misfit"
+
+
+def in_the_data(record: dict) -> bool:
+    """Whether the campaign's hidden effect changes its noise-free curves by more than
+    ``EXPLAINS_LIMIT`` scatters (False where the bench has no such figure)."""
+    return record["case"].get(visibility_key(record["cause"]), 0.0) > EXPLAINS_LIMIT
+
+
 def report(results: list[dict], causes: list[str]) -> None:
     """Confusion table, hit rates, gain ratios, explains_data, reliability, visibility, misses."""
     labels = VERDICTS + [c for c in causes if "+" in c]
@@ -583,15 +608,9 @@ def report(results: list[dict], causes: list[str]) -> None:
         f"combination: its added term changes the noise-free curves by more than {EXPLAINS_LIMIT:g} scatters):"
     )
     for cause in causes:
-        key = (
-            "truth_added_term"
-            if "+" in cause
-            else "truth_drift_change"
-            if cause == "run_drift"
-            else "truth_baseline_misfit"
-        )
+        key = visibility_key(cause)
         rows = [r for r in results if r["cause"] == cause and key in r["case"]]
-        visible = [r for r in rows if r["case"][key] > EXPLAINS_LIMIT]
+        visible = [r for r in rows if in_the_data(r)]
         if rows:
             hit = sum(is_right(r) for r in visible) / len(visible) if visible else float("nan")
             smallest = min(r["case"][key] for r in rows)
@@ -603,6 +622,31 @@ def report(results: list[dict], causes: list[str]) -> None:
                 f"  {cause:{width}s} in the data {len(visible)}/{len(rows)} (smallest {smallest:g} scatters), "
                 f"hit rate there {hit:.2f}{gains}"
             )
+    weak = [
+        r
+        for r in results
+        if r["cause"] in causes
+        and in_the_data(r)
+        and is_right(r)
+        and r.get("extended_error") is not None
+        and r["ratio"] >= CLEAR_GAIN
+    ]
+    if weak:
+        print(
+            f"\nnamed where in the data with a gain ratio of {CLEAR_GAIN:g} or more: the extended model's own "
+            "held-out error (scatter units; 1 is a prediction at the noise, which no model can beat, so "
+            f"a ratio below {CLEAR_GAIN:g} needs a baseline error above {1 / CLEAR_GAIN:.2f}):"
+        )
+        for cause in causes:
+            rows = sorted((r for r in weak if r["cause"] == cause), key=lambda r: r["ratio"])
+            if rows:
+                errors = sorted(r["extended_error"] for r in rows)
+                print(
+                    f"  {cause:{width}s} {len(rows)}: ratios {rows[0]['ratio']:.2f}-{rows[-1]['ratio']:.2f}, "
+                    f"extended errors {errors[0]:.2f}-{errors[-1]:.2f}, baseline errors "
+                    f"{min(r['extended_error'] / r['ratio'] for r in rows):.2f}-"
+                    f"{max(r['extended_error'] / r['ratio'] for r in rows):.2f}"
+                )
     several = [r for r in results if r["cause"] in causes and r.get("channels")]
     if several:
         print(
