@@ -634,8 +634,8 @@ def report(results: list[dict], causes: list[str]) -> None:
     if weak:
         print(
             f"\nnamed where in the data with a gain ratio of {CLEAR_GAIN:g} or more: the extended model's own "
-            "held-out error (scatter units; 1 is a prediction at the noise, which no model can beat, so "
-            f"a ratio below {CLEAR_GAIN:g} needs a baseline error above {1 / CLEAR_GAIN:.2f}):"
+            "held-out error (scatter units; 1 is a prediction at the noise, so a ratio below "
+            f"{CLEAR_GAIN:g} needs a baseline error above about {1 / CLEAR_GAIN:.2f}):"
         )
         for cause in causes:
             rows = sorted((r for r in weak if r["cause"] == cause), key=lambda r: r["ratio"])
