@@ -349,7 +349,11 @@ def test_a_file_unit_of_another_quantity_is_refused_without_yaml_unit(tmp_path):
     group = lms_export_group(["Time Laser:+X"], sensors["acc1"][:, None], "m/s", DT_S)
     writer = lambda p: write_testlab_mat(p, {"Laser": group})  # noqa: E731
     yaml_text = "name: t\nresponse: {quantity: acceleration}\nconfigurations:\n  c: {files: 'c/*'}\n"
-    with pytest.raises(CampaignFormatError, match=r"unit 'm/s' in the file is not a unit of acceleration"):
+    with pytest.raises(
+        CampaignFormatError,
+        match=r"unit 'm/s' in the file is not a unit of acceleration .*; it is a unit of velocity, "
+        r"and a campaign has one response quantity: leave the channel out of channels",
+    ):
         read_one(tmp_path, yaml_text, "run.mat", writer)
 
 

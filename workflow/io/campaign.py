@@ -674,9 +674,18 @@ def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
         return yaml_unit
     canonical = units.normalize_unit(file_unit)
     if canonical not in units.known_units(quantity):
+        # a sensor of another quantity (a laser vibrometer beside accelerometers): say so
+        other = [q for q in units.RESPONSE_QUANTITIES if canonical in units.known_units(q)]
+        hint = (
+            f"; it is a unit of {other[0]}, and a campaign has one response quantity: leave the "
+            "channel out of channels or analyse it in a campaign of its own"
+            if other
+            else ""
+        )
         raise ValueError(
             f"{what}: unit {quoted(file_unit)} in the file is not a unit of {quantity} "
             f"(campaign.yaml response quantity); expected one of {', '.join(units.known_units(quantity))}"
+            f"{hint}"
         )
     if yaml_unit is not None and canonical != yaml_unit:
         raise ValueError(
