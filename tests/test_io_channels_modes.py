@@ -21,7 +21,13 @@ from system_format_files import (
     write_uff58,
 )
 
-from workflow.io.campaign import SINGLE_CHANNEL_NAME, campaign_from_dict, campaign_to_dict, load_campaign
+from workflow.io.campaign import (
+    SINGLE_CHANNEL_NAME,
+    ResponseSpec,
+    campaign_from_dict,
+    campaign_to_dict,
+    load_campaign,
+)
 from workflow.io.records import CampaignFormatError
 from workflow.io.run_files import read_run
 
@@ -351,10 +357,62 @@ def test_a_file_unit_of_another_quantity_is_refused_without_yaml_unit(tmp_path):
     yaml_text = "name: t\nresponse: {quantity: acceleration}\nconfigurations:\n  c: {files: 'c/*'}\n"
     with pytest.raises(
         CampaignFormatError,
-        match=r"unit 'm/s' in the file is not a unit of acceleration .*; it is a unit of velocity, "
-        r"and a campaign has one response quantity: leave the channel out of channels",
+        match=r"unit 'm/s' in the file is not a unit of acceleration .*; it is a unit of velocity: "
+        r"leave quantity out of response in campaign.yaml .*or leave the channel out of channels",
     ):
         read_one(tmp_path, yaml_text, "run.mat", writer)
+
+
+def test_without_a_quantity_each_channel_records_its_file_units_quantity(tmp_path):
+    # a laser vibrometer (m/s) beside two accelerometers (g), as UNESP's beam was measured
+    sensors = three_sensors()
+    groups = {
+        "Laser": lms_export_group(["Time Laser:+X"], sensors["acc3"][:, None], "m/s", DT_S),
+        "Signal": lms_export_group(
+            ["Time Acc1:+X", "Time Acc2:+X"], np.column_stack([sensors["acc1"], sensors["acc2"]]), "g", DT_S
+        ),
+    }
+    writer = lambda p: write_testlab_mat(p, groups)  # noqa: E731
+    names = ["Time Acc1:+X", "Time Laser:+X", "Time Acc2:+X"]
+    yaml_text = f"name: t\nresponse: {{channels: {names!r}}}\nconfigurations:\n  c: {{files: 'c/*'}}\n"
+    record = read_one(tmp_path, yaml_text, "run.mat", writer)
+    assert [(c.unit, c.quantity) for c in record.responses] == [
+        ("g", "acceleration"),
+        ("m/s", "velocity"),
+        ("g", "acceleration"),
+    ]
+    laser = record.for_channel("Time Laser:+X")
+    assert (laser.response_quantity, laser.response_unit) == ("velocity", "m/s")
+    np.testing.assert_array_equal(laser.response, sensors["acc3"])
+    assert record.for_channel("Time Acc2:+X").response_quantity == "acceleration"
+
+
+def test_ascii_columns_of_different_quantities_without_a_quantity_in_campaign_yaml(tmp_path):
+    sensors = three_sensors()
+    t = np.arange(N) * DT_S
+    names = ["Time (s)", "acc1 (g)", "laser vel (in/s)", "disp3 (m)"]
+    writer = ascii_writer([t, *sensors.values()], names)
+    record = read_one(tmp_path, yaml_with("{channels: [acc1, laser vel, disp3]}"), "run.txt", writer)
+    assert [c.quantity for c in record.responses] == ["acceleration", "velocity", "displacement"]
+    assert record.for_channel("disp3").response_unit == "m"
+    # with a quantity, a column named for another is the contradiction it was
+    with pytest.raises(CampaignFormatError, match=r"'laser vel \(in/s\)' is velocity but campaign.yaml"):
+        read_one(
+            tmp_path, yaml_with("{quantity: acceleration, channels: [acc1, laser vel]}"), "run.txt", writer
+        )
+
+
+def test_a_response_unit_alone_names_the_quantity_and_nothing_at_all_is_refused_where_files_say_no_unit(
+    tmp_path,
+):
+    assert ResponseSpec(unit="in/s").quantity == "velocity"
+    assert ResponseSpec(unit="m/s2").quantity == "acceleration"
+    with pytest.raises(ValueError, match=r"unit 'lbf' is no response unit; expected one of g, m/s\^2"):
+        ResponseSpec(unit="lbf")
+    sensors = three_sensors()
+    writer = lambda p: write_plain_mat(p, acc1=sensors["acc1"])  # noqa: E731
+    with pytest.raises(CampaignFormatError, match=r"c/run.mat: variable 'acc1'.*records no unit.*add unit"):
+        read_one(tmp_path, yaml_with("{channels: [acc1]}"), "run.mat", writer)
 
 
 # --------------------------------------------------------------------------------------

@@ -175,7 +175,10 @@ class ResponseSpec:
 
     __pydantic_config__ = _CAMPAIGN_YAML_CONFIG
 
-    quantity: Literal["acceleration", "velocity", "displacement"]
+    quantity: Literal["acceleration", "velocity", "displacement"] | None = None
+    """What every response channel records; the unit's quantity when only ``unit`` is
+    given; None when every run file records each channel's unit, each channel then
+    recording its unit's quantity (accelerometers beside a laser vibrometer)."""
     unit: str | None = None
     """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in); None when every run file
     records its response unit (the file's unit is then used)."""
@@ -193,6 +196,14 @@ class ResponseSpec:
         if self.unit is None:
             return
         canonical = units.normalize_unit(self.unit)
+        if self.quantity is None:
+            quantity = units.response_quantity_of(canonical)
+            if quantity is None:
+                raise ValueError(
+                    f"unit {self.unit!r} is no response unit; expected one of "
+                    + ", ".join(u for q in units.RESPONSE_QUANTITIES for u in units.known_units(q))
+                )
+            object.__setattr__(self, "quantity", quantity)
         allowed = units.known_units(self.quantity)
         if canonical not in allowed:
             raise ValueError(
@@ -646,8 +657,10 @@ def frequency_problem(campaign: Campaign, sample_rate_hz: float, rate_source: st
 
 def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
     """The unit of a response channel: the one its file records, which must be a unit of
-    campaign.yaml's response quantity and agree with campaign.yaml's ``unit`` when given;
-    else campaign.yaml's (campaign.yaml fills only what the file leaves out).
+    campaign.yaml's response quantity when it gives one (else of any response quantity)
+    and agree with campaign.yaml's ``unit`` when given; else campaign.yaml's (campaign.yaml
+    fills only what the file leaves out). The unit names the channel's quantity
+    (:func:`workflow.io.units.response_quantity_of`).
 
     Parameters
     ----------
@@ -673,13 +686,21 @@ def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
             )
         return yaml_unit
     canonical = units.normalize_unit(file_unit)
-    if canonical not in units.known_units(quantity):
+    found = units.response_quantity_of(canonical)
+    if quantity is None:
+        if found is None:
+            every = (u for q in units.RESPONSE_QUANTITIES for u in units.known_units(q))
+            raise ValueError(
+                f"{what}: unit {quoted(file_unit)} in the file is no response unit; "
+                f"expected one of {', '.join(every)}"
+            )
+        return canonical
+    if found != quantity:
         # a sensor of another quantity (a laser vibrometer beside accelerometers): say so
-        other = [q for q in units.RESPONSE_QUANTITIES if canonical in units.known_units(q)]
         hint = (
-            f"; it is a unit of {other[0]}, and a campaign has one response quantity: leave the "
-            "channel out of channels or analyse it in a campaign of its own"
-            if other
+            f"; it is a unit of {found}: leave quantity out of response in campaign.yaml (each "
+            "channel then records its file's unit's quantity), or leave the channel out of channels"
+            if found is not None
             else ""
         )
         raise ValueError(

@@ -12,6 +12,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from workflow.io.units import response_quantity_of
+
 __all__ = [
     "MIN_SAMPLES",
     "CampaignFormatError",
@@ -101,6 +103,11 @@ class ResponseChannel:
     unit: str
     source: str = ""
 
+    @property
+    def quantity(self) -> str:
+        """What the channel records (acceleration, velocity, displacement): its unit's."""
+        return response_quantity_of(self.unit)
+
 
 @dataclass(frozen=True, eq=False)
 class RunRecord:
@@ -121,7 +128,7 @@ class RunRecord:
     response : ndarray
         The response in the campaign's response unit, as in the file.
     response_quantity : str
-        acceleration, velocity or displacement.
+        acceleration, velocity or displacement: what ``response`` records.
     response_unit : str
         Canonical unit of ``response``.
     header : dict
@@ -140,7 +147,8 @@ class RunRecord:
         (:mod:`workflow.io.recording_time`); empty otherwise (ASCII files).
     responses : tuple of ResponseChannel
         Every response channel campaign.yaml asks for, in its order; ``response`` and
-        ``response_unit`` are the first's (:meth:`for_channel` picks another).
+        ``response_unit`` are the first's (:meth:`for_channel` picks another; the channels
+        may record different quantities, each its unit's).
     """
 
     path: str
@@ -164,11 +172,16 @@ class RunRecord:
         return tuple(channel.name for channel in self.responses)
 
     def for_channel(self, name: str) -> RunRecord:
-        """The record with ``response`` and ``response_unit`` of the response channel
-        ``name`` (KeyError when the record has none of that name)."""
+        """The record with ``response``, ``response_unit`` and ``response_quantity`` of the
+        response channel ``name`` (KeyError when the record has none of that name)."""
         for channel in self.responses:
             if channel.name == name:
                 if channel.values is self.response:
                     return self
-                return replace(self, response=channel.values, response_unit=channel.unit)
+                return replace(
+                    self,
+                    response=channel.values,
+                    response_unit=channel.unit,
+                    response_quantity=channel.quantity,
+                )
         raise KeyError(f"{self.path}: no response channel {name!r} (has {', '.join(self.channel_names())})")

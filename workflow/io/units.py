@@ -21,6 +21,7 @@ __all__ = [
     "RESPONSE_QUANTITIES",
     "normalize_unit",
     "known_units",
+    "response_quantity_of",
     "factor_to_internal",
     "to_internal",
     "velocity_amplitude_in_s",
@@ -106,6 +107,18 @@ def known_units(quantity: str) -> tuple[str, ...]:
     if quantity not in _FACTORS_TO_INTERNAL:
         raise ValueError(f"unknown quantity {quantity!r}; expected one of {', '.join(_FACTORS_TO_INTERNAL)}")
     return tuple(_FACTORS_TO_INTERNAL[quantity])
+
+
+def response_quantity_of(unit: str) -> str | None:
+    """The response quantity whose unit ``unit`` (canonical) is, or None for no response unit.
+
+    >>> response_quantity_of("g"), response_quantity_of("m/s"), response_quantity_of("N")
+    ('acceleration', 'velocity', None)
+    """
+    for quantity in RESPONSE_QUANTITIES:
+        if unit in _FACTORS_TO_INTERNAL[quantity]:
+            return quantity
+    return None
 
 
 def factor_to_internal(quantity: str, unit: str) -> float:

@@ -264,7 +264,7 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
         time_s=None if time_s is None else np.ascontiguousarray(time_s),
         force_lbf=None if force_lbf is None else np.ascontiguousarray(force_lbf),
         response=response,
-        response_quantity=campaign.response.quantity,
+        response_quantity=responses[0].quantity,
         response_unit=responses[0].unit,
         header=dict(header_values.entries),
         n_samples=int(n_rows),

@@ -344,15 +344,13 @@ def find_columns(
             names_line,
             f"no response column among {[shortened(name) for name in names][:MAX_QUOTED_PROBLEMS]} (a response column's name contains acc, vel, resp or disp)",
         )
-    response_name = split_name_unit(names[roles["response"]])[0].lower()
-    for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
-        if word in response_name and quantity != campaign.response.quantity:
-            raise CampaignFormatError(
-                path,
-                names_line,
-                f"response column {quoted(names[roles['response']])} is {quantity} but "
-                f"campaign.yaml says response quantity {campaign.response.quantity}",
-            )
+    _check_named_quantity(
+        names[roles["response"]],
+        split_name_unit(names[roles["response"]])[0].lower(),
+        campaign,
+        path,
+        names_line,
+    )
     return _Columns(
         roles, column_units, tuple(names), names_line, (roles["response"],), (column_units["response"],)
     )
@@ -451,14 +449,7 @@ def _named_response_columns(
                     units_cells[index] if units_cells is not None else split_name_unit(names[index])[1]
                 )
         for index in responses:
-            for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
-                if word in bare[index] and quantity != campaign.response.quantity:
-                    raise CampaignFormatError(
-                        path,
-                        names_line,
-                        f"response column {quoted(names[index])} is {quantity} but campaign.yaml says "
-                        f"response quantity {campaign.response.quantity}",
-                    )
+            _check_named_quantity(names[index], bare[index], campaign, path, names_line)
     response_units = tuple(
         None
         if names is None
@@ -468,6 +459,22 @@ def _named_response_columns(
     roles["response"] = responses[0]
     column_units["response"] = response_units[0]
     return _Columns(roles, column_units, tuple(names or ()), names_line, tuple(responses), response_units)
+
+
+def _check_named_quantity(name: str, bare: str, campaign: Campaign, path: str, line: int | None) -> None:
+    """Refuse a response column whose name says another quantity than campaign.yaml's
+    (``bare``: the name without its unit, lower-case); without a quantity in campaign.yaml
+    each column's unit says what it records."""
+    if campaign.response.quantity is None:
+        return
+    for word, quantity in (("acc", "acceleration"), ("vel", "velocity"), ("disp", "displacement")):
+        if word in bare and quantity != campaign.response.quantity:
+            raise CampaignFormatError(
+                path,
+                line,
+                f"response column {quoted(name)} is {quantity} but campaign.yaml says "
+                f"response quantity {campaign.response.quantity}",
+            )
 
 
 def response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:

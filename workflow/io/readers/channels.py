@@ -447,7 +447,7 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         time_s=time_s,
         force_lbf=None if force_lbf is None else np.ascontiguousarray(force_lbf),
         response=responses[0].values,
-        response_quantity=campaign.response.quantity,
+        response_quantity=responses[0].quantity,
         response_unit=responses[0].unit,
         header=header,
         n_samples=int(n_samples),
