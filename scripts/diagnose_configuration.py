@@ -8,7 +8,7 @@ from workflow.discovery.diagnosis_files import write_configuration_diagnosis
 from workflow.discovery.modes import diagnosed_outcome
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json
-from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
+from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows, recorded_quantity
 from workflow.measured.settings import AnalysisSettings
 from workflow.models.paper import configuration_models_document
 from workflow.models.settings import DiscoverySettings, ModelSettings
@@ -25,7 +25,6 @@ outcome = diagnosed_outcome(
     segments,
     read_table(snakemake.input.runs),
     configuration,
-    response_quantity=campaign.response.quantity,
     settings=DiscoverySettings(**snakemake.params.discovery),
     segment_cycles=decay.segment_cycles,
     segment_overlap=decay.segment_overlap,
@@ -50,7 +49,7 @@ document = configuration_models_document(
     configuration,
     first_mode_rows(read_table(snakemake.input.modes)).set_index("configuration"),
     campaign.bearing_areas_in2(),
-    response_quantity=campaign.response.quantity,
+    response_quantity=recorded_quantity(segments, campaign.response.quantity or "acceleration"),
     analysis=decay,
     settings=ModelSettings(**snakemake.params.models),
     averaged_params=None

@@ -32,7 +32,6 @@ for index, mode_hz in enumerate(sorted(segments["mode_hz"].dropna().unique())):
         segments[segments["mode_hz"] == mode_hz],
         runs,
         configuration,
-        response_quantity=campaign.response.quantity,
         settings=DiscoverySettings(**snakemake.params.discovery),
         segment_cycles=decay.segment_cycles,
         segment_overlap=decay.segment_overlap,

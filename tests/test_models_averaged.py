@@ -278,6 +278,37 @@ def test_response_order_changes_the_envelope_decay_only_where_frequency_moves():
     assert abs(1 - z2[0] / z0[0]) < 1e-3 and abs(1 - z2[-1] / z0[-1]) < 1e-2
 
 
+@pytest.mark.parametrize("model", ["dahl", "dahl_drift"])
+def test_segments_of_records_of_different_quantities_each_read_their_own_envelope(model):
+    # accelerometers beside a laser vibrometer and a displacement probe, pooled: each
+    # segment's model damping is the one of its own record's quantity, on the same grid
+    params = {
+        "f_lin_hz": 100.0,
+        "zeta0": 1e-3,
+        "joint_stiffness_fraction": 0.1,
+        "slip_velocity_in_s": 1.0,
+        "drift": 0.4,
+    }
+    rng = np.random.default_rng(3)
+    v = np.geomspace(0.02, 50, 60)
+    runs = rng.integers(0, 3, v.size)
+    orders = rng.permutation(np.resize([2, 1, 0], v.size))
+    common = {"run_index": runs, "n_runs": 3, "grid_range": (v.min(), v.max())}
+    zeta, frequency_hz = CurveGrid(v, response_order=orders, **common)(model, params)
+    for order in (0, 1, 2):
+        own_zeta, own_f = CurveGrid(v, response_order=order, **common)(model, params)
+        np.testing.assert_array_equal(zeta[orders == order], own_zeta[orders == order])
+        np.testing.assert_array_equal(frequency_hz, own_f)
+    # one quantity given per segment is the one-quantity grid, to the bit
+    np.testing.assert_array_equal(
+        CurveGrid(v, response_order=np.full(v.size, 1), **common)(model, params)[0],
+        CurveGrid(v, response_order=1, **common)(model, params)[0],
+    )
+    # and the orders differ where the frequency moves (the softening joint's slip range)
+    z0, z2 = (CurveGrid(v, response_order=n, **common)(model, params)[0] for n in (0, 2))
+    assert np.max(1 - z2 / z0) > 0.01
+
+
 def test_drift_model_at_the_middle_run_is_dahl_and_shifts_the_slip_scale():
     params = {"f_lin_hz": 100.0, "zeta0": 1e-3, "joint_stiffness_fraction": 0.05, "slip_velocity_in_s": 1.0}
     v = np.geomspace(0.05, 5, 30)

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from workflow.models.configuration_data import (
     ConfigurationData,
     log_damping_bias,
     mean_unbiased_damping,
+    prepare_configuration,
     scatter_of,
 )
 
@@ -70,3 +72,24 @@ def test_noisy_low_amplitudes_show_no_damping_trend_once_the_bias_is_removed():
             assert abs(residual.mean()) < 3.0 * standard_error
     top = data.velocity_in_s > 0.5
     np.testing.assert_allclose(unbiased.zeta[top], data.zeta[top], rtol=1e-3)
+
+
+def test_the_segments_quantity_column_gives_each_segment_its_response_order():
+    frame = pd.DataFrame(
+        {
+            "configuration": "c",
+            "run": ["r1"] * 6,
+            "channel": ["acc1", "laser", "acc1", "laser", "acc2", "acc1"],
+            "response_quantity": ["acceleration", "velocity"] * 2 + ["acceleration"] * 2,
+            "velocity_amplitude_in_s": [1.0, 0.9, 0.5, 0.45, 0.3, 0.2],
+            "zeta": [0.003, 0.003, -0.001, 0.002, 0.002, 0.002],
+            "frequency_hz": 100.0,
+        }
+    )
+    data = prepare_configuration(frame, "c", response_order=0)
+    # the growing envelope's row is dropped with its order
+    assert data.response_order.tolist() == [2, 1, 1, 2, 2]
+    assert data.grid_response_order == 2
+    one = prepare_configuration(frame.assign(response_quantity="velocity"), "c", response_order=0)
+    assert (one.response_order, one.grid_response_order) == (1, 1)
+    assert prepare_configuration(frame.drop(columns="response_quantity"), "c", 0).response_order == 0

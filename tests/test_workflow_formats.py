@@ -208,33 +208,38 @@ def test_real_unesp_export_without_window_or_unit_stops_naming_the_dwell_line(tm
 
 
 @needs_realdata("raw")
-def test_real_unesp_export_by_its_four_accelerometers_gives_one_verdict(tmp_path):
-    """The Test.Lab export's four accelerometers (unit g, read from the file) see the free
-    decay after the dwell at four points of the beam: one configuration gives one joint
-    verdict with each sensor's own beside it. No two sensors are 0.7 sure of different
-    verdicts, those that are sure of one (here the three that see the decay over a decade
-    or more) are sure of the joint verdict, and a sensor that sees less may be less sure,
-    never sure of something else. The laser beside them
-    records m/s: the run is refused, naming the channel, its quantity and what to do."""
+def test_real_unesp_export_by_its_accelerometers_and_laser_gives_one_verdict(tmp_path):
+    """The Test.Lab export's four accelerometers (g) and laser vibrometer (m/s), units read
+    from the file, see the free decay after the dwell at five points of the beam: with no
+    quantity in campaign.yaml each channel records its unit's, and the configuration gives
+    one joint verdict with each sensor's own beside it. No two sensors are 0.7 sure of
+    different verdicts, those that are sure of one are sure of the joint verdict, and a
+    sensor that sees less may be less sure, never sure of something else. With
+    ``quantity: acceleration`` the laser contradicts campaign.yaml: the run is refused,
+    naming the channel, its quantity and what to do."""
     campaign = tmp_path / "campaign"
     (campaign / "t5nm").mkdir(parents=True)
     shutil.copyfile(REALDATA / "raw" / "unesp_T5Nm_Sine_09Hz_Time.mat", campaign / "t5nm" / "sine_09hz.mat")
-    accelerometers = [f"Time Acc{k}:+X" for k in range(1, 5)]
+    sensors = [*(f"Time Acc{k}:+X" for k in range(1, 5)), "Time Laser:+X"]
 
-    def write_yaml(channels):
+    def write_yaml(quantity):
         (campaign / "campaign.yaml").write_text(
             "name: unesp\nmode_hz: 18.7\n"
-            f"response: {{quantity: acceleration, channels: {json.dumps(channels)}}}\n"
+            f"response: {{{quantity}channels: {json.dumps(sensors)}}}\n"
             'configurations:\n  t5nm: {files: "t5nm/*.mat", window_s: [51.2, 64]}\n'
         )
 
-    write_yaml(accelerometers)
+    write_yaml("")
     work = tmp_path / "work"
     result = snakemake(work, "-c2", "discovery", "--config", f"campaign={campaign}")
     assert result.returncode == 0, result.stderr[-4000:]
+    segments = pd.read_parquet(work / "results/tables/segments.parquet")
+    recorded = segments.groupby("channel")["response_quantity"].unique().map(list).to_dict()
+    assert recorded == {**{name: ["acceleration"] for name in sensors[:4]}, "Time Laser:+X": ["velocity"]}
     configuration = json.loads((work / "results/diagnosis.json").read_text())["configurations"]["t5nm"]
     channels = configuration["channels"]
-    assert sorted(channels) == sorted(accelerometers)
+    assert sorted(channels) == sorted(sensors)
+    assert configuration["joint"]["left_out"] == []
     joint = max(configuration["confidence"], key=configuration["confidence"].get)
     sure = {
         name: max(verdict["confidence"], key=verdict["confidence"].get)
@@ -242,15 +247,18 @@ def test_real_unesp_export_by_its_four_accelerometers_gives_one_verdict(tmp_path
         if max(verdict["confidence"].values()) >= 0.7
     }
     assert set(sure.values()) == {joint}, (joint, {n: v["confidence"] for n, v in channels.items()})
+    # the laser, on the reference sensor's scale (factor near 1), reads the joint's cause first
+    laser = channels["Time Laser:+X"]["confidence"]
+    assert max(laser, key=laser.get) == joint, laser
 
-    write_yaml([*accelerometers, "Time Laser:+X"])
-    result = snakemake(tmp_path / "with_laser", "-c2", "measured", "--config", f"campaign={campaign}")
+    write_yaml("quantity: acceleration, ")
+    result = snakemake(tmp_path / "as_acceleration", "-c2", "measured", "--config", f"campaign={campaign}")
     assert result.returncode != 0
     output = result.stdout + result.stderr
     for words in (
         "'Time Laser:+X'",
         "not a unit of acceleration",
         "it is a unit of velocity",
-        "leave the channel out",
+        "leave quantity out of response",
     ):
         assert words in output, words

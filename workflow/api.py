@@ -147,7 +147,7 @@ def ring_down_table(
         decay_settings=analysis,
         quality_settings=quality,
     )
-    table = pd.DataFrame(columns).drop(columns=["configuration", "run"])
+    table = pd.DataFrame(columns).drop(columns=["configuration", "run", "response_quantity"])
     if kept_only:
         table = table[table["kept"]].reset_index(drop=True)
     table = with_si_columns(table)

@@ -205,9 +205,10 @@ def diagnose_configurations(
         ``run``, ``velocity_amplitude_in_s``, ``zeta``, ``frequency_hz``,
         ``bearing_area_in2``.
     response_quantity : str or mapping
-        Recorded quantity (campaign.yaml ``response.quantity``), for all
-        configurations or per configuration: the envelope of an acceleration record
-        decays differently from a displacement's when the frequency changes.
+        Recorded quantity, for all configurations or per configuration, where the
+        segments have no ``response_quantity`` column (the segments table's says each
+        segment's): the envelope of an acceleration record decays differently from a
+        displacement's when the frequency changes.
     settings : DiscoverySettings, optional
     segment_cycles, segment_overlap : float
         Log-decrement segment length in cycles and overlap (config

@@ -844,7 +844,8 @@ def diagnose_configuration_segments(
     context : FitContext
         The campaign's (:func:`~workflow.discovery.campaign.campaign_fit_context`).
     response_quantity : str
-        The configuration's recorded quantity (campaign.yaml ``response.quantity``).
+        The configuration's recorded quantity where the segments have no
+        ``response_quantity`` column (the segments table's says each segment's).
     settings : DiscoverySettings, optional
     segment_cycles, segment_overlap : float
         Log-decrement segment length (cycles) and overlap (fraction).

@@ -440,6 +440,7 @@ def departure_ruled_out_by_channels(
             zeta=data.zeta[rows],
             frequency_hz=data.frequency_hz[rows],
             run_index=data.run_index[rows],
+            response_order=data.response_order_of(rows),
             fit_rms=None,
             response_amplitude=None,
             channel_index=None,
@@ -813,7 +814,7 @@ def stiffness_signature(fit: FitResult, data: ConfigurationData, *, n_grid: int 
     velocity = np.geomspace(float(np.min(data.velocity_in_s)), float(np.max(data.velocity_in_s)), n_grid)
     curves = []
     for params in (fit.params, {**fit.params, "stiffness_shift": 0.0}):
-        _, frequency_hz = model_curves(fit.model, params, velocity, response_order=data.response_order)
+        _, frequency_hz = model_curves(fit.model, params, velocity, response_order=data.grid_response_order)
         curves.append(frequency_hz)
     whole, friction = (float(f[-1] / f[0] - 1.0) for f in curves)
     rise = float(np.max(curves[0] / np.minimum.accumulate(curves[0]) - 1.0))
@@ -864,7 +865,7 @@ def microslip_signature(fit: FitResult, data: ConfigurationData, *, n_grid: int 
     for name in ("stiffness_shift", "quadratic_zeta_per_in_s"):
         if name in joint_only:
             joint_only[name] = 0.0
-    zeta, _ = model_curves(fit.model, joint_only, velocity, response_order=data.response_order)
+    zeta, _ = model_curves(fit.model, joint_only, velocity, response_order=data.grid_response_order)
     excess = zeta - fit.params["zeta0"]
     rising = excess > MICROSLIP_ONSET * fit.params["zeta0"]
     if np.count_nonzero(rising) < 3:

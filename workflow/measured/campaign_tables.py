@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 __all__ = [
     "analyse_campaign",
     "response_unit_label",
+    "recorded_quantity",
     "nominal_modes_hz",
     "with_nominal_mode",
     "first_mode_and_channel",
@@ -89,6 +90,8 @@ def response_unit_label(campaign, statuses: list[dict]) -> str:
     """The unit of the tables' ``response_amplitude``, for the Parquet metadata:
     campaign.yaml's response unit, else the one the run files record (each channel's
     when they differ), with the quantity; e.g. ``m/s (velocity)``."""
+    from workflow.io.units import response_quantity_of
+
     quantity = campaign.response.quantity
     if campaign.response.unit is not None:
         return f"{campaign.response.unit} ({quantity})"
@@ -98,12 +101,34 @@ def response_unit_label(campaign, statuses: list[dict]) -> str:
             found.setdefault(channel, set()).add(unit)
     every = sorted(set().union(*found.values())) if found else []
     if len(every) == 1:
-        return f"{every[0]} ({quantity})"
+        return f"{every[0]} ({quantity or response_quantity_of(every[0])})"
     if not every:
-        return f"unit of the run files ({quantity})"
+        return f"unit of the run files ({quantity or 'the quantity of each file unit'})"
+    if quantity is None:
+        return "per channel: " + "; ".join(
+            f"{name} " + ", ".join(f"{unit} ({response_quantity_of(unit)})" for unit in sorted(units_))
+            for name, units_ in found.items()
+        )
     return f"{quantity}, per channel: " + "; ".join(
         f"{name} {', '.join(sorted(units_))}" for name, units_ in found.items()
     )
+
+
+def recorded_quantity(segments: pd.DataFrame, default: str) -> str:
+    """What the segments' records measured (their ``response_quantity``), ``default``
+    where they have no rows or no such column.
+
+    Raises
+    ------
+    ValueError
+        The rows come from records of several quantities (pooled channels).
+    """
+    found = segments["response_quantity"].unique().tolist() if "response_quantity" in segments else []
+    if len(found) > 1:
+        raise ValueError(
+            f"segments of several response quantities ({', '.join(map(str, found))}), expected one"
+        )
+    return str(found[0]) if found else default
 
 
 def nominal_modes_hz(campaign, configurations_modes: list[tuple[ModeInfo, ...]]) -> list[float]:

@@ -93,6 +93,7 @@ SEGMENT_COLUMNS = [
     "run",
     "mode",
     "channel",
+    "response_quantity",
     "t_s",
     "response_amplitude",
     "velocity_amplitude_in_s",
@@ -109,6 +110,7 @@ _SEGMENT_DTYPES = {
     "run": str,
     "mode": int,
     "channel": str,
+    "response_quantity": str,
     "kept": bool,
     "reject_reason": str,
 }
@@ -172,6 +174,7 @@ def analyse_run_with_quality(
     columns = {
         "configuration": np.full(n_segments, configuration),
         "run": np.full(n_segments, run),
+        "response_quantity": np.full(n_segments, record.response_quantity),
         "t_s": np.asarray(segments["t_s"], dtype=float),
         "response_amplitude": np.asarray(segments["amplitude"], dtype=float),
         "velocity_amplitude_in_s": units.velocity_amplitude_in_s(

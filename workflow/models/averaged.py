@@ -456,7 +456,7 @@ def model_curves_on_grid(
     velocity_grid: ArrayLike,
     *,
     run_position: ArrayLike | None = None,
-    response_order: int = 2,
+    response_order: int | tuple[int, ...] = 2,
     n_iter: int = 2,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Damping ratio and damped frequency on a velocity-amplitude grid.
@@ -473,15 +473,17 @@ def model_curves_on_grid(
     run_position : array_like, shape (R,), optional
         For ``dahl_drift``: ``(r - r_mean) / n_runs`` of the runs; the result then has
         shape ``B + (R, G)`` with batch parameters broadcast against ``(R, 1)``.
-    response_order : int
-        0, 1, 2 for a displacement, velocity or acceleration record.
+    response_order : int or tuple of int
+        0, 1, 2 for a displacement, velocity or acceleration record; a tuple of ``K``
+        orders gives ``zeta`` in each (records of several quantities).
     n_iter : int
         Fixed-point iterations for ``y = (V / V_s)(omega_lin / omega)``.
 
     Returns
     -------
     zeta, frequency_hz : ndarray
-        Shape ``broadcast(B, (G,))`` (or with the run axis).
+        Shape ``broadcast(B, (G,))`` (or with the run axis); with a tuple of orders
+        ``zeta`` has an axis of the ``K`` orders before the run and grid axes.
     """
     v = np.asarray(velocity_grid, dtype=float)
     p = {k: np.asarray(val, dtype=float) for k, val in params.items()}
@@ -528,14 +530,15 @@ def model_curves_on_grid(
     )
     omega2 = out["omega2"]
     s_a = out["decay_rate"]
-    if response_order:
-        # d ln(omega) / d ln(a), with ln a = ln V - ln omega + const
-        m = gradient_along_grid(0.5 * np.log(omega2), log_v)
-        s_meas = s_a * (1.0 + response_order * m / (1.0 - m))
-    else:
-        s_meas = s_a
     omega_d2 = np.maximum(omega2 - s_a**2, 1e-6 * omega2)
-    zeta = s_meas / np.sqrt(s_meas**2 + omega_d2)
+    orders = (response_order,) if np.ndim(response_order) == 0 else tuple(response_order)
+    # d ln(omega) / d ln(a), with ln a = ln V - ln omega + const
+    m = gradient_along_grid(0.5 * np.log(omega2), log_v) if any(orders) else None
+    zetas = []
+    for order in orders:
+        s_meas = s_a * (1.0 + order * m / (1.0 - m)) if order else s_a
+        zetas.append(s_meas / np.sqrt(s_meas**2 + omega_d2))
+    zeta = zetas[0] if np.ndim(response_order) == 0 else np.stack(zetas, axis=-3 if model.uses_runs else -2)
     return zeta, np.sqrt(omega_d2) / (2.0 * np.pi)
 
 
@@ -566,8 +569,9 @@ class CurveGrid:
         Run of each segment, 0-based in run order (needed by ``dahl_drift``).
     n_runs : int, optional
         Number of runs of the configuration (defaults to ``max(run_index) + 1``).
-    response_order : int
-        0, 1, 2: displacement, velocity, acceleration record.
+    response_order : int or array_like of int, shape (n,)
+        0, 1, 2: displacement, velocity, acceleration record; per segment where the
+        segments come from records of different quantities.
     grid_range : (float, float), optional
         Velocity range of the grid (defaults to the data's, padded by 5 %).
     n_grid : int
@@ -577,12 +581,14 @@ class CurveGrid:
     velocity_in_s: np.ndarray
     run_index: np.ndarray | None = None
     n_runs: int | None = None
-    response_order: int = 2
+    response_order: int | np.ndarray = 2
     grid_range: tuple[float, float] | None = None
     n_grid: int = 48
     grid: np.ndarray = field(init=False)
     _lo: np.ndarray = field(init=False)
     _w: np.ndarray = field(init=False)
+    _orders: int | tuple[int, ...] = field(init=False)
+    _order_slot: np.ndarray | None = field(init=False)
 
     def __post_init__(self) -> None:
         v = np.asarray(self.velocity_in_s, dtype=float)
@@ -601,6 +607,11 @@ class CurveGrid:
         self.run_index = np.asarray(self.run_index, dtype=int)
         if self.n_runs is None:
             self.n_runs = int(self.run_index.max()) + 1 if self.run_index.size else 1
+        self._orders, self._order_slot = int(np.max(self.response_order, initial=0)), None
+        if np.ndim(self.response_order) > 0:
+            orders, slot = np.unique(np.asarray(self.response_order, dtype=int), return_inverse=True)
+            if orders.size > 1:
+                self._orders, self._order_slot = tuple(int(n) for n in orders), slot
 
     @property
     def run_positions(self) -> np.ndarray:
@@ -618,12 +629,20 @@ class CurveGrid:
             params,
             self.grid,
             run_position=self.run_positions if model.uses_runs else None,
-            response_order=self.response_order,
+            response_order=self._orders,
         )
-        return self._interp(zeta_g, model.uses_runs), self._interp(f_g, model.uses_runs)
+        return (
+            self._interp(zeta_g, model.uses_runs, self._order_slot),
+            self._interp(f_g, model.uses_runs),
+        )
 
-    def _interp(self, values: np.ndarray, per_run: bool) -> np.ndarray:
-        if per_run:
+    def _interp(self, values: np.ndarray, per_run: bool, order_slot: np.ndarray | None = None) -> np.ndarray:
+        if order_slot is not None:
+            # one curve per response order: each segment reads its own order's
+            index = (order_slot, self.run_index) if per_run else (order_slot,)
+            a = values[(..., *index, self._lo)]
+            b = values[(..., *index, self._lo + 1)]
+        elif per_run:
             a = values[..., self.run_index, self._lo]
             b = values[..., self.run_index, self._lo + 1]
         else:

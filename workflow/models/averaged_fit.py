@@ -434,7 +434,7 @@ class _Problem:
             data.velocity_in_s[mask],
             run_index=data.run_index[mask],
             n_runs=max(data.n_runs, 1),
-            response_order=data.response_order,
+            response_order=data.response_order_of(mask),
             grid_range=(float(data.velocity_in_s.min()), float(data.velocity_in_s.max())),
         )
         self.ln_zeta = np.log(data.zeta[mask])

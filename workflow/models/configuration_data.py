@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from workflow.io.recording_time import FILE_NAME_ORDER, run_order
+from workflow.models.averaged import RESPONSE_ORDER
 
 __all__ = [
     "TOL_LN_ZETA",
@@ -63,8 +64,10 @@ class ConfigurationData:
     run_order : str
         Which order ``run_names`` is, in words (:func:`workflow.io.recording_time.run_order`).
     bearing_area_in2 : float or None
-    response_order : int
-        0, 1, 2: the record was displacement, velocity, acceleration.
+    response_order : int or ndarray of int
+        0, 1, 2: the record was displacement, velocity, acceleration; per segment where
+        pooled channels record different quantities (accelerometers beside a laser
+        vibrometer: each envelope decays in its own quantity's way).
     n_dropped : int
         Segments dropped because ``zeta <= 0`` or a value was not finite.
     fit_rms, response_amplitude : ndarray or None
@@ -85,7 +88,7 @@ class ConfigurationData:
     run_index: np.ndarray
     run_names: list[str]
     bearing_area_in2: float | None
-    response_order: int = 2
+    response_order: int | np.ndarray = 2
     n_dropped: int = 0
     fit_rms: np.ndarray | None = None
     response_amplitude: np.ndarray | None = None
@@ -98,6 +101,19 @@ class ConfigurationData:
     def __post_init__(self) -> None:
         if not self.anchor_velocity_in_s > 0:
             self.anchor_velocity_in_s = float(np.max(self.velocity_in_s)) if self.velocity_in_s.size else 1.0
+
+    def response_order_of(self, rows: np.ndarray) -> int | np.ndarray:
+        """:attr:`response_order` of the segments ``rows`` (a mask or indices)."""
+        return self.response_order if np.ndim(self.response_order) == 0 else self.response_order[rows]
+
+    @property
+    def grid_response_order(self) -> int:
+        """The order a model curve on a grid of amplitudes (not at the segments) is drawn
+        in: :attr:`response_order`, or where it is per segment the most segments' order."""
+        if np.ndim(self.response_order) == 0:
+            return int(self.response_order)
+        orders, counts = np.unique(self.response_order, return_counts=True)
+        return int(orders[np.argmax(counts)])
 
     @property
     def n_runs(self) -> int:
@@ -127,6 +143,9 @@ def prepare_configuration(
     fit in ``ln zeta`` and are dropped (counted in ``n_dropped``). ``record_start``
     (run name -> ISO 8601 recording start, the runs table's ``record_start``) orders
     the runs when every run has one (:func:`workflow.io.recording_time.run_order`).
+    A ``response_quantity`` column (the segments table's) gives the response order in
+    place of ``response_order``: one order, or one per segment where the channels
+    record different quantities.
     A ``channel_index`` column (pooled channels, :func:`workflow.discovery.joint.joint_segments`)
     becomes :attr:`ConfigurationData.channel_index`.
 
@@ -169,6 +188,9 @@ def prepare_configuration(
             extra = {"fit_rms": rms, "response_amplitude": amp}
     if "channel_index" in rows:
         extra["channel_index"] = rows["channel_index"].to_numpy(int)[ok]
+    if "response_quantity" in rows and ok.any():
+        orders = rows["response_quantity"].map(RESPONSE_ORDER).to_numpy(int)[ok]
+        response_order = int(orders[0]) if np.all(orders == orders[0]) else orders
     return ConfigurationData(
         name=name,
         velocity_in_s=v[ok],
