@@ -11,6 +11,7 @@ from workflow.io.units import (
     factor_to_internal,
     known_units,
     normalize_unit,
+    response_quantity_of,
     to_internal,
     velocity_amplitude_in_s,
 )
@@ -58,3 +59,23 @@ def test_single_precision_input_is_converted_in_double_precision():
     velocity = velocity_amplitude_in_s(1.0, "acceleration", "g", frequency_hz)
     expected = G_IN_S2 / (2 * math.pi * frequency_hz.astype(np.float64))
     np.testing.assert_allclose(velocity, expected, rtol=1e-14)
+
+
+@pytest.mark.parametrize(
+    "written, quantity, inches_per_unit",
+    [
+        ("mm/s", "velocity", 1.0 / 25.4),
+        ("MM/S", "velocity", 1.0 / 25.4),
+        ("mm/s²", "acceleration", 1.0 / 25.4),
+        ("mm/s/s", "acceleration", 1.0 / 25.4),
+        ("mm", "displacement", 1.0 / 25.4),
+        ("µm", "displacement", 1e-3 / 25.4),
+        ("μm", "displacement", 1e-3 / 25.4),
+        ("um", "displacement", 1e-3 / 25.4),
+    ],
+)
+def test_millimetre_and_micrometre_units_of_lasers_and_probes_are_read(written, quantity, inches_per_unit):
+    # 1 in = 25.4 mm exactly
+    unit = normalize_unit(written)
+    assert response_quantity_of(unit) == quantity
+    assert factor_to_internal(quantity, unit) == pytest.approx(inches_per_unit, rel=1e-15)

@@ -78,7 +78,7 @@ def ring_down_table(
         Samples per second.
     quantity, unit : str
         What the response is (acceleration, velocity or displacement) and its unit (g,
-        m/s^2, in/s^2, m/s, in/s, m, in).
+        m/s^2, in/s^2, mm/s^2, m/s, in/s, mm/s, m, in, mm, um).
     force_lbf : array_like, optional
         The hammer force in lbf, same length: the mode is then found from the H1
         frequency response.

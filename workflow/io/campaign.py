@@ -180,7 +180,7 @@ class ResponseSpec:
     given; None when every run file records each channel's unit, each channel then
     recording its unit's quantity (accelerometers beside a laser vibrometer)."""
     unit: str | None = None
-    """Canonical unit name (g, m/s^2, in/s^2, m/s, in/s, m, in); None when every run file
+    """Canonical unit name (g, m/s^2, in/s^2, mm/s^2, m/s, in/s, mm/s, m, in, mm, um); None when every run file
     records its response unit (the file's unit is then used)."""
     channel: Annotated[int | str | None, After(_channel_reference)] = None
     """Which channel of a run file holds the response: its name (a system file's channel,

@@ -50,9 +50,10 @@ RESPONSE_QUANTITIES: tuple[str, ...] = ("acceleration", "velocity", "displacemen
 """Response quantities a campaign may record."""
 
 _FACTORS_TO_INTERNAL: dict[str, dict[str, float]] = {
-    "acceleration": {"g": STANDARD_GRAVITY_IN_S2, "m/s^2": METRE_IN, "in/s^2": 1.0},
-    "velocity": {"m/s": METRE_IN, "in/s": 1.0},
-    "displacement": {"m": METRE_IN, "in": 1.0},
+    "acceleration": {"g": STANDARD_GRAVITY_IN_S2, "m/s^2": METRE_IN, "in/s^2": 1.0, "mm/s^2": METRE_IN / 1e3},
+    # laser vibrometers and displacement probes often record in mm/s, mm or um
+    "velocity": {"m/s": METRE_IN, "in/s": 1.0, "mm/s": METRE_IN / 1e3},
+    "displacement": {"m": METRE_IN, "in": 1.0, "mm": METRE_IN / 1e3, "um": METRE_IN / 1e6},
     "force": {"lbf": 1.0, "N": NEWTON_LBF},
 }
 
@@ -68,11 +69,21 @@ _ALIASES: dict[str, str] = {
     "in/s^2": "in/s^2",
     "in/s2": "in/s^2",
     "in/s/s": "in/s^2",
+    "mm/s^2": "mm/s^2",
+    "mm/s2": "mm/s^2",
+    "mm/s/s": "mm/s^2",
     "m/s": "m/s",
     "ms^-1": "m/s",
+    "mm/s": "mm/s",
     "in/s": "in/s",
     "ips": "in/s",
     "m": "m",
+    "mm": "mm",
+    "um": "um",
+    "µm": "um",
+    "μm": "um",
+    "micron": "um",
+    "microns": "um",
     "in": "in",
     "inch": "in",
     "lbf": "lbf",

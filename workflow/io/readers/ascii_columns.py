@@ -128,7 +128,12 @@ def _is_key_value(line: str, delimiter: str, n_columns: int) -> bool:
     return len({column_role(cell) for cell in cells} - {None}) < 2
 
 
-_KNOWN_UNIT_WORDS = {"s", "ms", "sec", "lbf", "N", "g", "m/s^2", "in/s^2", "m/s", "in/s", "m", "in"}
+_KNOWN_UNIT_WORDS = {
+    "s",
+    "ms",
+    "sec",
+    *(unit for quantity in (*units.RESPONSE_QUANTITIES, "force") for unit in units.known_units(quantity)),
+}
 
 
 def _is_units_row(line: str, delimiter: str, n_columns: int) -> list[str] | None:
