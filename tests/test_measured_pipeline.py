@@ -117,6 +117,7 @@ def test_run_file_analysis_gives_segments_checks_and_status(analysed, tmp_path):
         "status": "used",
         "reason": "",
         "record_start": "",  # an ASCII file states no recording start
+        "left_out": "",
         "response_units": {"response": "g"},
     }
     assert good.segments["kept"].sum() >= 3 and set(good.segments["run"]) == {"run01"}

@@ -171,6 +171,16 @@ class RunRecord:
         """The names of :attr:`responses`."""
         return tuple(channel.name for channel in self.responses)
 
+    def without_channels(self, names: set[str]) -> RunRecord:
+        """The record without the response channels ``names`` (at least one must remain);
+        ``response`` is then the first remaining channel's."""
+        if not names:
+            return self
+        remaining = tuple(channel for channel in self.responses if channel.name not in names)
+        if not remaining:
+            raise ValueError(f"{self.path}: no response channel would remain")
+        return replace(self, responses=remaining).for_channel(remaining[0].name)
+
     def for_channel(self, name: str) -> RunRecord:
         """The record with ``response``, ``response_unit`` and ``response_quantity`` of the
         response channel ``name`` (KeyError when the record has none of that name)."""

@@ -217,7 +217,7 @@ def collect_tables(
 
     status_rows = read_run_statuses(status_paths)
     statuses = pd.DataFrame(status_rows + list(excluded_paths))
-    statuses = statuses.reindex(columns=RUN_COLUMNS).fillna({"record_start": ""})
+    statuses = statuses.reindex(columns=RUN_COLUMNS).fillna({"record_start": "", "left_out": ""})
     runs = statuses.reset_index(drop=True)
     frames = [pd.DataFrame(read_columns(path)) for path in segment_paths]
     frames = [frame for frame in frames if len(frame)]

@@ -19,7 +19,7 @@ from workflow.io.record_rules import rates_agree
 from workflow.io.records import RunRecord
 from workflow.measured import mode as modal_id
 from workflow.measured import quality
-from workflow.measured.runs import analysis_window, failed_checks, read_with_quality, window_problems
+from workflow.measured.runs import analysis_window, read_with_quality, record_problems, window_problems
 from workflow.measured.settings import AnalysisSettings, QualitySettings
 
 __all__ = [
@@ -198,13 +198,14 @@ def identify_configuration_mode(
         record, rows = reads.get(run_path) or read_with_quality(
             campaign_dir, run_path, campaign, quality_settings
         )
-        problems = failed_checks(run_path, rows)
+        problems, clipped = record_problems(run_path, rows)
         if not problems:
             problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
         if problems:
             skipped[PurePosixPath(run_path).stem] = problems
             continue
-        records.append(record)
+        # a clipped sensor's harmonics are not modes: the search reads the others
+        records.append(record.without_channels({row["channel"] for row in clipped}))
         windows.append(analysis_window(record, window_s))
         run_paths_used.append(run_path)
     if not records:

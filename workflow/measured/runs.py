@@ -36,6 +36,9 @@ __all__ = [
     "read_with_quality",
     "labelled",
     "analyse_every_mode_and_channel",
+    "LEFT_OUT",
+    "leave_out",
+    "record_problems",
     "failed_checks",
     "RunAnalysis",
     "analyse_run_file",
@@ -83,9 +86,15 @@ def window_problem(record: RunRecord, window_s: tuple[float, float] | None, conf
     )
 
 
-RUN_COLUMNS = ["configuration", "run", "path", "status", "reason", "record_start"]
+RUN_COLUMNS = ["configuration", "run", "path", "status", "reason", "record_start", "left_out"]
 """Columns of the runs table (``record_start``: ISO 8601 recording start, empty when the
-file states none; :mod:`workflow.io.recording_time`)."""
+file states none, :mod:`workflow.io.recording_time`; ``left_out``: why a used run's channels
+or modes that failed a decay-level check were left out, :func:`leave_out`)."""
+
+
+LEFT_OUT = "channel or mode left out of the run (see runs.parquet left_out)"
+"""The ``reject_reason`` of the segments of a used run's (mode, channel) that failed a
+decay-level check (:func:`leave_out`)."""
 
 
 SEGMENT_COLUMNS = [
@@ -304,6 +313,37 @@ def analyse_every_mode_and_channel(
     return {key: np.concatenate([part[key] for part in parts]) for key in SEGMENT_COLUMNS}, decay_rows
 
 
+def leave_out(segments: dict[str, np.ndarray], pairs: set[tuple[int, str]]) -> dict[str, np.ndarray]:
+    """The segments with those of every (mode index, channel) of ``pairs`` rejected as
+    :data:`LEFT_OUT`.
+
+    A sensor near a node of one mode, or a mode one sensor barely sees, says nothing about
+    what the other channels and modes of the same hit measured: only that (mode, channel)
+    is left out of the run (:func:`analyse_run_file`).
+    """
+    out = np.zeros(segments["mode"].size, dtype=bool)
+    for mode, channel in pairs:
+        out |= (segments["mode"] == mode) & (segments["channel"] == channel)
+    return {
+        **segments,
+        "kept": segments["kept"] & ~out,
+        "reject_reason": np.where(out, LEFT_OUT, segments["reject_reason"]),
+    }
+
+
+def record_problems(path: str, rows: list[dict]) -> tuple[list[str], list[dict]]:
+    """What the record-level checks of a read run (:func:`read_with_quality`'s rows) say:
+    the messages that exclude it, and the failed clipping rows of the channels to leave
+    out. A clipped sensor is left out of the hit the others measured; any other failed
+    check (reading, the hit, the record's length), or every channel clipped, excludes the run."""
+    failed = [row for row in rows if row["applied"] and not row["passed"]]
+    clipped = [row for row in failed if row["check"] == "clipping"]
+    every = {row.get("channel") for row in rows}
+    if len(clipped) < len(failed) or {row["channel"] for row in clipped} >= every:
+        return failed_checks(path, rows), []
+    return [], clipped
+
+
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
     """Messages of the failed checks, each naming the file."""
     return [
@@ -337,7 +377,10 @@ def analyse_run_file(
     read: tuple[RunRecord | None, list[dict]] | None = None,
 ) -> RunAnalysis:
     """Read, check and analyse one run file; a run that cannot be used is excluded
-    with its reason, never raised.
+    with its reason, never raised. A (mode, channel) of a run that fails a decay-level
+    check (signal-to-noise, usable segments) while another passes is left out
+    (:func:`leave_out`), and so is every mode of a clipped channel while another is not:
+    the run is used, its status's ``left_out`` saying why.
 
     Parameters
     ----------
@@ -367,7 +410,9 @@ def analyse_run_file(
     if read is None:
         read = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
     record, rows = read[0], list(read[1])
-    problems = failed_checks(run_path, rows)
+    problems, clipped = record_problems(run_path, rows)
+    clipped_channels = {row["channel"] for row in clipped}
+    left_out: list[str] = []
     if record is not None and not problems:
         problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
     if record is not None and not problems:
@@ -389,7 +434,19 @@ def analyse_run_file(
                 problems = [_fault_reason(campaign_dir, run_path, "analysed", error)]
             else:
                 rows += decay_rows
-                problems = failed_checks(run_path, decay_rows)
+                # a (mode, channel) that fails a decay-level check is left out; the run is
+                # excluded only when nothing is left
+                failed = [row for row in decay_rows if row["applied"] and not row["passed"]]
+                checked = {(row["mode"], row["channel"]) for row in decay_rows}
+                pairs = {(row["mode"], row["channel"]) for row in failed}
+                pairs |= {(m, c) for m, c in checked if c in clipped_channels}
+                if pairs == checked:
+                    problems = failed_checks(run_path, decay_rows)
+                elif pairs:
+                    segments = leave_out(segments, pairs)
+                    left_out = failed_checks(run_path, clipped + failed)
+    if problems and clipped:
+        problems = [*failed_checks(run_path, clipped), *problems]
     status = {
         "configuration": configuration,
         "run": run,
@@ -397,6 +454,7 @@ def analyse_run_file(
         "status": "excluded" if problems else "used",
         "reason": "; ".join(problems),
         "record_start": "" if record is None else record.record_start,
+        "left_out": "; ".join(left_out),
         "response_units": {} if record is None else {c.name: c.unit for c in record.responses},
     }
     return RunAnalysis(segments, quality.quality_columns(configuration, run, rows), status)
@@ -426,6 +484,8 @@ def analyse_run_group(
         if result.status["status"] == "excluded":
             log.warning("excluded %s", result.status["reason"])
         else:
+            if result.status["left_out"]:
+                log.warning("left out of a used run: %s", result.status["left_out"])
             kept = result.segments["kept"]
             log.info("%s: %d segments kept of %d", run_path, int(kept.sum()), len(kept))
         results.append(result)

@@ -522,6 +522,25 @@ def verdict_html(
                     row_classes=["excluded"] * len(excluded),
                 )
             )
+        partial = (
+            runs[(runs["status"] == "used") & (runs["left_out"].fillna("") != "")]
+            if "left_out" in runs
+            else []
+        )
+        if len(partial):
+            parts.append(
+                f"<p>{len(partial)} used run(s) with a channel or mode left out (it failed a "
+                "decay-level check; the run's other channels and modes are used):</p>"
+            )
+            parts.append(
+                html_table(
+                    ["configuration", "run", "file", "left out"],
+                    [
+                        [esc(r.configuration), esc(r.run), esc(r.path), esc(r.left_out)]
+                        for r in partial.itertuples()
+                    ],
+                )
+            )
     parts.append(
         '<p class="note">The figures and tables behind this page are in the other '
         "categories of the report: measured data, damping and area fits, friction models, "
