@@ -607,11 +607,12 @@ class CurveGrid:
         self.run_index = np.asarray(self.run_index, dtype=int)
         if self.n_runs is None:
             self.n_runs = int(self.run_index.max()) + 1 if self.run_index.size else 1
-        self._orders, self._order_slot = int(np.max(self.response_order, initial=0)), None
-        if np.ndim(self.response_order) > 0:
-            orders, slot = np.unique(np.asarray(self.response_order, dtype=int), return_inverse=True)
-            if orders.size > 1:
-                self._orders, self._order_slot = tuple(int(n) for n in orders), slot
+        orders, slot = np.unique(
+            np.atleast_1d(np.asarray(self.response_order, dtype=int)), return_inverse=True
+        )
+        several = orders.size > 1
+        self._orders = tuple(int(n) for n in orders) if several else int(orders[0])
+        self._order_slot = slot if several else None
 
     @property
     def run_positions(self) -> np.ndarray:
