@@ -233,7 +233,7 @@ def test_ascii_columns_by_index_without_names(tmp_path):
     ("response", "names", "words"),
     [
         (
-            "{quantity: acceleration, channels: [acc1, acc2]}",
+            "{quantity: acceleration, channels: [acc2]}",
             ["Time (s)", "acc1 (g)", "acc2", "acc3 (g)"],
             ["'acc2'", "no unit"],
         ),
@@ -361,6 +361,38 @@ def test_a_file_unit_of_another_quantity_is_refused_without_yaml_unit(tmp_path):
         r"leave quantity out of response in campaign.yaml .*or leave the channel out of channels",
     ):
         read_one(tmp_path, yaml_text, "run.mat", writer)
+
+
+def test_a_channel_of_another_quantity_beside_others_is_refused_alone(tmp_path):
+    # campaign.yaml says acceleration; the laser's m/s contradicts it: the laser is refused,
+    # the accelerometers read
+    sensors = three_sensors()
+    groups = {
+        "Laser": lms_export_group(["Time Laser:+X"], sensors["acc3"][:, None], "m/s", DT_S),
+        "Signal": lms_export_group(["Time Acc1:+X"], sensors["acc1"][:, None], "g", DT_S),
+    }
+    writer = lambda p: write_testlab_mat(p, groups)  # noqa: E731
+    names = ["Time Laser:+X", "Time Acc1:+X"]
+    yaml_text = (
+        f"name: t\nresponse: {{quantity: acceleration, channels: {names!r}}}\n"
+        "configurations:\n  c: {files: 'c/*'}\n"
+    )
+    record = read_one(tmp_path, yaml_text, "run.mat", writer)
+    assert record.channel_names() == ("Time Acc1:+X",) and record.response_unit == "g"
+    np.testing.assert_array_equal(record.response, sensors["acc1"])
+    [(name, why)] = record.refused_channels
+    assert name == "Time Laser:+X"
+    assert "unit 'm/s' in the file is not a unit of acceleration" in why and "leave quantity out" in why
+    # an ASCII column with no unit where campaign.yaml gives none, beside one with its unit
+    writer = ascii_writer(
+        [np.arange(N) * DT_S, *sensors.values()], ["Time (s)", "acc1 (g)", "acc2", "acc3 (g)"]
+    )
+    record = read_one(
+        tmp_path, yaml_with("{quantity: acceleration, channels: [acc2, acc3]}"), "run.txt", writer
+    )
+    assert record.channel_names() == ("acc3",)
+    [(name, why)] = record.refused_channels
+    assert name == "acc2" and "response column 'acc2': the file records no unit" in why
 
 
 def test_without_a_quantity_each_channel_records_its_file_units_quantity(tmp_path):

@@ -126,3 +126,29 @@ def test_the_workflow_reports_what_it_left_out_of_a_used_hit(tmp_path):
     assert set(rejected.loc[rejected["channel"] == "dead", "reject_reason"]) == {LEFT_OUT}
     modes = json.loads((work / "results/diagnosis.json").read_text())["modes"]
     assert [sorted(m["configurations"]["c"].get("channels") or {}) for m in modes][0] == ["acc1", "acc2"]
+
+
+def test_a_sensor_whose_unit_contradicts_campaign_yaml_is_left_out_and_the_hit_used(tmp_path):
+    sensors = hit({"acc1": 0.5, "acc2": 0.0})
+    folder = tmp_path / "campaign"
+    (folder / "c").mkdir(parents=True)
+    groups = {
+        "Signal": lms_export_group(["acc1"], sensors["acc1"][:, None], "g", 1.0 / RATE_HZ),
+        "Laser": lms_export_group(["laser"], sensors["acc2"][:, None], "m/s", 1.0 / RATE_HZ),
+    }
+    write_testlab_mat(folder / "c" / "run.mat", groups)
+    (folder / "campaign.yaml").write_text(
+        "name: t\nmode_hz: 80.5\nresponse: {quantity: acceleration, channels: [laser, acc1]}\n"
+        "configurations:\n  c: {files: 'c/*'}\n"
+    )
+    options = {"configuration": "c", "campaign": load_campaign(folder), "quality_settings": QualitySettings()}
+    mode = identify_configuration_mode(folder, ["c/run.mat"], mode_search=AnalysisSettings(), **options)
+    result = analyse_run_file(folder, "c/run.mat", mode=mode, decay_settings=AnalysisSettings(), **options)
+    assert result.status["status"] == "used" and result.status["reason"] == ""
+    assert result.status["left_out"].startswith("c/run.mat: ") and "unit 'm/s'" in result.status["left_out"]
+    assert set(result.segments["channel"]) == {"acc1"} and result.segments["kept"].sum() >= 10
+    refused = result.quality["check"] == "unit"
+    assert (
+        result.quality["channel"][refused].tolist() == ["laser"]
+        and not result.quality["passed"][refused].any()
+    )

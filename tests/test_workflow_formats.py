@@ -215,8 +215,9 @@ def test_real_unesp_export_by_its_accelerometers_and_laser_gives_one_verdict(tmp
     one joint verdict with each sensor's own beside it. No two sensors are 0.7 sure of
     different verdicts, those that are sure of one are sure of the joint verdict, and a
     sensor that sees less may be less sure, never sure of something else. With
-    ``quantity: acceleration`` the laser contradicts campaign.yaml: the run is refused,
-    naming the channel, its quantity and what to do."""
+    ``quantity: acceleration`` the laser contradicts campaign.yaml: it is left out of the
+    hit (runs.parquet ``left_out`` naming the channel, its quantity and what to do) and the
+    accelerometers are used."""
     campaign = tmp_path / "campaign"
     (campaign / "t5nm").mkdir(parents=True)
     shutil.copyfile(REALDATA / "raw" / "unesp_T5Nm_Sine_09Hz_Time.mat", campaign / "t5nm" / "sine_09hz.mat")
@@ -252,9 +253,13 @@ def test_real_unesp_export_by_its_accelerometers_and_laser_gives_one_verdict(tmp
     assert max(laser, key=laser.get) == joint, laser
 
     write_yaml("quantity: acceleration, ")
-    result = snakemake(tmp_path / "as_acceleration", "-c2", "measured", "--config", f"campaign={campaign}")
-    assert result.returncode != 0
-    output = result.stdout + result.stderr
+    work = tmp_path / "as_acceleration"
+    result = snakemake(work, "-c2", "measured", "--config", f"campaign={campaign}")
+    assert result.returncode == 0, result.stderr[-4000:]
+    runs = pd.read_parquet(work / "results/tables/runs.parquet")
+    assert runs["status"].tolist() == ["used"]
+    output = runs["left_out"][0]
+    assert set(pd.read_parquet(work / "results/tables/segments.parquet")["channel"]) == set(sensors[:4])
     for words in (
         "'Time Laser:+X'",
         "not a unit of acceleration",

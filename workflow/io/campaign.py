@@ -19,6 +19,7 @@ from __future__ import annotations
 import datetime
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from dataclasses import fields as dataclass_fields
 from pathlib import Path
@@ -56,6 +57,7 @@ __all__ = [
     "load_campaign",
     "frequency_problem",
     "response_unit",
+    "response_units",
     "force_unit",
 ]
 
@@ -714,6 +716,36 @@ def response_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:
             f"{yaml_unit!r} ({quantity})"
         )
     return canonical
+
+
+def response_units(
+    file_units: Sequence[str | None], campaign: Campaign, whats: Sequence[str]
+) -> tuple[tuple[str | None, ...], tuple[str | None, ...]]:
+    """:func:`response_unit` of each response channel of a file, a channel whose unit is
+    refused left out (its unit None, its message beside it) while another is kept: one
+    sensor that contradicts campaign.yaml does not take the hit the others measured down.
+
+    Returns
+    -------
+    units, refusals : tuple
+        Per channel, its canonical unit or None, and None or why it was refused.
+
+    Raises
+    ------
+    ValueError
+        Every channel refused (the messages joined).
+    """
+    found, refusals = [], []
+    for file_unit, what in zip(file_units, whats, strict=True):
+        try:
+            found.append(response_unit(file_unit, campaign, what))
+            refusals.append(None)
+        except ValueError as error:
+            found.append(None)
+            refusals.append(str(error))
+    if all(unit is None for unit in found):
+        raise ValueError("; ".join(refusals))
+    return tuple(found), tuple(refusals)
 
 
 def force_unit(file_unit: str | None, campaign: Campaign, what: str) -> str:

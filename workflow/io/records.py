@@ -145,8 +145,11 @@ class RunRecord:
     record_start : str
         Wall-clock time the recording started, ISO 8601, when the file states it
         (:mod:`workflow.io.recording_time`); empty otherwise (ASCII files).
+    refused_channels : tuple of (str, str)
+        The response channels campaign.yaml asks for whose unit contradicts it (name, why),
+        left out of ``responses`` while another channel is kept.
     responses : tuple of ResponseChannel
-        Every response channel campaign.yaml asks for, in its order; ``response`` and
+        Every other response channel campaign.yaml asks for, in its order; ``response`` and
         ``response_unit`` are the first's (:meth:`for_channel` picks another; the channels
         may record different quantities, each its unit's).
     """
@@ -166,6 +169,7 @@ class RunRecord:
     pretrigger_source: str = "default"
     record_start: str = ""
     responses: tuple[ResponseChannel, ...] = ()
+    refused_channels: tuple[tuple[str, str], ...] = ()
 
     def channel_names(self) -> tuple[str, ...]:
         """The names of :attr:`responses`."""

@@ -236,6 +236,7 @@ def read_with_quality(
                 mode_hz=min(requested_hz, default=None),
             )
             rows += [labelled(row, name, len(names) > 1) for row in mine]
+        rows += [{**_refused_row(why), "channel": name, "mode": -1} for name, why in record.refused_channels]
         return record, rows
     return None, [
         {
@@ -248,6 +249,19 @@ def read_with_quality(
             "reason": reason,
         }
     ]
+
+
+def _refused_row(reason: str) -> dict:
+    """The failed ``unit`` check of a response channel the reader refused."""
+    return {
+        "check": "unit",
+        "applied": True,
+        "passed": False,
+        "value": float("nan"),
+        "threshold": float("nan"),
+        "unit": "",
+        "reason": reason,
+    }
 
 
 def labelled(row: dict, channel: str, several: bool, mode: int = -1, mode_hz: float | None = None) -> dict:
@@ -331,13 +345,18 @@ def leave_out(segments: dict[str, np.ndarray], pairs: set[tuple[int, str]]) -> d
     }
 
 
+CHANNEL_CHECKS = ("clipping", "unit")
+"""Record-level checks of one response channel: one that fails leaves the channel out."""
+
+
 def record_problems(path: str, rows: list[dict]) -> tuple[list[str], list[dict]]:
     """What the record-level checks of a read run (:func:`read_with_quality`'s rows) say:
-    the messages that exclude it, and the failed clipping rows of the channels to leave
-    out. A clipped sensor is left out of the hit the others measured; any other failed
-    check (reading, the hit, the record's length), or every channel clipped, excludes the run."""
+    the messages that exclude it, and the failed rows of :data:`CHANNEL_CHECKS` of the channels to leave
+    out. A clipped sensor, or one whose unit contradicts campaign.yaml, is left out of the
+    hit the others measured; any other failed check (reading, the hit, the record's length),
+    or every channel left out, excludes the run."""
     failed = [row for row in rows if row["applied"] and not row["passed"]]
-    clipped = [row for row in failed if row["check"] == "clipping"]
+    clipped = [row for row in failed if row["check"] in CHANNEL_CHECKS]
     every = {row.get("channel") for row in rows}
     if len(clipped) < len(failed) or {row["channel"] for row in clipped} >= every:
         return failed_checks(path, rows), []
@@ -379,8 +398,9 @@ def analyse_run_file(
     """Read, check and analyse one run file; a run that cannot be used is excluded
     with its reason, never raised. A (mode, channel) of a run that fails a decay-level
     check (signal-to-noise, usable segments) while another passes is left out
-    (:func:`leave_out`), and so is every mode of a clipped channel while another is not:
-    the run is used, its status's ``left_out`` saying why.
+    (:func:`leave_out`), and so is every mode of a clipped channel, or of one whose unit
+    contradicts campaign.yaml, while another is kept: the run is used, its status's
+    ``left_out`` saying why.
 
     Parameters
     ----------
@@ -442,7 +462,7 @@ def analyse_run_file(
                 pairs |= {(m, c) for m, c in checked if c in clipped_channels}
                 if pairs == checked:
                     problems = failed_checks(run_path, decay_rows)
-                elif pairs:
+                elif pairs or clipped:
                     segments = leave_out(segments, pairs)
                     left_out = failed_checks(run_path, clipped + failed)
     if problems and clipped:

@@ -530,7 +530,7 @@ def verdict_html(
         if len(partial):
             parts.append(
                 f"<p>{len(partial)} used run(s) with a channel or mode left out (it failed a "
-                "decay-level check; the run's other channels and modes are used):</p>"
+                "check of that channel or mode; the run's other channels and modes are used):</p>"
             )
             parts.append(
                 html_table(

@@ -152,7 +152,7 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
     header_values = read_header_values(header, shown)
     columns = find_columns(header, first_line, delimiter, n_columns, campaign, shown)
     time_factor_s, force_factor_lbf = column_unit_factors(columns, campaign, shown)
-    response_units = response_column_units(columns, campaign, shown)
+    response_units, refusals = response_column_units(columns, campaign, shown)
 
     values = parse_text_fast(text, offset, end, delimiter, n_rows, n_columns)
     if values is None:
@@ -250,11 +250,13 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
     force_lbf = None
     if "force" in columns.roles:
         force_lbf = values[:, columns.roles["force"]] * force_factor_lbf
+    names = campaign.response.channel_names()
     responses = tuple(
         ResponseChannel(
             name, np.ascontiguousarray(values[:, index]), unit, columns.names[index] if columns.names else ""
         )
-        for name, index, unit in zip(campaign.response.channel_names(), columns.responses, response_units)
+        for name, index, unit in zip(names, columns.responses, response_units)
+        if unit is not None
     )
     response = responses[0].values
     return RunRecord(
@@ -272,4 +274,5 @@ def read_ascii_run(full_path: Path, relative: str, shown: str, campaign: Campaig
         sample_rate_source=sample_rate_source,
         pretrigger_source=pretrigger_source,
         responses=responses,
+        refused_channels=tuple((name, why) for name, why in zip(names, refusals) if why is not None),
     )

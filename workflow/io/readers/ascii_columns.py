@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
-from workflow.io.campaign import force_unit, response_unit
+from workflow.io.campaign import force_unit, response_units
 from workflow.io.limits import MAX_QUOTED_PROBLEMS, magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.readers.ascii_rows import (
     KEY_VALUE,
@@ -482,20 +482,19 @@ def _check_named_quantity(name: str, bare: str, campaign: Campaign, path: str, l
             )
 
 
-def response_column_units(columns: _Columns, campaign: Campaign, path: str) -> tuple[str, ...]:
-    """Each response column's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
-    found = []
-    for index, unit in zip(columns.responses, columns.response_units):
-        what = (
-            f"response column {quoted(columns.names[index])}"
-            if columns.names
-            else f"response column {index + 1}"
-        )
-        try:
-            found.append(response_unit(unit, campaign, what))
-        except ValueError as error:
-            raise CampaignFormatError(path, columns.line, str(error)) from None
-    return tuple(found)
+def response_column_units(
+    columns: _Columns, campaign: Campaign, path: str
+) -> tuple[tuple[str | None, ...], tuple[str | None, ...]]:
+    """Each response column's canonical unit, or None with why it is refused
+    (:func:`workflow.io.campaign.response_units`); every column refused is an error."""
+    whats = [
+        f"response column {quoted(columns.names[index])}" if columns.names else f"response column {index + 1}"
+        for index in columns.responses
+    ]
+    try:
+        return response_units(columns.response_units, campaign, whats)
+    except ValueError as error:
+        raise CampaignFormatError(path, columns.line, str(error)) from None
 
 
 _TIME_UNIT_FACTORS_S = {

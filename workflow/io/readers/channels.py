@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from workflow.io import units
-from workflow.io.campaign import force_unit, response_unit
+from workflow.io.campaign import force_unit, response_units
 from workflow.io.limits import magnitude_problem, name_length_problem, quoted, shortened
 from workflow.io.record_rules import column_role, first_bad_time_step, rates_agree
 from workflow.io.recording_time import iso_text
@@ -271,14 +271,6 @@ def _checked_magnitude(channel: Channel, values: NDArray[np.float64], shown: str
     return values
 
 
-def _response_unit(channel: Channel, campaign: Campaign, shown: str) -> str:
-    """The channel's canonical unit (:func:`workflow.io.campaign.response_unit`)."""
-    try:
-        return response_unit(unit_label(channel.unit), campaign, channel.record)
-    except ValueError as error:
-        raise CampaignFormatError(shown, None, str(error)) from None
-
-
 def _force_factor_lbf(channel: Channel, campaign: Campaign, shown: str) -> float:
     """Factor taking the force channel to lbf: the file's unit, else campaign.yaml's, else lbf."""
     try:
@@ -357,9 +349,17 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
                 None,
                 f"{channel.record} has {samples[id(channel)].size} samples but {response.record} has {n_samples}",
             )
+    names = campaign.response.channel_names()
+    try:
+        found, refusals = response_units(
+            [unit_label(channel.unit) for channel in selected], campaign, [c.record for c in selected]
+        )
+    except ValueError as error:
+        raise CampaignFormatError(shown, None, str(error)) from None
     responses = [
-        ResponseChannel(name, samples[id(channel)], _response_unit(channel, campaign, shown), channel.name)
-        for name, channel in zip(campaign.response.channel_names(), selected)
+        ResponseChannel(name, samples[id(channel)], unit, channel.name)
+        for name, channel, unit in zip(names, selected, found)
+        if unit is not None
     ]
     force_lbf = None
     if force is not None:
@@ -456,4 +456,5 @@ def assemble_record(file_channels: FileChannels, relative: str, shown: str, camp
         pretrigger_source=pretrigger_source,
         record_start=iso_text(record_start),
         responses=tuple(responses),
+        refused_channels=tuple((name, why) for name, why in zip(names, refusals) if why is not None),
     )
