@@ -422,3 +422,35 @@ def test_combinations_are_fitted_after_none_only_where_the_data_depart_from_the_
     assert combinations_to_try("run_drift", "iwan_cells_5", departs=True) == []
     for cause in ("microslip_power_law", "quadratic_damping", "stiffness_nonlinearity", "unknown"):
         assert sorted(combinations_to_try(cause, "iwan_cells_5", departs=False)) == both
+
+
+@pytest.mark.parametrize(
+    ("significant", "ratio", "tried"),
+    [(True, 0.83, True), (False, 0.83, False), (True, 0.5, False)],
+)
+def test_the_thresholds_from_the_data_are_tried_where_the_power_law_would_read_unknown(
+    significant, ratio, tried
+):
+    # The power law within 2 scatters everywhere (residuals 0) yet leaving a misfit the
+    # pooled sensors find significant, cutting the baseline's error only to 0.83: the
+    # decision would read unknown (RESIDUAL_GAIN), so micro-slip's other representation,
+    # the slip thresholds from the data, is tried; where its misfit is not significant,
+    # or it removes most of the baseline's, the power law stands.
+    from workflow.discovery.configuration import needs_threshold_cells
+    from workflow.discovery.decision import RESIDUAL_GAIN, ModelEvidence
+    from workflow.models.configuration_data import ConfigurationData
+
+    v = np.geomspace(0.05, 5.0, 40)
+    data = ConfigurationData(
+        "c", v, np.full(v.size, 0.003), np.full(v.size, 100.0), np.zeros(v.size, int), ["r"], 1.0
+    )
+    zeros = {key: np.zeros(v.size) for key in ("ln_zeta", "rel_f", "z_noise", "f_noise")}
+    result = {
+        "cause": "unknown",
+        "baseline": "lugre",
+        "baseline_fails": True,
+        "errors": {"lugre": {"error": 10.0}, "iwan": {"error": 10.0 * ratio}},
+        "candidates": {"microslip_power_law": {"residual_significant": significant}},
+    }
+    assert (ratio >= RESIDUAL_GAIN) == (ratio == 0.83)
+    assert needs_threshold_cells(data, result, {"iwan": ModelEvidence(zeros, {}, 4)}) is tried

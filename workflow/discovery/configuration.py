@@ -350,9 +350,11 @@ def needs_threshold_cells(
     data: ConfigurationData, result: Mapping, evidence: Mapping[str, ModelEvidence]
 ) -> bool:
     """Whether micro-slip may be represented by the Iwan joint with the slip thresholds
-    from the data: the power law does not explain the data or predicts held-out data no
+    from the data: the power law does not explain the data, predicts held-out data no
     better than the baseline (then it is no candidate, however closely it follows the
-    data it was fitted to), and micro-slip is the verdict, the baseline's misfit is
+    data it was fitted to), or leaves a significant misfit while cutting the baseline's
+    error by less than :data:`RESIDUAL_GAIN` (then the decision reads it as ``unknown``:
+    the misfit several pooled sensors find below 2 scatters), and micro-slip is the verdict, the baseline's misfit is
     significant, or the thresholds from the data, where already fitted (for the
     combinations), predict held-out data better than the baseline and pass
     :func:`passes_departure_gate`, the gate every candidate passes to depart from
@@ -367,13 +369,20 @@ def needs_threshold_cells(
     clear = (
         cells in errors and errors[cells]["error"] < baseline_error and passes_departure_gate(result, cells)
     )
+    power_law = result.get("candidates", {}).get("microslip_power_law", {})
     power_law_falls_short = (
         errors["iwan"]["error"] >= baseline_error
         or not (explains_data(data, evidence["iwan"].residuals)["explains_data"])
+        # decide() would read it as unknown: a significant misfit left, most of it
+        or (
+            power_law.get("residual_significant")
+            and errors["iwan"]["error"] >= RESIDUAL_GAIN * baseline_error
+        )
     )
-    return (
-        result["cause"] == "microslip_power_law" or result["baseline_fails"] or clear
-    ) and power_law_falls_short
+    return bool(
+        (result["cause"] == "microslip_power_law" or result["baseline_fails"] or clear)
+        and power_law_falls_short
+    )
 
 
 def friction_explains_softening(decision: Mapping, cells: str) -> bool:
