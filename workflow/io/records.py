@@ -126,7 +126,7 @@ class RunRecord:
     force_lbf : ndarray or None
         Hammer force in lbf, when recorded.
     response : ndarray
-        The response in the campaign's response unit, as in the file.
+        The first response channel's samples as in the file, in ``response_unit``.
     response_quantity : str
         acceleration, velocity or displacement: what ``response`` records.
     response_unit : str

@@ -198,14 +198,14 @@ def identify_configuration_mode(
         record, rows = reads.get(run_path) or read_with_quality(
             campaign_dir, run_path, campaign, quality_settings
         )
-        problems, clipped = record_problems(run_path, rows)
+        problems, channel_failures = record_problems(run_path, rows)
         if not problems:
             problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
         if problems:
             skipped[PurePosixPath(run_path).stem] = problems
             continue
         # a clipped sensor's harmonics are not modes: the search reads the others
-        records.append(record.without_channels({row["channel"] for row in clipped}))
+        records.append(record.without_channels({row["channel"] for row in channel_failures}))
         windows.append(analysis_window(record, window_s))
         run_paths_used.append(run_path)
     if not records:

@@ -356,11 +356,11 @@ def record_problems(path: str, rows: list[dict]) -> tuple[list[str], list[dict]]
     hit the others measured; any other failed check (reading, the hit, the record's length),
     or every channel left out, excludes the run."""
     failed = [row for row in rows if row["applied"] and not row["passed"]]
-    clipped = [row for row in failed if row["check"] in CHANNEL_CHECKS]
+    channel_failures = [row for row in failed if row["check"] in CHANNEL_CHECKS]
     every = {row.get("channel") for row in rows}
-    if len(clipped) < len(failed) or {row["channel"] for row in clipped} >= every:
+    if len(channel_failures) < len(failed) or {row["channel"] for row in channel_failures} >= every:
         return failed_checks(path, rows), []
-    return [], clipped
+    return [], channel_failures
 
 
 def failed_checks(path: str, rows: list[dict]) -> list[str]:
@@ -430,8 +430,7 @@ def analyse_run_file(
     if read is None:
         read = read_with_quality(campaign_dir, run_path, campaign, quality_settings)
     record, rows = read[0], list(read[1])
-    problems, clipped = record_problems(run_path, rows)
-    clipped_channels = {row["channel"] for row in clipped}
+    problems, channel_failures = record_problems(run_path, rows)
     left_out: list[str] = []
     if record is not None and not problems:
         problems = window_problems(campaign_dir, run_path, record, campaign, configuration)
@@ -441,7 +440,8 @@ def analyse_run_file(
         else:
             try:
                 segments, decay_rows = analyse_every_mode_and_channel(
-                    record,
+                    # a clipped channel's decay is not analysed
+                    record.without_channels({row["channel"] for row in channel_failures}),
                     configuration=configuration,
                     run=run,
                     mode=mode,
@@ -457,16 +457,14 @@ def analyse_run_file(
                 # a (mode, channel) that fails a decay-level check is left out; the run is
                 # excluded only when nothing is left
                 failed = [row for row in decay_rows if row["applied"] and not row["passed"]]
-                checked = {(row["mode"], row["channel"]) for row in decay_rows}
                 pairs = {(row["mode"], row["channel"]) for row in failed}
-                pairs |= {(m, c) for m, c in checked if c in clipped_channels}
-                if pairs == checked:
+                if pairs == {(row["mode"], row["channel"]) for row in decay_rows}:
                     problems = failed_checks(run_path, decay_rows)
-                elif pairs or clipped:
+                elif pairs or channel_failures:
                     segments = leave_out(segments, pairs)
-                    left_out = failed_checks(run_path, clipped + failed)
-    if problems and clipped:
-        problems = [*failed_checks(run_path, clipped), *problems]
+                    left_out = failed_checks(run_path, channel_failures + failed)
+    if problems and channel_failures:
+        problems = [*failed_checks(run_path, channel_failures), *problems]
     status = {
         "configuration": configuration,
         "run": run,
