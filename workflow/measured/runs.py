@@ -236,25 +236,18 @@ def read_with_quality(
                 mode_hz=min(requested_hz, default=None),
             )
             rows += [labelled(row, name, len(names) > 1) for row in mine]
-        rows += [{**_refused_row(why), "channel": name, "mode": -1} for name, why in record.refused_channels]
+        rows += [
+            {**_failed_row("unit", why), "channel": name, "mode": -1} for name, why in record.refused_channels
+        ]
         return record, rows
-    return None, [
-        {
-            "check": "read",
-            "applied": True,
-            "passed": False,
-            "value": float("nan"),
-            "threshold": float("nan"),
-            "unit": "",
-            "reason": reason,
-        }
-    ]
+    return None, [_failed_row("read", reason)]
 
 
-def _refused_row(reason: str) -> dict:
-    """The failed ``unit`` check of a response channel the reader refused."""
+def _failed_row(check: str, reason: str) -> dict:
+    """The quality row of a check that failed with no measured value: a file that could not
+    be read (``read``), a response channel the reader refused (``unit``)."""
     return {
-        "check": "unit",
+        "check": check,
         "applied": True,
         "passed": False,
         "value": float("nan"),
