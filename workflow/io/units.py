@@ -19,6 +19,7 @@ __all__ = [
     "STANDARD_GRAVITY_IN_S2",
     "NEWTON_LBF",
     "RESPONSE_QUANTITIES",
+    "RESPONSE_UNITS",
     "normalize_unit",
     "known_units",
     "response_quantity_of",
@@ -56,6 +57,11 @@ _FACTORS_TO_INTERNAL: dict[str, dict[str, float]] = {
     "displacement": {"m": METRE_IN, "in": 1.0, "mm": METRE_IN / 1e3, "um": METRE_IN / 1e6},
     "force": {"lbf": 1.0, "N": NEWTON_LBF},
 }
+
+RESPONSE_UNITS: tuple[str, ...] = tuple(
+    unit for quantity in RESPONSE_QUANTITIES for unit in _FACTORS_TO_INTERNAL[quantity]
+)
+"""Canonical units of every response quantity, in the quantities' order."""
 
 # Spellings seen in instrument exports, mapped to the canonical names above.
 # Keys are lower-case with spaces removed; "G" for g is an accelerometer convention.

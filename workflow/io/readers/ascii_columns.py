@@ -132,7 +132,8 @@ _KNOWN_UNIT_WORDS = {
     "s",
     "ms",
     "sec",
-    *(unit for quantity in (*units.RESPONSE_QUANTITIES, "force") for unit in units.known_units(quantity)),
+    *units.RESPONSE_UNITS,
+    *units.known_units("force"),
 }
 
 
