@@ -45,6 +45,7 @@ rule diagnose_modes:
     input:
         segments="results/tables/segments.parquet",
         runs="results/tables/runs.parquet",
+        modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         directory("results/interim/diagnosis_modes/{configuration}/{channel_key}"),
@@ -61,7 +62,6 @@ rule diagnose_modes:
         runtime=60,
     params:
         channel=lambda wildcards: RESPONSE_CHANNELS[channel_index(wildcards.channel_key)],
-        first_channel=lambda wildcards: channel_index(wildcards.channel_key) == 0,
         analysis=asdict(SETTINGS.analysis),
         discovery=asdict(SETTINGS.discovery),
     script:
@@ -74,6 +74,7 @@ rule diagnose_joint:
     input:
         segments="results/tables/segments.parquet",
         runs="results/tables/runs.parquet",
+        modes="results/tables/modes.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         directory("results/interim/diagnosis_joint/{configuration}"),
@@ -90,7 +91,6 @@ rule diagnose_joint:
         runtime=60,
     params:
         channel=None,
-        first_channel=False,
         analysis=asdict(SETTINGS.analysis),
         discovery=asdict(SETTINGS.discovery),
     script:
@@ -105,6 +105,7 @@ rule diagnose:
         modes_channels=mode_channel_diagnoses(),
         joint=joint_diagnoses(),
         modes="results/tables/modes.parquet",
+        segments="results/tables/segments.parquet",
         campaign_settings="results/interim/campaign.json",
     output:
         diagnosis=report(

@@ -88,6 +88,6 @@ rule figures_models:
     params:
         configurations=CONFIGURATIONS,
         units=SETTINGS.units,
-        first_channel=RESPONSE_CHANNELS[0],
+        channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/figures_models.py"

@@ -86,6 +86,6 @@ rule report_summary:
         runtime=5,
     params:
         units=SETTINGS.units,
-        first_channel=RESPONSE_CHANNELS[0],
+        channels=list(RESPONSE_CHANNELS),
     script:
         "../scripts/report_summary.py"

@@ -8,7 +8,7 @@ from workflow.discovery.diagnosis_files import read_configuration_diagnosis
 from workflow.discovery.modes import mode_document, with_modes
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json, write_table
-from workflow.measured.campaign_tables import with_mode_and_channel
+from workflow.measured.campaign_tables import paper_channel, with_mode_and_channel
 from workflow.models.averaged_fit import FitContext
 from workflow.runtime.logs import setup_script_logging
 
@@ -23,7 +23,8 @@ def document_of(outcomes):
     return diagnoses, campaign_document(campaign.name, context, diagnoses, skipped)
 
 
-# the first mode on the first channel: the residuals, the figures, the paper's models
+# the first mode on the paper's channel (rule diagnose_configuration's): the residuals,
+# the figures, the paper's models
 diagnoses, first = document_of(
     [read_configuration_diagnosis(path) for path in snakemake.input.configurations]
 )
@@ -32,16 +33,19 @@ modes_hz = [
     float(hz) for hz in sorted(read_table(snakemake.input.modes)["nominal_mode_hz"].dropna().unique())
 ]
 channels = snakemake.params.channels
-residuals = with_mode_and_channel(residual_table(diagnoses), modes_hz[0] if modes_hz else None, channels[0])
+paper = channels.index(paper_channel(read_table(snakemake.input.segments), channels))
+residuals = with_mode_and_channel(
+    residual_table(diagnoses), modes_hz[0] if modes_hz else None, channels[paper]
+)
 write_table(residuals, snakemake.output.residuals)
 # every other (mode, channel): rule diagnose_modes's files, <configuration>/c<channel>/<mode>.npz
-outcomes: dict[tuple[int, int], list] = {(0, 0): None}
+outcomes: dict[tuple[int, int], list] = {(0, paper): None}
 for folder in map(Path, snakemake.input.modes_channels):
     for path in sorted(folder.glob("*.npz")):
         outcomes.setdefault((int(path.stem), int(folder.name[1:])), []).append(
             read_configuration_diagnosis(path)
         )
-documents = {key: first if key == (0, 0) else document_of(found)[1] for key, found in outcomes.items()}
+documents = {key: first if key == (0, paper) else document_of(found)[1] for key, found in outcomes.items()}
 # several channels: every mode's joint analysis, rule diagnose_joint's <configuration>/<mode>.npz
 joint_outcomes: dict[int, list] = {}
 for folder in map(Path, snakemake.input.joint):

@@ -8,7 +8,12 @@ from workflow.discovery.diagnosis_files import write_configuration_diagnosis
 from workflow.discovery.modes import diagnosed_outcome
 from workflow.io.interim import read_campaign
 from workflow.io.tables import read_table, write_json
-from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows, recorded_quantity
+from workflow.measured.campaign_tables import (
+    first_mode_and_channel,
+    first_mode_rows,
+    paper_channel,
+    recorded_quantity,
+)
 from workflow.measured.settings import AnalysisSettings
 from workflow.models.paper import configuration_models_document
 from workflow.models.settings import DiscoverySettings, ModelSettings
@@ -17,8 +22,12 @@ from workflow.runtime.logs import setup_script_logging
 log = setup_script_logging(snakemake.log[0], "diagnose_configuration")
 configuration = snakemake.wildcards.configuration
 campaign = read_campaign(snakemake.input.campaign_settings)
-# the first mode, seen by the first channel (docs/outputs.md)
-segments = first_mode_and_channel(read_table(snakemake.input.segments), campaign.response.channel_names()[0])
+# the first mode, seen by the first channel listed that the runs kept (docs/outputs.md)
+segments = read_table(snakemake.input.segments)
+channel = paper_channel(segments, campaign.response.channel_names())
+segments = first_mode_and_channel(segments, channel)
+if channel != campaign.response.channel_names()[0]:
+    log.info("the paper's models read channel %r: the channels listed before it were left out", channel)
 decay = AnalysisSettings(**snakemake.params.analysis)
 started = time.perf_counter()
 outcome = diagnosed_outcome(

@@ -1,6 +1,7 @@
-"""Rule figures_measured: paper figure 9 (the first used run of the first configuration),
-figures 10-12 (damping vs velocity amplitude, one per configuration), figure 13 (damping
-fits against bearing area) and the backbones (frequency vs velocity amplitude)."""
+"""Rule figures_measured, on the paper's channel (the first listed that the runs kept):
+paper figure 9 (the first used run of the first configuration), figures 10-12 (damping vs
+velocity amplitude, one per configuration), figure 13 (damping fits against bearing area)
+and the backbones (frequency vs velocity amplitude); then every mode on every channel."""
 
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from workflow.io.run_files import read_run
 from workflow.io.tables import read_table
 from workflow.io.units import UNIT_SYSTEMS, response_in_units
 from workflow.measured import decay
-from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows
+from workflow.measured.campaign_tables import first_mode_and_channel, first_mode_rows, paper_channel
 from workflow.measured.runs import analysis_window
 from workflow.measured.settings import AnalysisSettings
 from workflow.outputs import figures
@@ -23,6 +24,9 @@ log = setup_script_logging(snakemake.log[0], "figures_measured")
 units = UNIT_SYSTEMS[snakemake.params.units]
 campaign_dir = Path(snakemake.input.campaign_yaml).parent
 campaign = read_campaign(snakemake.input.campaign_settings)
+# the paper's figures: the first mode, from the paper's channel (docs/outputs.md)
+all_segments = read_table(snakemake.input.segments)
+channel = paper_channel(all_segments, campaign.response.channel_names())
 
 # figure 9
 configuration = snakemake.params.configurations[0]
@@ -44,6 +48,8 @@ if used.empty:
 modes = first_mode_rows(read_table(snakemake.input.modes)).set_index("configuration")
 row = used.iloc[0]
 record = read_run(campaign_dir, row["path"], campaign)
+if channel in record.channel_names():  # a channel this file's unit refused: the first kept
+    record = record.for_channel(channel)
 band_hz = (float(modes.loc[configuration, "band_low_hz"]), float(modes.loc[configuration, "band_high_hz"]))
 start, stop = analysis_window(record, campaign.configurations[configuration].window_s)
 result = decay.analyse_decay(
@@ -72,10 +78,8 @@ figures.save(figure, snakemake.output.time_history)
 log.info("figure 9 from %s", row["path"])
 
 # figures 10-13
-# the paper's figures: the first mode, from the first channel (docs/outputs.md)
-first_channel = campaign.response.channel_names()[0]
-segments = first_mode_and_channel(read_table(snakemake.input.segments), first_channel)
-curves = first_mode_and_channel(read_table(snakemake.input.curves), first_channel)
+segments = first_mode_and_channel(all_segments, channel)
+curves = first_mode_and_channel(read_table(snakemake.input.curves), channel)
 for configuration, path in zip(snakemake.params.configurations, snakemake.output.damping, strict=True):
     mine = segments[segments["configuration"] == configuration]
     figure = figures.damping_vs_amplitude(
@@ -89,7 +93,7 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     log.info("%s: %d segments plotted", configuration, len(mine))
 figure = figures.area_fits(
     curves,
-    first_mode_and_channel(read_table(snakemake.input.area), first_channel),
+    first_mode_and_channel(read_table(snakemake.input.area), channel),
     title=f"{plot_text(campaign.name)}: damping vs velocity amplitude and bearing area",
     units=units,
 )
@@ -107,7 +111,6 @@ for configuration, path in zip(snakemake.params.configurations, snakemake.output
     log.info("%s: backbone of %d segments plotted", configuration, len(mine))
 
 # every mode on every channel (campaigns with several)
-all_segments = read_table(snakemake.input.segments)
 for path in snakemake.output.modes_channels:
     figure = figures.modes_and_channels(
         all_segments,

@@ -8,7 +8,7 @@ from pathlib import Path
 from workflow.io.escape import plot_text
 from workflow.io.tables import atomic_write_bytes, read_table, write_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.measured.campaign_tables import first_mode_and_channel, with_mode_and_channel
+from workflow.measured.campaign_tables import first_mode_and_channel, paper_channel, with_mode_and_channel
 from workflow.models.paper import fit_table, model_curve_frames
 from workflow.outputs import figures
 from workflow.outputs.report_tables import model_fits_html
@@ -21,11 +21,11 @@ for path in snakemake.input.fits:
     document = json.loads(Path(path).read_text())
     documents[document["configuration"]] = document
 fits = fit_table(documents)
-segments = first_mode_and_channel(read_table(snakemake.input.segments), snakemake.params.first_channel)
+segments = read_table(snakemake.input.segments)
+channel = paper_channel(segments, snakemake.params.channels)
+segments = first_mode_and_channel(segments, channel)
 first_mode_hz = segments["mode_hz"].min() if len(segments) else None
-write_table(
-    with_mode_and_channel(fits, first_mode_hz, snakemake.params.first_channel), snakemake.output.table
-)
+write_table(with_mode_and_channel(fits, first_mode_hz, channel), snakemake.output.table)
 atomic_write_bytes(snakemake.output.page, model_fits_html(fits, units).encode())
 log.info("%d parameters of %d configurations", len(fits), fits["configuration"].nunique())
 

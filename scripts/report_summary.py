@@ -7,7 +7,7 @@ from pathlib import Path
 
 from workflow.io.tables import atomic_write_bytes, read_table
 from workflow.io.units import UNIT_SYSTEMS
-from workflow.measured.campaign_tables import first_mode_and_channel
+from workflow.measured.campaign_tables import first_mode_and_channel, paper_channel
 from workflow.outputs import landing_page, report_tables, verdict_page
 from workflow.outputs.summary import run_summary
 from workflow.runtime.logs import setup_script_logging
@@ -15,11 +15,12 @@ from workflow.runtime.logs import setup_script_logging
 log = setup_script_logging(snakemake.log[0], "report_summary")
 document = json.loads(Path(snakemake.input.diagnosis).read_text())
 runs = read_table(snakemake.input.runs)
-# the verdict is the first mode's, from the first channel (docs/outputs.md)
-first_channel = snakemake.params.first_channel
-hypotheses = first_mode_and_channel(read_table(snakemake.input.hypotheses), first_channel)
-segments = first_mode_and_channel(read_table(snakemake.input.segments), first_channel)
-damping_fits = first_mode_and_channel(read_table(snakemake.input.damping_fits), first_channel)
+# the paper's tables are the first mode's, on the paper's channel (docs/outputs.md)
+segments = read_table(snakemake.input.segments)
+channel = paper_channel(segments, snakemake.params.channels)
+hypotheses = first_mode_and_channel(read_table(snakemake.input.hypotheses), channel)
+segments = first_mode_and_channel(segments, channel)
+damping_fits = first_mode_and_channel(read_table(snakemake.input.damping_fits), channel)
 areas = dict(zip(damping_fits["configuration"], damping_fits["bearing_area_in2"]))
 units = UNIT_SYSTEMS[snakemake.params.units]
 

@@ -19,14 +19,16 @@ RATE_HZ = 2048.0
 N = 8192
 
 
-def hit(mode2_at: dict[str, float], clipped: bool = False):
-    """Sensors (g) of one hit: mode 1 (80.5 Hz) everywhere, mode 2 (297.7 Hz) at each
-    sensor's ``mode2_at`` share, a 1e-5 g noise on each; and a sensor that sees no mode."""
+def hit(mode2_at: dict[str, float], clipped: bool = False, mode1_at: dict[str, float] | None = None):
+    """Sensors (g) of one hit: mode 1 (80.5 Hz) at each sensor's ``mode1_at`` share (1 by
+    default), mode 2 (297.7 Hz) at its ``mode2_at`` share, a 1e-5 g noise on each; and a
+    sensor that sees no mode."""
     rng = np.random.default_rng(7)
     t = np.arange(N) / RATE_HZ
     first = np.exp(-2.0 * t) * np.sin(2 * np.pi * 80.5 * t)
     second = np.exp(-3.0 * t) * np.sin(2 * np.pi * 297.7 * t)
-    sensors = {name: first + share * second for name, share in mode2_at.items()}
+    mode1_at = mode1_at or {}
+    sensors = {name: mode1_at.get(name, 1.0) * first + share * second for name, share in mode2_at.items()}
     sensors["dead"] = np.zeros(N)
     if clipped:
         # an overloaded sensor: the hit's first cycles flat at 0.6 of their peak
@@ -34,8 +36,8 @@ def hit(mode2_at: dict[str, float], clipped: bool = False):
     return {name: values + 1e-5 * rng.standard_normal(N) for name, values in sensors.items()}
 
 
-def write_hit_campaign(tmp_path, channels, modes, clipped=False):
-    sensors = hit({"acc1": 0.5, "acc2": 0.0}, clipped)
+def write_hit_campaign(tmp_path, channels, modes, clipped=False, sensors=None):
+    sensors = sensors or hit({"acc1": 0.5, "acc2": 0.0}, clipped)
     folder = tmp_path / "campaign"
     (folder / "c").mkdir(parents=True)
     group = lms_export_group(list(sensors), np.column_stack(list(sensors.values())), "g", 1.0 / RATE_HZ)
@@ -127,6 +129,29 @@ def test_the_workflow_reports_what_it_left_out_of_a_used_hit(tmp_path):
     assert set(rejected.loc[rejected["channel"] == "dead", "reject_reason"]) == {LEFT_OUT}
     modes = json.loads((work / "results/diagnosis.json").read_text())["modes"]
     assert [sorted(m["configurations"]["c"].get("channels") or {}) for m in modes][0] == ["acc1", "acc2"]
+
+
+def test_the_paper_reads_the_first_channel_kept_and_each_mode_keeps_its_number(tmp_path):
+    # the sensor listed first sees nothing: the paper's models, figures and residuals read
+    # the next; the third sits at a node of mode 1, so its first mode kept is mode 2,
+    # which stays mode 2 in the diagnosis
+    sensors = hit({"acc1": 0.5, "acc2": 0.5}, mode1_at={"acc2": 1e-6})
+    folder = write_hit_campaign(tmp_path, "[dead, acc1, acc2]", "modes_hz: [80.5, 297.7]", sensors=sensors)
+    work = tmp_path / "work"
+    result = run_snakemake(work, "-c2", "all", "--config", f"campaign={folder}", timeout=900)
+    assert result.returncode == 0, result.stderr[-3000:]
+    runs = pd.read_parquet(work / "results/tables/runs.parquet")
+    assert "channel 'dead'" in runs["left_out"][0] and "channel 'acc2', mode 80." in runs["left_out"][0]
+    for name in ("model_fits", "diagnosis_residuals"):
+        rows = pd.read_parquet(work / f"results/tables/{name}.parquet")
+        assert set(zip(rows["mode_hz"], rows["channel"])) == {(80.5, "acc1")}, name
+    models = json.loads((work / "results/models/c.json").read_text())
+    assert "skipped" not in models and set(models["models"]) == {"dahl", "lugre"}
+    diagnosis = json.loads((work / "results/diagnosis.json").read_text())
+    first, second = diagnosis["modes"]
+    assert first["mode_hz"] == 80.5 and second["mode_hz"] == 297.7
+    assert "acc2" not in (first["configurations"]["c"].get("channels") or {})
+    assert set(second["configurations"]["c"]["channels"]) == {"acc1", "acc2"}
 
 
 def test_a_sensor_whose_unit_contradicts_campaign_yaml_is_left_out_and_the_hit_used(tmp_path):

@@ -21,6 +21,8 @@ from workflow.measured.runs import RUN_COLUMNS, SEGMENT_COLUMNS, analyse_run_fil
 from workflow.measured.settings import AnalysisSettings, DampingFitSettings, QualitySettings
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import pandas as pd
 
 __all__ = [
@@ -30,6 +32,7 @@ __all__ = [
     "nominal_modes_hz",
     "with_nominal_mode",
     "first_mode_and_channel",
+    "paper_channel",
     "with_mode_and_channel",
     "first_mode_rows",
     "collect_tables",
@@ -158,20 +161,44 @@ def with_nominal_mode(table: pd.DataFrame, nominal_hz: list[float]) -> pd.DataFr
     return table
 
 
-def first_mode_and_channel(table: pd.DataFrame, channel: str) -> pd.DataFrame:
-    """The rows of the first (lowest) mode and of ``channel``: the paper's models, the
-    diagnosis and the paper's figures analyse this one mode and sensor. A table without
-    ``mode_hz`` or ``channel`` columns is returned whole."""
+def _first_mode(table: pd.DataFrame) -> pd.DataFrame:
+    """The rows of the first (lowest) mode and of no mode; a table without ``mode_hz``
+    whole."""
     if "mode_hz" in table and len(table):
         first_hz = table["mode_hz"].min()
-        table = (
-            table[table["mode_hz"].isna() | (table["mode_hz"] == first_hz)]
-            if not np.isnan(first_hz)
-            else table
-        )
+        if not np.isnan(first_hz):
+            return table[table["mode_hz"].isna() | (table["mode_hz"] == first_hz)]
+    return table
+
+
+def first_mode_and_channel(table: pd.DataFrame, channel: str) -> pd.DataFrame:
+    """The rows of the first (lowest) mode and of ``channel``: the paper's models, the
+    diagnosis and the paper's figures analyse this one mode and sensor
+    (:func:`paper_channel`). A table without ``mode_hz`` or ``channel`` columns is
+    returned whole."""
+    table = _first_mode(table)
     if "channel" in table:
         table = table[table["channel"] == channel]
     return table
+
+
+def paper_channel(segments: pd.DataFrame, channels: Sequence[str]) -> str:
+    """The response channel the paper's models and figures read: the first of
+    ``channels`` (campaign.yaml's order) with a kept segment of the first mode in the
+    segments table, so that a sensor left out of every hit (clipped, its unit refused,
+    too weak) does not leave them unfitted; the first listed where no channel has one.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> kept = pd.DataFrame({"mode_hz": [80.5, 80.5, 297.7], "channel": ["acc2", "acc3", "laser"]})
+    >>> paper_channel(kept, ["laser", "acc2", "acc3"])
+    'acc2'
+    >>> paper_channel(kept.iloc[:0], ["laser", "acc2"])
+    'laser'
+    """
+    seen = set(_first_mode(segments)["channel"]) if "channel" in segments else set()
+    return next((channel for channel in channels if channel in seen), channels[0])
 
 
 def with_mode_and_channel(table: pd.DataFrame, mode_hz: float | None, channel: str) -> pd.DataFrame:

@@ -332,7 +332,8 @@ def modes_section(document: Mapping) -> list[str]:
         '<p class="note">Each mode is diagnosed on its own. With several channels a '
         "configuration's verdict is one joint analysis of every channel (each on one amplitude "
         "scale, in its own scatter, the same runs held out on all); each channel's own verdict is "
-        "a consistency check. The paper's figures and models are the first mode's, on the first channel.</p>"
+        "a consistency check. The paper's figures and models are the first mode's, on the first "
+        "channel listed that the runs kept (the tables' <code>channel</code>).</p>"
     )
     return parts
 
