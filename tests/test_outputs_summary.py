@@ -52,6 +52,61 @@ def test_summary_without_exclusions_does_not_point_to_reasons():
     assert "0 excluded" in text and "runs.csv" not in text
 
 
+COMBINED = {
+    "campaign": "hit",
+    "cause": "quadratic_damping",
+    "causes": ["quadratic_damping", "microslip_power_law"],
+    # the first cause alone has a share of its own: the verdict's is the combination's
+    "confidence": {"microslip_power_law+quadratic_damping": 0.81, "quadratic_damping": 0.19},
+    "configurations": {
+        "c": {
+            "cause": "quadratic_damping",
+            "causes": ["quadratic_damping", "microslip_power_law"],
+            "confidence": {"microslip_power_law+quadratic_damping": 0.81, "quadratic_damping": 0.19},
+            "gain": {"ratio": 0.31},
+            "extended_model": {"model": "iwan_cells_4_quadratic"},
+            "explains_data": False,
+        }
+    },
+    "modes": [
+        {"mode_hz": 80.5, "cause": "quadratic_damping"},
+        {
+            "mode_hz": 297.7,
+            "cause": "none",
+            "causes": ["none"],
+            "confidence": {"none": 0.46, "microslip_power_law": 0.27, "quadratic_damping": 0.27},
+        },
+    ],
+}
+
+
+def test_summary_names_every_mechanism_of_a_combination_with_its_confidence():
+    runs = runs_table(excluded=0)
+    runs["left_out"] = ["c/run01.txt: channel 'acc2\x1b[2J': response clipped", "", ""]
+    text = run_summary(COMBINED, runs)
+    assert (
+        "Verdict (mode 80.5 Hz): quadratic damping + micro-slip (power law) "
+        "(microslip_power_law+quadratic_damping), confidence 0.81\n" in text
+    )
+    assert (
+        "  c: quadratic damping + micro-slip (power law), confidence 0.81, held-out error ratio 0.31, "
+        in text
+    )
+    assert "does not explain the data" in text and "0.19" not in text
+    assert "Verdict (mode 297.7 Hz): none (paper's model suffices), confidence 0.46" in text
+    # what a used run left out is said, through the terminal's escaping
+    assert "  left out: c/run01.txt: channel 'acc2\\x1b[2J': response clipped" in text
+    assert "\x1b" not in text and "results/tables/runs.csv" in text
+
+
+def test_verdict_page_and_first_page_name_both_mechanisms():
+    from workflow.outputs.landing_page import verdict_rst
+    from workflow.outputs.verdict_page import verdict_html
+
+    assert "Campaign verdict: quadratic damping + micro-slip (power law).</b>" in verdict_html(COMBINED)
+    assert verdict_rst(COMBINED).startswith(r"Verdict\: quadratic damping \+ micro\-slip \(power law\)")
+
+
 def test_unknown_key_from_the_command_line_is_blamed_on_it_with_valid_keys():
     with pytest.raises(ConfigError) as error:
         validate_config({"analysys": {"filter_order": 4}}, command_line={"analysys": {"filter_order": 4}})

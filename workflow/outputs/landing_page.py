@@ -16,7 +16,6 @@ from workflow.outputs.report_wording import (
     campaign_headline,
     candidate_margin,
     candidate_name,
-    cause_name,
     discrepancy_text,
     excluded_runs,
     explains_sentences,
@@ -27,6 +26,8 @@ from workflow.outputs.report_wording import (
     n_runs_of,
     trend_sentence,
     unidentified_parameters_of,
+    verdict_confidence,
+    verdict_name,
 )
 
 __all__ = [
@@ -61,9 +62,8 @@ def verdict_rst(
     Campaign **washers\_\*2\***.
     """
     entries = document.get("configurations", {})
-    cause = document.get("cause", "unknown")
     trends = measured_trends(segments) if segments is not None else {}
-    title = rst_text(f"Verdict: {cause_name(cause)}")
+    title = rst_text(f"Verdict: {verdict_name(document)}")
     lines = [title, "=" * len(title), ""]
     if document.get("campaign"):
         lines += [f"Campaign {rst_strong(document['campaign'])}.", ""]
@@ -92,7 +92,7 @@ def verdict_rst(
                 )
                 margin = candidate_margin(entry)
                 if margin and margin["ratio"] is not None and margin["ratio"] >= 1:
-                    confidence = (entry.get("confidence") or {}).get(entry.get("cause"))
+                    confidence = verdict_confidence(entry)
                     text += (
                         f" It is {margin_words(margin['ratio'], confidence)} the next best, "
                         f"{candidate_name(margin['next'])}, which has {ratio(margin['ratio'])} times "
@@ -104,8 +104,7 @@ def verdict_rst(
         if unidentified:
             text += " " + unidentified
         lines += [
-            f"* {rst_strong(name)}: *{rst_text(cause_name(entry.get('cause')))}*. "
-            + rst_text(text, limit=None),
+            f"* {rst_strong(name)}: *{rst_text(verdict_name(entry))}*. " + rst_text(text, limit=None),
             "",
         ]
     skipped = document.get("skipped_configurations") or {}

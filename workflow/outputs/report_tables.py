@@ -20,7 +20,7 @@ from workflow.io.recording_time import run_order
 from workflow.io.units import INCH_SECOND, MODEL_PARAMETER_UNITS, UnitSystem
 from workflow.outputs.plain_words import uncertainty_note
 from workflow.outputs.report_html import amplitude_range, esc, fmt, html_table, page, ratio, tag
-from workflow.outputs.report_wording import ERROR_UNIT, cause_name, model_name
+from workflow.outputs.report_wording import ERROR_UNIT, cause_name, model_name, verdict_name
 
 __all__ = [
     "hypotheses_in_units",
@@ -278,7 +278,7 @@ def candidates_html(document: Mapping) -> str:
     ]
     for name, entry in (document.get("configurations") or {}).items():
         evidence = entry.get("evidence") or {}
-        parts.append(f"<h2>{esc(name)}: {tag(cause_name(entry.get('cause')), 'cause')}</h2>")
+        parts.append(f"<h2>{esc(name)}: {tag(verdict_name(entry), 'cause')}</h2>")
         rows = []
         for model, b in (evidence.get("baselines") or {}).items():
             rows.append(

@@ -31,6 +31,8 @@ __all__ = [
     "ONE_RUN_ERROR_UNIT",
     "model_name",
     "cause_name",
+    "verdict_name",
+    "verdict_confidence",
     "candidate_name",
     "candidate_margin",
     "signature_sentences",
@@ -115,13 +117,54 @@ ONE_RUN_ERROR_UNIT = (
 
 
 def model_name(model_id: str | None) -> str:
+    """Display name of a model id; a combined model (``iwan_cells_<n>_quadratic``,
+    ``iwan_cells_<n>_stiffness``) names its added term.
+
+    >>> model_name("iwan_cells_4_quadratic")
+    'Iwan micro-slip with slip thresholds from the data + quadratic damping'
+    """
     if model_id and model_id.startswith("iwan_cells_"):
-        return "Iwan micro-slip with slip thresholds from the data"
+        added = {"quadratic": " + quadratic damping", "stiffness": " + nonlinear stiffness"}
+        term = added.get(model_id.rsplit("_", 1)[-1], "")
+        return f"Iwan micro-slip with slip thresholds from the data{term}"
     return MODEL_NAMES.get(model_id or "", model_id or "?")
 
 
 def cause_name(cause: str | None) -> str:
+    """Short name of a cause, or of a combination by its ``confidence`` key.
+
+    >>> cause_name("microslip_power_law+quadratic_damping")
+    'micro-slip (power law) + quadratic damping'
+    """
+    if cause and "+" in cause:
+        return " + ".join(CAUSE_NAMES.get(part, part) for part in cause.split("+"))
     return CAUSE_NAMES.get(cause or "", cause or "?")
+
+
+def verdict_name(entry: Mapping) -> str:
+    """The verdict of diagnosis.json, of one of its modes or configurations: every
+    mechanism of ``causes`` named, the largest share of the gain first (``cause`` alone is
+    only the first).
+
+    >>> verdict_name({"cause": "stiffness_nonlinearity",
+    ...               "causes": ["stiffness_nonlinearity", "microslip_power_law"]})
+    'stiffness nonlinearity + micro-slip (power law)'
+    """
+    return " + ".join(cause_name(cause) for cause in entry.get("causes") or [entry.get("cause", "unknown")])
+
+
+def verdict_confidence(entry: Mapping) -> float | None:
+    """The verdict's share of ``confidence`` (a combination's under its key,
+    :func:`~workflow.discovery.confidence.verdict_key`); None where there is none.
+
+    >>> verdict_confidence({"cause": "quadratic_damping", "causes": ["quadratic_damping", "microslip_power_law"],
+    ...                     "confidence": {"microslip_power_law+quadratic_damping": 0.9, "quadratic_damping": 0.1}})
+    0.9
+    """
+    share = (entry.get("confidence") or {}).get(
+        verdict_key(entry.get("causes") or [entry.get("cause") or "?"])
+    )
+    return None if share is None else float(share)
 
 
 def candidate_name(cause: str | None) -> str:
@@ -503,8 +546,13 @@ def campaign_headline(document: Mapping) -> str:
     words = []
     for n in failing:
         margin = candidate_margin(entries[n]) or {}
-        confidence = (entries[n].get("confidence") or {}).get(entries[n].get("cause"))
-        words.append(gain_words((entries[n].get("gain") or {}).get("ratio"), margin.get("ratio"), confidence))
+        words.append(
+            gain_words(
+                (entries[n].get("gain") or {}).get("ratio"),
+                margin.get("ratio"),
+                verdict_confidence(entries[n]),
+            )
+        )
     word = "clearly better" if words and all(w == "clearly better" for w in words) else "better"
     text = (
         f"The paper's friction model (the better of Dahl and LuGre) falls short in "
@@ -520,7 +568,15 @@ def campaign_headline(document: Mapping) -> str:
     ]
     ratios = [r for r in ratios if r is not None]
     extended = [entries[n]["extended_model"]["model"] for n in failing if entries[n].get("cause") == cause]
-    text += f"The cause: {CAUSE_WORDS.get(cause, cause)}."
+    causes = document.get("causes") or [cause]
+    if len(causes) == 1:
+        text += f"The cause: {CAUSE_WORDS.get(cause, cause)}."
+    else:
+        text += (
+            "The causes, the largest share of the gain first: "
+            + "; and ".join(CAUSE_WORDS.get(c, c) for c in causes)
+            + "."
+        )
     if extended and ratios:
         best = min(ratios)
         held_out = (

@@ -14,7 +14,6 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-from workflow.discovery.confidence import verdict_key
 from workflow.discovery.wording import runs_words
 from workflow.io.units import INCH_SECOND, UnitSystem
 from workflow.outputs.plain_words import (
@@ -55,6 +54,8 @@ from workflow.outputs.report_wording import (
     threshold_sentences,
     trend_sentence,
     unidentified_parameters_of,
+    verdict_confidence,
+    verdict_name,
 )
 
 __all__ = [
@@ -90,7 +91,7 @@ def _configuration_row(name: str, entry: Mapping, area_in2: float | None, units:
         esc(name),
         fmt(scaled_number(area_in2, units.per_in2)),
         esc(model_name(entry.get("baseline", {}).get("model"))),
-        tag(cause_name(entry.get("cause")), "none" if entry.get("cause") == "none" else "cause"),
+        tag(verdict_name(entry), "none" if entry.get("cause") == "none" else "cause"),
         esc(model_name(entry.get("extended_model", {}).get("model"))),
         fmt(gain.get("baseline")),
         fmt(gain.get("extended")),
@@ -190,7 +191,7 @@ def _sureness_items(name: str, entry: Mapping, units: UnitSystem = INCH_SECOND) 
                 f"times its held-out error ({fmt(margin['next_score'])})."
             )
         elif margin["ratio"] >= 1:
-            confidence = (entry.get("confidence") or {}).get(verdict_key(entry.get("causes") or [cause]))
+            confidence = verdict_confidence(entry)
             sure = f"; its confidence is {percent_of(confidence)}" if confidence is not None else ""
             items.append(
                 f"The verdict is {margin_words(margin['ratio'], confidence)} the next-best candidate, "
@@ -303,19 +304,17 @@ def modes_section(document: Mapping) -> list[str]:
         mode_hz = mode.get("mode_hz")
         heading = f"mode {mode_hz:.5g} Hz" if isinstance(mode_hz, int | float) else "mode not found"
         parts.append(
-            f"<h3>{esc(heading)}: {esc(cause_name(mode.get('cause')))}</h3>"
+            f"<h3>{esc(heading)}: {esc(verdict_name(mode))}</h3>"
             f"<p>confidence: {_confidence_text(mode.get('confidence'))}</p>"
         )
         rows = []
         for name, entry in mode.get("configurations", {}).items():
             channels = entry.get("channels") or {}
-            seen = "; ".join(
-                f"{channel}: {cause_name(own.get('cause'))}" for channel, own in channels.items()
-            )
+            seen = "; ".join(f"{channel}: {verdict_name(own)}" for channel, own in channels.items())
             rows.append(
                 [
                     esc(name),
-                    esc(cause_name(entry.get("cause"))),
+                    esc(verdict_name(entry)),
                     _confidence_text(entry.get("confidence")),
                     esc(fmt(entry.get("gain", {}).get("ratio"))),
                     esc(seen),
@@ -390,7 +389,7 @@ def verdict_html(
     kind = "none" if cause == "none" else ("unknown" if cause == "unknown" else "")
     parts.append(
         f'<div class="headline {kind}"><b>Campaign verdict: '
-        f"{esc(cause_name(cause))}.</b> {esc(campaign_headline(document))}</div>"
+        f"{esc(verdict_name(document))}.</b> {esc(campaign_headline(document))}</div>"
     )
 
     # what the paper's model gets wrong
@@ -399,7 +398,7 @@ def verdict_html(
         parts.append(
             "<ul>"
             + "".join(
-                f"<li><b>{esc(n)}</b> ({tag(cause_name(e.get('cause')), 'none' if e.get('cause') == 'none' else 'cause')}): "
+                f"<li><b>{esc(n)}</b> ({tag(verdict_name(e), 'none' if e.get('cause') == 'none' else 'cause')}): "
                 f"{esc(discrepancy_text(e, units))}"
                 + (f" {esc(trend_sentence(trends[n], units))}" if n in trends else "")
                 + _unidentified_tag(e)
