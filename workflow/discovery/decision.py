@@ -266,7 +266,10 @@ def parsimonious(cause: str, candidate: Mapping, baseline_bic: float) -> bool:
     """Whether a candidate pays for its parameters: its BIC below the baseline's, or, for a
     cause that acts between runs (:data:`BETWEEN_RUN_CAUSES`), its held-out gain across
     runs beyond their scatter (``gain_across_runs``: :func:`heldout_gain_t` above Student's
-    one-sided 2.5 % quantile, :func:`~workflow.discovery.combined.paired_critical_value`).
+    one-sided 2.5 % quantile, :func:`~workflow.discovery.combined.paired_critical_value`),
+    or the removal of the baseline's significant run-order trend (``removes_run_trend``:
+    the trend test, :func:`~workflow.discovery.misfit.run_order_trend`, is the drift's own
+    test at a stated false-alarm rate, the same parameter's evidence by another route).
 
     The BIC judges a parameter by what it adds to the in-sample fit. A run drift's
     parameter says how the runs differ, and in sample each run's two offsets already say
@@ -283,10 +286,14 @@ def parsimonious(cause: str, candidate: Mapping, baseline_bic: float) -> bool:
     True
     >>> parsimonious("quadratic_damping", {"bic": 11.0, "gain_across_runs": True}, 10.0)
     False
+    >>> parsimonious("run_drift", {"bic": 11.0, "removes_run_trend": True}, 10.0)
+    True
     """
     if candidate["bic"] < baseline_bic:
         return True
-    return cause in BETWEEN_RUN_CAUSES and bool(candidate.get("gain_across_runs", False))
+    return cause in BETWEEN_RUN_CAUSES and bool(
+        candidate.get("gain_across_runs", False) or candidate.get("removes_run_trend", False)
+    )
 
 
 @dataclass
@@ -420,6 +427,10 @@ def evaluate_decision(
             "shows_signature": evidence[m].shows_signature,
             "heldout_gain_t": gain_t,
             "gain_across_runs": bool(n_runs_view >= 2 and gain_t > critical_t),
+            # the baseline's run-order trend significant, the candidate's not
+            "removes_run_trend": bool(
+                trend is not None and trend["significant"] and (ct is None or not ct["significant"])
+            ),
             "beyond_accuracy": bool(
                 beyond_accuracy(unit_curve_squares[base], unit_curve_squares[m], unit_tolerance, all_units)[0]
             ),
