@@ -31,6 +31,7 @@ __all__ = [
     "ONE_RUN_ERROR_UNIT",
     "model_name",
     "cause_name",
+    "entry_causes",
     "verdict_name",
     "verdict_confidence",
     "candidate_name",
@@ -141,6 +142,13 @@ def cause_name(cause: str | None) -> str:
     return CAUSE_NAMES.get(cause or "", cause or "?")
 
 
+def entry_causes(entry: Mapping) -> list[str]:
+    """The mechanisms of a verdict of diagnosis.json, of one of its modes or configurations:
+    ``causes``, the largest share of the gain first, or ``cause`` alone where a document
+    has no ``causes`` (``unknown`` where it has neither)."""
+    return list(entry.get("causes") or [entry.get("cause") or "unknown"])
+
+
 def verdict_name(entry: Mapping) -> str:
     """The verdict of diagnosis.json, of one of its modes or configurations: every
     mechanism of ``causes`` named, the largest share of the gain first (``cause`` alone is
@@ -150,7 +158,7 @@ def verdict_name(entry: Mapping) -> str:
     ...               "causes": ["stiffness_nonlinearity", "microslip_power_law"]})
     'stiffness nonlinearity + micro-slip (power law)'
     """
-    return " + ".join(cause_name(cause) for cause in entry.get("causes") or [entry.get("cause", "unknown")])
+    return " + ".join(cause_name(cause) for cause in entry_causes(entry))
 
 
 def verdict_confidence(entry: Mapping) -> float | None:
@@ -161,9 +169,7 @@ def verdict_confidence(entry: Mapping) -> float | None:
     ...                     "confidence": {"microslip_power_law+quadratic_damping": 0.9, "quadratic_damping": 0.1}})
     0.9
     """
-    share = (entry.get("confidence") or {}).get(
-        verdict_key(entry.get("causes") or [entry.get("cause") or "?"])
-    )
+    share = (entry.get("confidence") or {}).get(verdict_key(entry_causes(entry)))
     return None if share is None else float(share)
 
 
@@ -193,7 +199,7 @@ def candidate_margin(entry: Mapping) -> dict | None:
     ranking = [r for r in entry.get("ranking", []) if r.get("score") is not None]
     cause = entry.get("cause")
     # unknown keeps the baseline: compare it with the best candidate
-    chosen = "none" if cause in ("none", "unknown") else verdict_key(entry.get("causes") or [cause])
+    chosen = "none" if cause in ("none", "unknown") else verdict_key(entry_causes(entry))
     mine = [r for r in ranking if r["cause"] == chosen]
     others = [r for r in ranking if r["cause"] != chosen]
     if not mine or not others:
@@ -568,7 +574,7 @@ def campaign_headline(document: Mapping) -> str:
     ]
     ratios = [r for r in ratios if r is not None]
     extended = [entries[n]["extended_model"]["model"] for n in failing if entries[n].get("cause") == cause]
-    causes = document.get("causes") or [cause]
+    causes = entry_causes(document)
     if len(causes) == 1:
         text += f"The cause: {CAUSE_WORDS.get(cause, cause)}."
     else:

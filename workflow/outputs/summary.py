@@ -12,7 +12,7 @@ import pandas as pd
 from workflow.discovery.confidence import verdict_key
 from workflow.io.escape import terminal_text
 from workflow.outputs.report_command import REPORT_COMMAND_FILE
-from workflow.outputs.report_wording import verdict_confidence, verdict_name
+from workflow.outputs.report_wording import entry_causes, verdict_confidence, verdict_name
 
 __all__ = [
     "REASONS_SHOWN",
@@ -73,7 +73,7 @@ def run_summary(document: Mapping, runs: pd.DataFrame, *, width: int = 100) -> s
     # the campaign's text reaches the console only through terminal_text; a reason's
     # whitespace runs are folded to one space first (its line breaks are layout, not content)
     lines = [f"lapjoint: campaign {terminal_text(document.get('campaign', '?'))}"]
-    key = verdict_key(document.get("causes") or [document.get("cause", "unknown")])
+    key = verdict_key(entry_causes(document))
     modes = document.get("modes") or []
     first_hz = modes[0].get("mode_hz") if len(modes) > 1 else None
     at = f" (mode {first_hz:.5g} Hz)" if isinstance(first_hz, int | float) else ""
