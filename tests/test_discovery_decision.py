@@ -68,7 +68,8 @@ REASONS = {
     "none": "no significant misfit of the baseline and no candidate reduces the held-out error below 0.7 "
     "of the baseline's or removes more held-out misfit than the models' accuracy",
     "no_candidate": "the baseline misfit is significant but no candidate lowers the held-out error, pays for "
-    "its parameters (BIC, or a run drift's held-out gain across runs) and shows its cause's signature",
+    "its parameters (BIC, or a run drift's held-out gain across runs or its removal of the run-order trend) "
+    "and shows its cause's signature",
     "misfit_left": "the best eligible candidate (quadratic_damping) leaves a significant misfit and cuts the "
     "held-out error only to 0.75 of the baseline's",
     "named_misfit": "baseline misfit significant; quadratic_damping has the lowest held-out error among "

@@ -83,7 +83,8 @@ BETWEEN_RUN_CAUSES = ("run_drift",)
 own frequency and linear-damping offsets, fitted to all its segments, absorb part of what
 the extension explains in sample, so its BIC cannot show its gain, while a held-out run,
 its offsets set by its stuck-joint calibration segments alone, shows it. Such a candidate
-also pays for its parameter by its held-out gain across runs (:func:`parsimonious`)."""
+also pays for its parameter by its held-out gain across runs, or by removing the
+baseline's significant run-order trend (:func:`parsimonious`)."""
 
 
 CLEAR_GAIN = 0.7
@@ -123,7 +124,9 @@ def decide(
         optionally ``shows_signature`` (default true), ``gain_across_runs`` (whether its
         held-out gain over the baseline passes the paired test over the runs,
         :func:`heldout_gain_t`; default false; counts for :data:`BETWEEN_RUN_CAUSES` only,
-        :func:`parsimonious`) and ``beyond_accuracy`` (whether it
+        :func:`parsimonious`), ``removes_run_trend`` (the baseline's run-order trend
+        significant and the candidate's not; default false; the same) and
+        ``beyond_accuracy`` (whether it
         removes more held-out misfit than the models' accuracy,
         :func:`~workflow.discovery.confidence.beyond_accuracy`; default false).
 
@@ -146,7 +149,8 @@ def decide(
       single mode (baseline or candidate) can remove that misfit.
     * A candidate is *eligible* when its held-out error is below the baseline's, it pays
       for its parameters (:func:`parsimonious`: its BIC below the baseline's; a run drift
-      also by its held-out gain across runs), and its fit shows its cause's signature
+      also by its held-out gain across runs or by removing the baseline's run-order
+      trend), and its fit shows its cause's signature
       (:func:`~workflow.discovery.misfit.stiffness_signature`).
     * ``none`` when the baseline has no significant misfit and no eligible candidate
       cuts the held-out error below ``CLEAR_GAIN`` x the baseline's or removes more
@@ -197,7 +201,8 @@ def decide(
     if not eligible:
         return "unknown", (
             "the baseline misfit is significant but no candidate lowers the held-out error, pays for its "
-            "parameters (BIC, or a run drift's held-out gain across runs) and shows its cause's signature"
+            "parameters (BIC, or a run drift's held-out gain across runs or its removal of the run-order "
+            "trend) and shows its cause's signature"
         )
     leader = min(eligible, key=lambda c: eligible[c]["heldout_error"])
     best_squares = None if unit_squares is None else unit_squares[leader]
