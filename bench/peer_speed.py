@@ -21,6 +21,12 @@ run forward and backward, analysis from 0.05 s after the largest sample to 2.0 s
 
 The parabolas are solved in closed form for all extrema at once (the port solves a
 3 x 3 system per extremum in a Python loop): a peer at least as fast as the published one.
+``--published-port DIR`` also times the published port itself, from a copy of its
+``pff.py`` that the user puts in DIR (it is not part of this repository): its
+``pff_analysis`` as its own test calls it on this record (nominal 153.9 Hz, a half band
+of 10/153.9 of the peak, order 3, from 0.05 s after the largest sample to 2.0 s,
+``remove_end=20``), after ``scipy.io.loadmat`` of the file, as a third participant in
+the same alternation.
 On the sample record it reproduces the method's published output
 (../shared/realdata/pff-lms-sample.reference.csv) between 0.3 and 1.8 s: damping -1.7 %
 in the median (5.5 % median absolute difference, point by point), frequency +0.014 Hz.
@@ -42,7 +48,7 @@ Both run single-threaded, as the workflow's jobs do (Snakemake gives a ``threads
 job one BLAS thread): a threaded BLAS call leaves its threads spinning on a loaded
 machine, and the next timed work, either side's, pays for them.
 
-    python bench/peer_speed.py [--repeats 7] [--raw ../shared/realdata/raw]
+    python bench/peer_speed.py [--repeats 7] [--raw ../shared/realdata/raw] [--published-port DIR]
 """
 
 import os
@@ -136,6 +142,14 @@ def peer_record(mat_path: Path) -> dict[str, np.ndarray]:
     return pff_extraction(t, x, nominal_hz=NOMINAL_HZ, start_s=t[np.argmax(x)] + 0.05, stop_s=2.0)
 
 
+def published_port_record(port, mat_path: Path):
+    """The published port's per-record work as its own test does it on this record: read
+    the MAT file, ``pff_analysis`` (``port``: its imported ``pff`` module)."""
+    data = scipy.io.loadmat(mat_path)
+    start_s = data["t"][np.argmax(data["x"])] + 0.05
+    return port.pff_analysis(data["t"][:, 0], data["x"], 153.9, start_s, 2.0, 10.0 / 153.9, remove_end=20)
+
+
 def project_record(folder: Path, campaign: Campaign) -> tuple[ConfigurationMode, RunAnalysis]:
     """The project's per-record work on the one run of the campaign in ``folder``, as its
     ``identify_mode`` job does it once the campaign is read: the file read once, the mode
@@ -170,8 +184,21 @@ def main() -> None:
     parser.add_argument(
         "--raw", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "realdata" / "raw"
     )
+    parser.add_argument(
+        "--published-port",
+        type=Path,
+        help="a folder holding a copy of the published port's pff.py (JustinPorter88/pff-analysis), "
+        "timed as a third participant",
+    )
     args = parser.parse_args()
     mat_path = args.raw / "pff_Sample_LMS_Data.mat"
+    port = None
+    if args.published_port is not None:
+        import importlib.util
+
+        spec = importlib.util.spec_from_file_location("pff", args.published_port / "pff.py")
+        port = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(port)
     before_s = reference_loop_s()
     folder = Path(tempfile.mkdtemp(prefix="lapjoint-peer-speed-"))
     try:
@@ -189,6 +216,8 @@ def main() -> None:
                 project_record(folder, read_campaign(settings_json))[1].segments,
             )[1],
         }
+        if port is not None:
+            work["published port (PFF)"] = lambda: published_port_record(port, mat_path)
         seconds = {name: [] for name in work}
         outputs = {}
         for repeat in range(args.repeats + 1):
@@ -199,17 +228,21 @@ def main() -> None:
                     seconds[name].append(time.perf_counter() - start)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
-    peer, project = (statistics.median(values) for values in seconds.values())
-    ratios = [a / b for a, b in zip(seconds["project"], seconds["peer (PFF)"])]
     kept = outputs["project"]["kept"]
     print(f"| per record, {args.repeats} alternating rounds | median s | range s |")
     print("|---|---|---|")
     for name, values in seconds.items():
         print(f"| {name} | {statistics.median(values):.3f} | {min(values):.3f}-{max(values):.3f} |")
-    print(
-        f"\nproject / peer: {project / peer:.2f} (ratio of medians); the rounds' ratios "
-        f"{statistics.median(ratios):.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
-    )
+    print()
+    for name in seconds:
+        if name == "project":
+            continue
+        ratios = [a / b for a, b in zip(seconds["project"], seconds[name])]
+        ratio = statistics.median(seconds["project"]) / statistics.median(seconds[name])
+        print(
+            f"project / {name.removesuffix(' (PFF)')}: {ratio:.2f} (ratio of medians); the rounds' ratios "
+            f"{statistics.median(ratios):.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
+        )
     pff = outputs["peer (PFF)"]
     print(
         f"peer: {pff['t_s'].size} extrema, median {np.median(pff['frequency_hz']):.2f} Hz, "

@@ -43,6 +43,13 @@ fraction of the analysis window does not decay there: an exponential decay holds
 for ln(2) / 2 / sigma, so holding half the window means falling by less than a factor 2
 across all of it. Such a line is forced (a shaker dwell, mains hum), not a mode."""
 
+TRACK_POINTS_PER_BIN: int = 32
+"""Instants per bin of the tracking band at which :func:`line_hold_fraction` reads a
+line's track (every sample of a shorter run): the track holds no period shorter than the
+run over the band's bins, so 32 instants per bin resolve its 3 dB crossings to 1/32 of
+its fastest period, and a long record's track is not computed at every sample (a 131,072
+sample record at 51.2 kHz: 9,920 instants for a 151 Hz line)."""
+
 CLEAR_MODE_OVER_FLOOR: float = 10.0
 """Least ratio of a mode's spectral amplitude to the spectrum's median amplitude over
 the searched range (20 dB above the noise floor) for ``modes_hz: auto`` to take it."""
@@ -394,17 +401,32 @@ def line_hold_fraction(
         if run.size <= 4 * edge:
             continue
         spectrum = np.fft.rfft(run - run.mean()) if spectra is None else spectra[index]
-        track = _line_track(spectrum, run.size, fs_hz, line_hz, sigma_hz)[edge:-edge]
+        points = min(run.size, TRACK_POINTS_PER_BIN * _band_bins(run.size, fs_hz, line_hz, sigma_hz)[0].size)
+        edge_points = int(np.ceil(edge * points / run.size))
+        track = _line_track(spectrum, run.size, fs_hz, line_hz, sigma_hz, points=points)
+        track = track[edge_points:-edge_points]
         peak = track.max()
         fractions.append(float(np.mean(track >= peak / np.sqrt(2.0))) if peak > 0 else 0.0)
     return float(np.median(fractions)) if fractions else 0.0
 
 
-def _line_track(spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigma_hz: float) -> np.ndarray:
+def _band_bins(n: int, fs_hz: float, line_hz: float, sigma_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Indices and frequencies (Hz) of the one-sided FFT bins of ``n`` samples within 40
+    standard deviations ``sigma_hz`` of ``line_hz`` (where the Gaussian band's gain is not
+    0 in float64)."""
+    frequency_hz = np.fft.rfftfreq(n, 1.0 / fs_hz)
+    inside = np.flatnonzero(np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz)
+    return inside, frequency_hz[inside]
+
+
+def _line_track(
+    spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigma_hz: float, *, points: int | None = None
+) -> np.ndarray:
     """Amplitude over time of the part of a run of ``n`` samples whose one-sided spectrum
     (``rfft``) is ``spectrum`` in a Gaussian band of standard deviation ``sigma_hz``
     around ``line_hz`` (positive frequencies only: the analytic signal of the band,
-    halved), in the unit of the run.
+    halved), in the unit of the run: at every sample, or with ``points`` at that many
+    instants ``j n / points`` spread evenly over the run (at least twice the band's bins).
 
     The band's gain underflows to exactly 0 beyond 40 standard deviations, so it is
     computed inside them only; at 0 Hz and at negative frequencies it is 0 (``line_hz``
@@ -412,19 +434,26 @@ def _line_track(spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigm
     ``X[k]`` is ``(2 / n) S(t)``, ``S(t) = sum_k X[k] exp(2 pi i k t / n)``, and its
     squared modulus ``|S|^2 = C[0] + 2 Re sum_m C[m] exp(2 pi i m t / n)`` with the
     spectrum's autocorrelation ``C[m] = sum_k X[k + m] conj(X[k])``: one real inverse
-    transform of ``C`` (K squared products) instead of two of the band.
+    transform of ``C`` (K squared products) instead of two of the band. ``|S|^2`` holds
+    no period shorter than ``n / (K - 1)`` samples, so the transform of ``C`` to ``points
+    >= 2 K - 1`` values gives it exactly at those instants (a trigonometric polynomial's
+    samples), without the samples in between.
     """
-    frequency_hz = np.fft.rfftfreq(n, 1.0 / fs_hz)
-    inside = np.flatnonzero(np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz)
+    points = n if points is None else int(points)
+    inside, frequency_hz = _band_bins(n, fs_hz, line_hz, sigma_hz)
     if not inside.size:
-        return np.zeros(n)
-    banded = spectrum[inside] * np.exp(-0.5 * ((frequency_hz[inside] - line_hz) / sigma_hz) ** 2)
+        return np.zeros(points)
+    if points < 2 * inside.size - 1:
+        raise ValueError(
+            f"{points} points cannot hold a track of {inside.size} bins (at least {2 * inside.size - 1})"
+        )
+    banded = spectrum[inside] * np.exp(-0.5 * ((frequency_hz - line_hz) / sigma_hz) ** 2)
     autocorrelation = np.correlate(banded, banded, mode="full")[banded.size - 1 :]
-    squared = np.fft.irfft(autocorrelation, n)
-    # |S|^2 = n irfft(C); rounding may leave it a hair below 0 where the band is silent
-    # (in place: the track is as long as the run)
+    squared = np.fft.irfft(autocorrelation, points)
+    # |S|^2 = points irfft(C); rounding may leave it a hair below 0 where the band is
+    # silent (in place: at every sample the track is as long as the run)
     np.maximum(squared, 0.0, out=squared)
-    squared /= n
+    squared /= n / points * n
     return np.sqrt(squared, out=squared)
 
 
