@@ -79,15 +79,16 @@ def _line_fits(
     times ``t_centred`` (shape (L,), mean 0) shared by every row; returns (a at the
     centre, b, rms residual or None without ``residual``), each of shape (K,)."""
     intercept = y.mean(axis=1)
-    y_centred = y - intercept[:, None]
     # Sums along each row (not einsum, whose order depends on the shape, nor np.dot,
     # a threaded BLAS call that stalls on a loaded machine): a row gives the same
-    # sums, to the last bit, whether fitted alone or beside others. The products go
-    # into the centred values' array when no residual needs them, else into one
-    # scratch array: a fresh one per step costs as much as the arithmetic.
+    # sums, to the last bit, whether fitted alone or beside others. The times sum to
+    # 0, so the slope needs no centred values (their rounding and the products' differ
+    # by 1e-14 of an unwrapped phase's slope); the residual does, and the products go
+    # into one scratch array: a fresh one per step costs as much as the arithmetic.
     if not residual:
-        slope = np.multiply(y_centred, t_centred, out=y_centred).sum(axis=1) / np.sum(t_centred * t_centred)
+        slope = np.multiply(y, t_centred).sum(axis=1) / np.sum(t_centred * t_centred)
         return intercept, slope, None
+    y_centred = y - intercept[:, None]
     scratch = np.multiply(y_centred, t_centred)
     slope = scratch.sum(axis=1) / np.sum(t_centred * t_centred)
     y_centred -= np.multiply(slope[:, None], t_centred, out=scratch)
