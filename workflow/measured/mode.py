@@ -401,32 +401,29 @@ def line_hold_fraction(
         if run.size <= 4 * edge:
             continue
         spectrum = np.fft.rfft(run - run.mean()) if spectra is None else spectra[index]
-        points = min(run.size, TRACK_POINTS_PER_BIN * _band_bins(run.size, fs_hz, line_hz, sigma_hz)[0].size)
-        edge_points = int(np.ceil(edge * points / run.size))
-        track = _line_track(spectrum, run.size, fs_hz, line_hz, sigma_hz, points=points)
+        track = _line_track(spectrum, run.size, fs_hz, line_hz, sigma_hz, points_per_bin=TRACK_POINTS_PER_BIN)
+        edge_points = int(np.ceil(edge * track.size / run.size))
         track = track[edge_points:-edge_points]
         peak = track.max()
         fractions.append(float(np.mean(track >= peak / np.sqrt(2.0))) if peak > 0 else 0.0)
     return float(np.median(fractions)) if fractions else 0.0
 
 
-def _band_bins(n: int, fs_hz: float, line_hz: float, sigma_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    """Indices and frequencies (Hz) of the one-sided FFT bins of ``n`` samples within 40
-    standard deviations ``sigma_hz`` of ``line_hz`` (where the Gaussian band's gain is not
-    0 in float64)."""
-    frequency_hz = np.fft.rfftfreq(n, 1.0 / fs_hz)
-    inside = np.flatnonzero(np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz)
-    return inside, frequency_hz[inside]
-
-
 def _line_track(
-    spectrum: np.ndarray, n: int, fs_hz: float, line_hz: float, sigma_hz: float, *, points: int | None = None
+    spectrum: np.ndarray,
+    n: int,
+    fs_hz: float,
+    line_hz: float,
+    sigma_hz: float,
+    *,
+    points_per_bin: int | None = None,
 ) -> np.ndarray:
     """Amplitude over time of the part of a run of ``n`` samples whose one-sided spectrum
     (``rfft``) is ``spectrum`` in a Gaussian band of standard deviation ``sigma_hz``
     around ``line_hz`` (positive frequencies only: the analytic signal of the band,
-    halved), in the unit of the run: at every sample, or with ``points`` at that many
-    instants ``j n / points`` spread evenly over the run (at least twice the band's bins).
+    halved), in the unit of the run: at every sample, or with ``points_per_bin`` (2 or
+    more) at that many instants per bin of the band, ``j n / points``, spread evenly over
+    the run (every sample where that is fewer).
 
     The band's gain underflows to exactly 0 beyond 40 standard deviations, so it is
     computed inside them only; at 0 Hz and at negative frequencies it is 0 (``line_hz``
@@ -439,15 +436,14 @@ def _line_track(
     >= 2 K - 1`` values gives it exactly at those instants (a trigonometric polynomial's
     samples), without the samples in between.
     """
-    points = n if points is None else int(points)
-    inside, frequency_hz = _band_bins(n, fs_hz, line_hz, sigma_hz)
+    if points_per_bin is not None and points_per_bin < 2:
+        raise ValueError(f"points_per_bin must be 2 or more, got {points_per_bin}")
+    frequency_hz = np.fft.rfftfreq(n, 1.0 / fs_hz)
+    inside = np.flatnonzero(np.abs(frequency_hz - line_hz) < 40.0 * sigma_hz)
+    points = n if points_per_bin is None else min(n, points_per_bin * inside.size)
     if not inside.size:
-        return np.zeros(points)
-    if points < 2 * inside.size - 1:
-        raise ValueError(
-            f"{points} points cannot hold a track of {inside.size} bins (at least {2 * inside.size - 1})"
-        )
-    banded = spectrum[inside] * np.exp(-0.5 * ((frequency_hz - line_hz) / sigma_hz) ** 2)
+        return np.zeros(n)
+    banded = spectrum[inside] * np.exp(-0.5 * ((frequency_hz[inside] - line_hz) / sigma_hz) ** 2)
     autocorrelation = np.correlate(banded, banded, mode="full")[banded.size - 1 :]
     squared = np.fft.irfft(autocorrelation, points)
     # |S|^2 = points irfft(C); rounding may leave it a hair below 0 where the band is
