@@ -1222,7 +1222,7 @@ def test_contact_patch_joint_is_explained_by_the_slip_thresholds_recovered_from_
 
 
 def test_power_law_written_as_cells_keeps_the_stiffness_released_below_the_top_amplitude():
-    """The refinement's start: Segalman's density t^chi integrated over each half-decade
+    """The refinement's start: Segalman's density t^chi integrated over each quarter-decade
     cell; below the top amplitude (macro-slip above it) the cells hold exactly the
     stiffness the power law releases there, beta (V_top / V_s)^(chi + 1) / (1 + macro)."""
     model = MODELS["iwan_cells_4"]
@@ -1239,7 +1239,7 @@ def test_power_law_written_as_cells_keeps_the_stiffness_released_below_the_top_a
     shares = np.array([cells[name] for name in model.cell_names])
     assert shares.sum() == pytest.approx(0.02 * (4.0 / 20.0) ** 0.5 / 1.1, rel=1e-12)
     # each cell t^(chi+1) between its edges; the lowest also holds everything below it
-    edges = 4.0 * np.array([10**-2, 10**-1.5, 10**-1, 10**-0.5, 1.0]) / 20.0
+    edges = 4.0 * np.array([10**-1, 10**-0.75, 10**-0.5, 10**-0.25, 1.0]) / 20.0
     expected = 0.02 / 1.1 * np.diff(np.sqrt(edges))
     expected[0] += 0.02 / 1.1 * np.sqrt(edges[0])
     np.testing.assert_allclose(shares, expected, rtol=1e-12)

@@ -21,7 +21,6 @@ from workflow.models.joint_averages import (
     iwan_cells_averages,
     jenkins_dissipation,
     jenkins_inphase,
-    jenkins_log_integral,
     lugre_averages,
     power_stiffness_harmonic_factor,
     threshold_cell_edges,
@@ -161,7 +160,7 @@ def test_threshold_cells_match_a_sum_of_jenkins_elements(x):
     shares = np.array([0.1, 0.35, 0.05, 0.5])
     av = iwan_cells_averages(x, shares)
     d, g, slope = _cells_discrete(x, shares)
-    # midpoint rule over 20000 elements a cell: relative error ~ (ln 10 / 2 / 20000)^2
+    # midpoint rule over 20000 elements a cell: relative error ~ (ln 10 / 4 / 20000)^2
     assert av.dissipation == pytest.approx(d, rel=1e-7, abs=1e-15)
     assert av.inphase == pytest.approx(g, abs=1e-7)
     # the stuck stiffness counts whole elements: one element's weight is 2.5e-5 of the joint
@@ -373,25 +372,34 @@ def test_gradient_along_grid_is_numpys_gradient_to_the_bit(coordinate):
     )
 
 
-def test_jenkins_log_integral_is_numpys_interp_of_its_table_to_the_bit():
-    # the Iwan cells' fits are unchanged only if every value is: random points, the
-    # table's own points and their neighbours on both sides, the ends, NaN
+def _cells_numpy(y, shares):
+    """:func:`iwan_cells_averages`'s formulas with NumPy's arrays, ``H`` by ``np.interp``."""
     from workflow.models.joint_averages import _JENKINS_LOG_H, _JENKINS_LOG_TAU
 
-    tau = _JENKINS_LOG_TAU
-    points = np.concatenate(
-        [
-            np.random.default_rng(0).random(200_000),
-            np.geomspace(1e-12, 1.0, 1000),
-            tau,
-            np.nextafter(tau, 2.0),
-            np.nextafter(tau[1:], -1.0),
-            [0.0, 1.0, np.nan, np.nan, 0.5, 1.0],
-        ]
-    )
-    points = np.minimum(points, 1.0).reshape(-1, 4)
-    with np.errstate(invalid="ignore"):
-        np.testing.assert_array_equal(jenkins_log_integral(points), np.interp(points, tau, _JENKINS_LOG_H))
+    edges = threshold_cell_edges(shares.shape[-1])
+    low, high = edges[:-1], edges[1:]
+    x = np.abs(np.asarray(y, dtype=float))[..., None]
+    c = shares / np.log(high / low)
+    m = np.clip(x, low, high)
+    d = np.sum(4.0 * c * (x * (m - low) - 0.5 * (m**2 - low**2)), axis=-1)
+    h = np.interp(np.minimum(edges / np.where(x > 0, x, 1.0), 1.0), _JENKINS_LOG_TAU, _JENKINS_LOG_H)
+    h_top = np.where(x > 0, h[..., 1:], h[..., :-1])
+    stuck = c * np.log(high / m)
+    return d, np.sum(c * (h_top - h[..., :-1]) + stuck, axis=-1), x[..., 0] * np.sum(stuck, axis=-1)
+
+
+def test_threshold_cells_compiled_loop_is_the_array_formulas():
+    # amplitudes inside and beyond every cell, on the edges, at 0 and NaN; two parameter sets
+    edges = threshold_cell_edges(9)
+    y = np.concatenate([np.geomspace(1e-4, 30.0, 400), edges, np.nextafter(edges, 2.0), [0.0]])
+    shares = np.random.default_rng(0).dirichlet(np.ones(9), size=(2, 1))
+    av = iwan_cells_averages(y, shares)
+    for got, expected in zip((av.dissipation, av.inphase, av.tip_energy_slope), _cells_numpy(y, shares)):
+        assert got.shape == (2, y.size)
+        # the same arithmetic, summed in another order: a few ulps
+        np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-15)
+    nan = iwan_cells_averages(np.array([np.nan]), shares[0, 0])
+    assert np.isnan(nan.dissipation).all() and np.isnan(nan.inphase).all()
 
 
 def test_gradient_along_grid_of_a_quadratic_is_exact_inside():
@@ -425,19 +433,19 @@ def test_cells_no_fitted_amplitude_reaches_are_tied_to_the_highest_one_reached()
 
     model = MODELS["iwan_cells_5"]
     index = {p.name: i for i, p in enumerate(model.params)}
-    fixed = {"anchor_velocity_in_s": 10.0}  # lower edges 0.0316, 0.1, 0.316, 1, 3.16 in/s
-    assert unseen_cell_ties(model, np.array([0.05, 2.0]), fixed) == [
+    fixed = {"anchor_velocity_in_s": 10.0}  # lower edges 0.562, 1, 1.78, 3.16, 5.62 in/s
+    assert unseen_cell_ties(model, np.array([0.05, 4.0]), fixed) == [
         (index["stiffness_fraction_cell_5"], index["stiffness_fraction_cell_4"])
     ]
-    assert unseen_cell_ties(model, np.array([0.05, 0.5]), fixed) == [
-        (index[f"stiffness_fraction_cell_{k}"], index["stiffness_fraction_cell_3"]) for k in (4, 5)
+    assert unseen_cell_ties(model, np.array([0.05, 1.5]), fixed) == [
+        (index[f"stiffness_fraction_cell_{k}"], index["stiffness_fraction_cell_2"]) for k in (3, 4, 5)
     ]
-    assert unseen_cell_ties(model, np.array([0.05, 4.0]), fixed) == []
+    assert unseen_cell_ties(model, np.array([0.05, 6.0]), fixed) == []
     assert unseen_cell_ties(MODELS["iwan"], np.array([0.05, 0.5]), fixed) == []
 
 
 def test_a_fit_below_the_top_cell_predicts_it_from_the_cells_it_sees():
-    """One hit's top half decade held out leaves the top threshold cell without a segment
+    """One hit's top quarter decade held out leaves the top threshold cell without a segment
     that slips it: its share is not in the data (untied, from a start a thousandth of the
     truth's, the fit takes it to its range's upper edge and misses the top's damping by a
     factor of 10). Tied to the highest cell the fit sees, which for a log-uniform threshold
@@ -446,7 +454,7 @@ def test_a_fit_below_the_top_cell_predicts_it_from_the_cells_it_sees():
     from workflow.models.configuration_data import scatter_of
 
     model, truth, data = _one_hit_of_cells([2e-3] * 4)
-    below = data.velocity_in_s < 10**-0.5  # cell 4 holds thresholds 0.316-1 in/s
+    below = data.velocity_in_s < 10**-0.25  # cell 4 holds thresholds 0.562-1 in/s
     start = dict(truth, stiffness_fraction_cell_4=2e-6)
     fit = fit_model(
         model, data, scatter_of(data), FitContext(0.5), mask=below, warm_start=to_coords(model, start)

@@ -759,13 +759,13 @@ def test_the_verdict_says_where_the_model_does_not_explain_the_data():
 def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
     cells = [
         {
-            "threshold_low_in_s": 0.1,
-            "threshold_high_in_s": 0.316,
+            "threshold_low_in_s": 0.316,
+            "threshold_high_in_s": 0.562,
             "stiffness_fraction": 1e-7,
             "standard_error": None,
         },
         {
-            "threshold_low_in_s": 0.316,
+            "threshold_low_in_s": 0.562,
             "threshold_high_in_s": 1.0,
             "stiffness_fraction": 0.004,
             "standard_error": 2e-4,
@@ -786,14 +786,14 @@ def test_the_verdict_gives_the_slip_thresholds_recovered_from_the_data():
     }
     head, shares = report_wording.threshold_sentences(entry)
     assert (
-        "2 half-decade cells" in head
+        "2 quarter-decade cells" in head
         and "1.7" in head
         and "5.1" in head
         and "it is the extended model" in head
     )
-    assert "0.316–1 in/s: 0.4 ± 0.02 %" in shares and "(not identified)" in shares
+    assert "0.562–1 in/s: 0.4 ± 0.02 %" in shares and "(not identified)" in shares
     _, in_si = report_wording.threshold_sentences(entry, SI)
-    assert "0.00803–0.0254 m/s" in in_si
+    assert "0.00803–0.0143 m/s" in in_si
     entry["evidence"]["threshold_distribution"]["adopted"] = False
     assert "the power law stays the extended model" in report_wording.threshold_sentences(entry)[0]
     assert report_wording.threshold_sentences({"evidence": {"threshold_distribution": None}}) == []

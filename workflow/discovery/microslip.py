@@ -2,7 +2,7 @@
 
 When the power-law Iwan joint does not explain the data and micro-slip is the verdict or,
 with a significant baseline misfit, an eligible candidate
-(:func:`workflow.discovery.configuration.needs_threshold_cells`), the thresholds are recovered as half-decade cells of stiffness share, started from the power-law fit
+(:func:`workflow.discovery.configuration.needs_threshold_cells`), the thresholds are recovered as quarter-decade cells of stiffness share, started from the power-law fit
 written as cells, with Gauss-Newton standard errors.
 """
 
@@ -36,14 +36,14 @@ __all__ = [
 
 
 def threshold_cells(data: ConfigurationData) -> int:
-    """Half-decade slip-threshold cells of a configuration's recovered distribution.
+    """Quarter-decade slip-threshold cells of a configuration's recovered distribution.
 
-    From half a decade below its lowest measured amplitude (elements that slipped at
+    From at least half a decade below its lowest measured amplitude (elements that slipped at
     every amplitude measured still lower the frequency and add a damping falling as
     ``1 / V``) to the top of its range (higher thresholds never slip: linear stiffness).
     """
     span = float(np.log10(data.anchor_velocity_in_s / np.min(data.velocity_in_s)))
-    return int(np.clip(np.ceil(2.0 * span - 1e-9) + 1, 1, MAX_THRESHOLD_CELLS))
+    return int(np.clip(np.ceil(4.0 * span - 1e-9) + 2, 1, MAX_THRESHOLD_CELLS))
 
 
 def iwan_as_cells(iwan_params: Mapping[str, float], model: AveragedModel) -> dict[str, float]:

@@ -319,15 +319,15 @@ MODELS: dict[str, AveragedModel] = {
 """The averaged models, by id."""
 
 
-MAX_THRESHOLD_CELLS = 12
-"""Most half-decade slip-threshold cells of an ``iwan_cells_<n>`` model (six decades)."""
+MAX_THRESHOLD_CELLS = 24
+"""Most quarter-decade slip-threshold cells of an ``iwan_cells_<n>`` model (six decades)."""
 
 
 def iwan_cells_model(n_cells: int) -> AveragedModel:
     """The Iwan joint whose slip-threshold density is set by the data, in ``n_cells`` cells.
 
-    Cell ``k`` (1 = lowest) holds the slip thresholds between ``10^((k - 1 - n) / 2)``
-    and ``10^((k - n) / 2)`` times ``anchor_velocity_in_s``, the top of the measured
+    Cell ``k`` (1 = lowest) holds the slip thresholds between ``10^((k - 1 - n) / 4)``
+    and ``10^((k - n) / 4)`` times ``anchor_velocity_in_s``, the top of the measured
     amplitude range (fixed, not fitted: thresholds above it never slip and are part of
     the linear stiffness); its parameter is the share of the small-amplitude modal
     stiffness those elements release at full slip. Their sum is the joint stiffness
@@ -340,8 +340,8 @@ def iwan_cells_model(n_cells: int) -> AveragedModel:
             f"stiffness_fraction_cell_{k}",
             "1",
             "log",
-            f"modal stiffness share released by slip thresholds between 10^{(k - 1 - n_cells) / 2:g} "
-            f"and 10^{(k - n_cells) / 2:g} of the top measured amplitude",
+            f"modal stiffness share released by slip thresholds between 10^{(k - 1 - n_cells) / 4:g} "
+            f"and 10^{(k - n_cells) / 4:g} of the top measured amplitude",
         )
         for k in range(1, n_cells + 1)
     )
@@ -349,7 +349,7 @@ def iwan_cells_model(n_cells: int) -> AveragedModel:
         f"iwan_cells_{n_cells}",
         "iwan_cells",
         _BASE[:2] + cells,
-        "Iwan joint with the slip-threshold density recovered from the data (half-decade cells) "
+        "Iwan joint with the slip-threshold density recovered from the data (quarter-decade cells) "
         "+ linear viscous damping",
         fixed=("anchor_velocity_in_s",),
     )

@@ -392,7 +392,7 @@ def unseen_cell_ties(
     A cell whose lowest threshold lies at or above the largest fitted amplitude holds
     elements that never slip there: they add stiffness the linear frequency absorbs, and
     the data say nothing of its share. Held out, the top amplitudes of one hit leave the
-    top cell so (its half decade is the top block's): the fit then puts any share there
+    top cell so (its quarter decade lies in the top block): the fit then puts any share there
     (one of the lab's micro-slip + loss hits, bench seed 1934: 8.8e-6 where every other
     fold put 5.1e-3) and its prediction of the top block is whatever that share makes
     (3800 scatters off there, where the folds below predict within one to four). Tied, the density of thresholds per ``ln t`` continues at

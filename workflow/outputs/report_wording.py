@@ -276,7 +276,7 @@ def threshold_sentences(entry: Mapping, units: UnitSystem = INCH_SECOND) -> list
     cells = refinement.get("cells") or []
     head = (
         f"The power law does not explain the data, so the spread of slip thresholds was recovered "
-        f"from the data in {len(cells)} half-decade cells: held-out error "
+        f"from the data in {len(cells)} quarter-decade cells: held-out error "
         f"{fmt(refinement.get('heldout_error'))} against the power law's "
         f"{fmt(refinement.get('iwan_heldout_error'))}, BIC {fmt(refinement.get('bic'))} against "
         f"{fmt(refinement.get('iwan_bic'))}; "
