@@ -248,9 +248,12 @@ def test_real_unesp_export_by_its_accelerometers_and_laser_gives_one_verdict(tmp
         if max(verdict["confidence"].values()) >= 0.7
     }
     assert set(sure.values()) == {joint}, (joint, {n: v["confidence"] for n, v in channels.items()})
-    # the laser, on the reference sensor's scale (factor near 1), reads the joint's cause first
+    # the laser, on the reference sensor's scale (factor near 1), leads with the joint's
+    # mechanism: alone, its one decay splits micro-slip with and without a velocity-squared
+    # loss about evenly, sure of neither
     laser = channels["Time Laser:+X"]["confidence"]
-    assert max(laser, key=laser.get) == joint, laser
+    assert max(laser, key=laser.get).split("+")[0] == joint.split("+")[0], laser
+    assert sum(share for key, share in laser.items() if key.startswith(joint)) >= 0.7, laser
 
     write_yaml("quantity: acceleration, ")
     work = tmp_path / "as_acceleration"
