@@ -20,6 +20,7 @@ amplitude ``y`` (the ring-down models of :mod:`workflow.models.averaged` scale t
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -280,17 +281,13 @@ def _cells_loop(x_all, shares, edges, tau_table, h_table, slope_table):
     return dissipation, inphase, energy_slope
 
 
-_CELLS_KERNEL = []
-
-
+@functools.cache
 def _cells_kernel():
     """:func:`_cells_loop` compiled by Numba (cached on disk), at the first call: the jobs
     that import the models only to draw do not import Numba."""
-    if not _CELLS_KERNEL:
-        import numba
+    import numba
 
-        _CELLS_KERNEL.append(numba.njit(cache=True, error_model="numpy")(_cells_loop))
-    return _CELLS_KERNEL[0]
+    return numba.njit(cache=True, error_model="numpy")(_cells_loop)
 
 
 def iwan_cells_averages(y: ArrayLike, shares: ArrayLike) -> JointAverages:
